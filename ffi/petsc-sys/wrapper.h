@@ -1,0 +1,5 @@
+#include <petscsys.h>
+#include <petscvec.h>
+#include <petscmat.h>
+#include <petscksp.h>
+#include <petscviewer.h>

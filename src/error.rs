@@ -1,0 +1,61 @@
+//! The crate's top-level error: every failure a run can report, each
+//! message naming the file, key, element or PETSc function involved.
+
+use crate::{io::IoError, mesh::MeshError, petsc::PetscError, scenario::ScenarioError};
+
+/// Any error of a run.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// Scenario file problem.
+    #[error(transparent)]
+    Scenario(#[from] ScenarioError),
+    /// Mesh problem (file, element).
+    #[error("{context}: {source}")]
+    Mesh {
+        /// Which body or file.
+        context: String,
+        /// The mesh error.
+        source: MeshError,
+    },
+    /// The model is inconsistent (unknown set, empty BC...).
+    #[error("{path}: {message}")]
+    Model {
+        /// The scenario path.
+        path: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// PETSc failure or diverged solve.
+    #[error(transparent)]
+    Petsc(#[from] PetscError),
+    /// Output failure.
+    #[error(transparent)]
+    Io(#[from] IoError),
+    /// A non-finite temperature appeared.
+    #[error("non-finite temperature at step {step} (t = {time} s) at node {node}: the solution diverged; reduce dt or use theta >= 0.5")]
+    NonFinite {
+        /// Step number.
+        step: u64,
+        /// Time.
+        time: f64,
+        /// Original node id.
+        node: usize,
+    },
+    /// Another rank failed; its error is printed by that rank.
+    #[error("another MPI rank reported an error")]
+    OtherRank,
+    /// Partitioning failure.
+    #[error("partitioning failed: {0}")]
+    Partition(String),
+    /// Plain I/O failure (directories, summary files).
+    #[error("{path}: {source}")]
+    File {
+        /// The path.
+        path: String,
+        /// The I/O error.
+        source: std::io::Error,
+    },
+}
+
+/// Result alias.
+pub type Result<T> = std::result::Result<T, Error>;

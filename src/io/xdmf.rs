@@ -1,0 +1,223 @@
+//! XDMF index of a time series, rewritten atomically after every completed step.
+
+use std::fmt::Write as _;
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+
+use super::IoError;
+
+/// Where a field lives in the mesh.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Center {
+    Node,
+    Cell,
+}
+
+impl Center {
+    fn xdmf(self) -> &'static str {
+        match self {
+            Self::Node => "Node",
+            Self::Cell => "Cell",
+        }
+    }
+
+    /// HDF5 group holding this center's fields below `/static` or `/fields`.
+    pub(crate) fn group(self) -> &'static str {
+        match self {
+            Self::Node => "node",
+            Self::Cell => "cell",
+        }
+    }
+}
+
+/// XDMF attribute type for a component count, `None` if unsupported.
+pub(crate) fn attribute_type(components: usize) -> Option<&'static str> {
+    match components {
+        1 => Some("Scalar"),
+        3 => Some("Vector"),
+        6 => Some("Tensor6"),
+        9 => Some("Tensor"),
+        _ => None,
+    }
+}
+
+/// A time-dependent field as listed in the XDMF file.
+#[derive(Clone, Debug)]
+pub(crate) struct FieldDesc {
+    pub name: String,
+    pub center: Center,
+    pub components: usize,
+}
+
+/// Everything needed to render the XDMF file.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct XdmfModel {
+    /// File name (no directory) of the HDF5 file, relative to the XDMF file.
+    pub h5_name: String,
+    pub nodes: u64,
+    pub cells: u64,
+    /// Static i32 fields: `(name, center)`.
+    pub statics: Vec<(String, Center)>,
+    /// Time-dependent fields, identical in every step.
+    pub fields: Vec<FieldDesc>,
+    /// Times of the completed steps.
+    pub times: Vec<f64>,
+}
+
+fn escape(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    for c in s.chars() {
+        match c {
+            '&' => out.push_str("&amp;"),
+            '<' => out.push_str("&lt;"),
+            '>' => out.push_str("&gt;"),
+            '"' => out.push_str("&quot;"),
+            '\'' => out.push_str("&apos;"),
+            _ => out.push(c),
+        }
+    }
+    out
+}
+
+impl XdmfModel {
+    /// Topology, geometry and static attributes: identical for every step.
+    fn mesh_block(&self, indent: &str) -> String {
+        let h5 = escape(&self.h5_name);
+        let (n, e) = (self.nodes, self.cells);
+        let mut s = String::new();
+        let _ = writeln!(
+            s,
+            "{indent}<Topology TopologyType=\"Tetrahedron\" NumberOfElements=\"{e}\" NodesPerElement=\"4\">\n\
+             {indent}  <DataItem Dimensions=\"{e} 4\" NumberType=\"UInt\" Precision=\"4\" Format=\"HDF\">{h5}:/mesh/topology</DataItem>\n\
+             {indent}</Topology>\n\
+             {indent}<Geometry GeometryType=\"XYZ\">\n\
+             {indent}  <DataItem Dimensions=\"{n} 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">{h5}:/mesh/coordinates</DataItem>\n\
+             {indent}</Geometry>"
+        );
+        for (name, center) in &self.statics {
+            let rows = match center {
+                Center::Node => n,
+                Center::Cell => e,
+            };
+            let name = escape(name);
+            let _ = writeln!(
+                s,
+                "{indent}<Attribute Name=\"{name}\" AttributeType=\"Scalar\" Center=\"{c}\">\n\
+                 {indent}  <DataItem Dimensions=\"{rows}\" NumberType=\"Int\" Precision=\"4\" Format=\"HDF\">{h5}:/static/{g}/{name}</DataItem>\n\
+                 {indent}</Attribute>",
+                c = center.xdmf(),
+                g = center.group(),
+            );
+        }
+        s
+    }
+
+    /// Renders the whole XDMF document.
+    pub(crate) fn render(&self) -> String {
+        let mut s = String::from(
+            "<?xml version=\"1.0\" encoding=\"utf-8\"?>\n\
+             <!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n\
+             <Xdmf Version=\"3.0\" xmlns:xi=\"http://www.w3.org/2001/XInclude\">\n\
+             \x20 <Domain>\n",
+        );
+        if self.times.is_empty() {
+            // No step yet: the mesh and its static fields only.
+            s.push_str("    <Grid Name=\"mesh\" GridType=\"Uniform\">\n");
+            s.push_str(&self.mesh_block("      "));
+            s.push_str("    </Grid>\n");
+        } else {
+            let mesh = self.mesh_block("        ");
+            let h5 = escape(&self.h5_name);
+            s.push_str(
+                "    <Grid Name=\"TimeSeries\" GridType=\"Collection\" CollectionType=\"Temporal\">\n",
+            );
+            for (k, t) in self.times.iter().enumerate() {
+                let _ = writeln!(
+                    s,
+                    "      <Grid Name=\"step_{k:06}\" GridType=\"Uniform\">\n        <Time Value=\"{t:e}\"/>"
+                );
+                s.push_str(&mesh);
+                for f in &self.fields {
+                    let rows = match f.center {
+                        Center::Node => self.nodes,
+                        Center::Cell => self.cells,
+                    };
+                    let c = f.components;
+                    let dims = if c == 1 {
+                        rows.to_string()
+                    } else {
+                        format!("{rows} {c}")
+                    };
+                    let ty = attribute_type(c).unwrap_or("Matrix");
+                    let name = escape(&f.name);
+                    let _ = writeln!(
+                        s,
+                        "        <Attribute Name=\"{name}\" AttributeType=\"{ty}\" Center=\"{center}\">\n\
+                         \x20         <DataItem Dimensions=\"{dims}\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">{h5}:/fields/{g}/{name}/{step}</DataItem>\n\
+                         \x20       </Attribute>",
+                        center = f.center.xdmf(),
+                        g = f.center.group(),
+                        step = step_name(k),
+                    );
+                }
+                s.push_str("      </Grid>\n");
+            }
+            s.push_str("    </Grid>\n");
+        }
+        s.push_str("  </Domain>\n</Xdmf>\n");
+        s
+    }
+}
+
+/// Name of the dataset holding step `k` of a field: `000012`.
+pub(crate) fn step_name(k: usize) -> String {
+    format!("{k:06}")
+}
+
+/// `<path>.tmp`: the temporary file renamed over the XDMF file.
+pub(crate) fn tmp_path(xdmf: &Path) -> PathBuf {
+    let mut name = xdmf.as_os_str().to_owned();
+    name.push(".tmp");
+    PathBuf::from(name)
+}
+
+/// Replaces `path` by `text` atomically: writes and syncs `<path>.tmp`, then renames
+/// it over `path`, so readers (and a crash) see either the old or the new file.
+pub(crate) fn write_atomic(path: &Path, text: &str) -> Result<(), IoError> {
+    let tmp = tmp_path(path);
+    let mut file = std::fs::File::create(&tmp)
+        .map_err(|e| IoError::io(&tmp, "creating temporary XDMF file", e))?;
+    file.write_all(text.as_bytes())
+        .map_err(|e| IoError::io(&tmp, "writing temporary XDMF file", e))?;
+    file.sync_all()
+        .map_err(|e| IoError::io(&tmp, "syncing temporary XDMF file", e))?;
+    drop(file);
+    std::fs::rename(&tmp, path).map_err(|e| IoError::io(path, "renaming XDMF file into place", e))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn renders_steps() {
+        let m = XdmfModel {
+            h5_name: "out.h5".into(),
+            nodes: 5,
+            cells: 2,
+            statics: vec![("body".into(), Center::Node)],
+            fields: vec![FieldDesc {
+                name: "u".into(),
+                center: Center::Node,
+                components: 3,
+            }],
+            times: vec![0.0, 0.5],
+        };
+        let s = m.render();
+        assert_eq!(s.matches("<Grid Name=\"step_").count(), 2);
+        assert!(s.contains("out.h5:/fields/node/u/000001</DataItem>"));
+        assert!(s.contains("Dimensions=\"5 3\""));
+        assert!(s.contains("out.h5:/static/node/body"));
+        assert!(s.contains("<Time Value=\"5e-1\"/>"));
+    }
+}

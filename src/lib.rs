@@ -1,0 +1,24 @@
+//! fdem: combined finite–discrete element solver for heat transfer and
+//! thermo-mechanics of 3D particle systems.
+//!
+//! Module map (see README "Architecture"):
+//! - [`mesh`]: Tet4 meshes, boundary faces, quality checks, Gmsh import, generators.
+//! - [`thermal`]: element matrices and loads (seed 000 eqs 14–20), theta integrator (eq 22).
+//! - [`parallel`]: METIS partition, owned/ghost numbering matching PETSc ownership.
+//! - [`petsc`]: safe RAII layer over `petsc-sys`.
+//! - [`io`]: HDF5 + XDMF output, CSV histories.
+//! - [`scenario`]: TOML schema with validation and clear errors.
+//! - [`validation`]: analytic reference solutions.
+//! - [`model`]: the data model every stage shares.
+//! - [`run`]: the time loop that ties the stages together.
+
+pub mod error;
+pub mod io;
+pub mod mesh;
+pub mod model;
+pub mod parallel;
+pub mod petsc;
+pub mod run;
+pub mod scenario;
+pub mod thermal;
+pub mod validation;

@@ -1,0 +1,241 @@
+//! The `fdem` command: `run`, `check`, `info`.
+//!
+//! PETSc options (single dash, e.g. `-ksp_type cg -pc_type gamg -log_view`)
+//! may appear anywhere on the command line; they are handed to
+//! `PetscInitialize` and override the scenario's solver settings.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+use mpi::traits::*;
+
+use fdem::error::Error;
+use fdem::model::Model;
+use fdem::petsc::Petsc;
+use fdem::run::{run, RunOptions};
+use fdem::scenario;
+
+#[derive(Parser)]
+#[command(
+    name = "fdem",
+    version,
+    about = "FDEM heat transfer and thermo-mechanics of 3D particle systems"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Run a scenario (use under mpirun for several ranks).
+    Run {
+        /// Scenario TOML file.
+        scenario: PathBuf,
+        /// Output directory (default: the scenario's, or output/<stem>).
+        #[arg(long)]
+        output: Option<PathBuf>,
+        /// Override a scenario value by dotted path, e.g. --set bodies.bar.mesh.element_size=0.05
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+        /// No progress bar.
+        #[arg(long)]
+        quiet: bool,
+    },
+    /// Validate a scenario and its meshes without running.
+    Check {
+        /// Scenario TOML file.
+        scenario: PathBuf,
+        /// Override a scenario value by dotted path.
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+    },
+    /// Print the PETSc, MPI and HDF5 versions in use.
+    Info,
+}
+
+/// Split PETSc options (`-name [value]`) from fdem's own arguments.
+fn split_args(args: &[String]) -> (Vec<String>, Vec<String>) {
+    let is_petsc_opt = |a: &str| {
+        a.len() > 2
+            && a.starts_with('-')
+            && !a.starts_with("--")
+            && a.as_bytes()[1].is_ascii_alphabetic()
+    };
+    let mut ours = vec![args[0].clone()];
+    let mut petsc = vec![args[0].clone()];
+    let mut i = 1;
+    while i < args.len() {
+        let a = &args[i];
+        if is_petsc_opt(a) {
+            petsc.push(a.clone());
+            if let Some(v) = args.get(i + 1) {
+                if !is_petsc_opt(v) && !v.starts_with("--") {
+                    // A value, unless it is fdem's subcommand or positional
+                    // argument: PETSc values never end in `.toml`.
+                    if !v.ends_with(".toml") && !["run", "check", "info"].contains(&v.as_str()) {
+                        petsc.push(v.clone());
+                        i += 1;
+                    }
+                }
+            }
+        } else {
+            ours.push(a.clone());
+        }
+        i += 1;
+    }
+    (ours, petsc)
+}
+
+fn main() -> ExitCode {
+    let args: Vec<String> = std::env::args().collect();
+    let (ours, petsc_args) = split_args(&args);
+    let cli = Cli::parse_from(ours);
+    tracing_subscriber::fmt()
+        .with_env_filter(
+            tracing_subscriber::EnvFilter::try_from_env("FDEM_LOG")
+                .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("warn")),
+        )
+        .with_writer(std::io::stderr)
+        .init();
+
+    let Some(universe) = mpi::initialize() else {
+        eprintln!("error: MPI could not be initialised");
+        return ExitCode::FAILURE;
+    };
+    let world = universe.world();
+    let rank = world.rank();
+    let result = match Petsc::init(&world, &petsc_args) {
+        Err(e) => Err(Error::from(e)),
+        Ok(petsc) => {
+            let r = dispatch(&cli.command, &petsc, &world);
+            drop(petsc);
+            r
+        }
+    };
+    drop(universe);
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(Error::OtherRank) => ExitCode::FAILURE,
+        Err(e) => {
+            if rank == 0 || !deterministic(&e) {
+                eprintln!("error: {e}");
+            }
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// Errors every rank finds identically are printed by rank 0 only.
+fn deterministic(e: &Error) -> bool {
+    matches!(
+        e,
+        Error::Scenario(_)
+            | Error::Mesh { .. }
+            | Error::Model { .. }
+            | Error::Petsc(_)
+            | Error::NonFinite { .. }
+            | Error::Partition(_)
+    )
+}
+
+fn dispatch(
+    cmd: &Command,
+    petsc: &Petsc,
+    world: &mpi::topology::SimpleCommunicator,
+) -> fdem::error::Result<()> {
+    let rank = world.rank();
+    match cmd {
+        Command::Info => {
+            if rank == 0 {
+                println!("fdem {}", env!("CARGO_PKG_VERSION"));
+                println!("PETSc: {}", petsc.version()?);
+                println!(
+                    "MPI:   {}",
+                    mpi::environment::library_version()
+                        .unwrap_or_default()
+                        .trim()
+                );
+                let v = hdf5::library_version();
+                println!("HDF5:  {}.{}.{} (MPI-IO driver)", v.0, v.1, v.2);
+                println!("ranks: {}", world.size());
+            }
+            Ok(())
+        }
+        Command::Check {
+            scenario: path,
+            set,
+        } => {
+            let sc = scenario::load(path, set)?;
+            let model = Model::from_scenario(&sc)?;
+            if rank == 0 {
+                let q = model.mesh.min_quality();
+                println!("{}: ok", path.display());
+                println!(
+                    "  {} bodies, {} nodes, {} Tet4, {} steps of {} s (theta = {})",
+                    model.bodies.len(),
+                    model.mesh.nodes.len(),
+                    model.mesh.tets.len(),
+                    model.steps,
+                    model.dt,
+                    model.thermal.theta
+                );
+                if let Some((q, e)) = q {
+                    println!("  worst element quality {q:.3} (element {e})");
+                }
+                println!(
+                    "  {} prescribed-temperature nodes, {} flux faces, {} convection faces",
+                    model.thermal.dirichlet.len(),
+                    model.thermal.flux.len(),
+                    model.thermal.convection.len()
+                );
+            }
+            Ok(())
+        }
+        Command::Run {
+            scenario: path,
+            output,
+            set,
+            quiet,
+        } => {
+            let sc = scenario::load(path, set)?;
+            let opts = RunOptions {
+                output_dir: output.clone(),
+                progress: !quiet,
+            };
+            let summary = run(petsc, world, &sc, &opts)?;
+            if rank == 0 {
+                println!("{summary}");
+            }
+            Ok(())
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::split_args;
+
+    #[test]
+    fn petsc_options_are_split_off() {
+        let a: Vec<String> =
+            "fdem run -ksp_type cg s.toml --set a=1 -ksp_monitor -ksp_rtol 1e-12 --quiet"
+                .split(' ')
+                .map(String::from)
+                .collect();
+        let (ours, petsc) = split_args(&a);
+        assert_eq!(ours, ["fdem", "run", "s.toml", "--set", "a=1", "--quiet"]);
+        assert_eq!(
+            petsc,
+            [
+                "fdem",
+                "-ksp_type",
+                "cg",
+                "-ksp_monitor",
+                "-ksp_rtol",
+                "1e-12"
+            ]
+        );
+    }
+}

@@ -1,0 +1,53 @@
+//! Tet4 meshes: storage, boundary faces, orientation/quality checks, Gmsh
+//! import and box/bar generators.
+//!
+//! Self-contained: depends only on std, nalgebra, mshio and thiserror, so it
+//! unit-tests without MPI or PETSc. Node and element indices are `u32`
+//! (a 10-million-tet mesh fits) and 0-based.
+//!
+//! Submodules:
+//! - `error`: [`MeshError`], the error type of this module.
+//! - `geometry`: signed volume ([`tet_signed_volume`]), shape quality
+//!   ([`tet_quality`]), bounding box, [`TetMesh::validate`],
+//!   [`TetMesh::fix_orientation`], [`TetMesh::min_quality`].
+//! - `boundary`: [`TetMesh::boundary_faces`] ([`BoundaryFace`], local face
+//!   convention [`LOCAL_FACES`]) and [`TetMesh::face_area_normal`].
+//! - `sets`: node sets from face sets ([`TetMesh::nodes_of_face_set`],
+//!   [`TetMesh::set_nodes`]) and [`TetMesh::append`] for multi-body models.
+//! - [`generate`]: structured generators ([`generate::box_mesh`]).
+//! - [`gmsh`]: MSH 4.1 import (ASCII and binary, [`gmsh::read_msh`]) and
+//!   ASCII export ([`gmsh::write_msh_ascii`]).
+
+use std::collections::BTreeMap;
+
+mod boundary;
+mod error;
+pub mod generate;
+mod geometry;
+pub mod gmsh;
+mod sets;
+
+pub use boundary::{BoundaryFace, LOCAL_FACES};
+pub use error::MeshError;
+pub use geometry::{tet_quality, tet_signed_volume, DEGENERATE_REL_TOL};
+
+/// A Tet4 mesh holding one or more bodies.
+///
+/// Element `e` has nodes `tets[e]` and belongs to body `body[e]`. Named sets
+/// come from Gmsh physical groups or from generators (e.g. `xmin`, `xmax`).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct TetMesh {
+    /// Node coordinates (m).
+    pub nodes: Vec<[f64; 3]>,
+    /// Element connectivity, positively oriented (det of [x1-x0, x2-x0, x3-x0] > 0).
+    pub tets: Vec<[u32; 4]>,
+    /// Body id per element.
+    pub body: Vec<u32>,
+    /// Named node sets (sorted, unique node ids).
+    pub node_sets: BTreeMap<String, Vec<u32>>,
+    /// Named face sets: triangles on the boundary, nodes ordered so the
+    /// right-hand normal points out of the body.
+    pub face_sets: BTreeMap<String, Vec<[u32; 3]>>,
+    /// Named element sets (e.g. Gmsh physical volumes).
+    pub elem_sets: BTreeMap<String, Vec<u32>>,
+}

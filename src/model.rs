@@ -1,0 +1,330 @@
+//! The data model every stage shares: the combined Tet4 mesh of all
+//! bodies, materials, bodies, and the thermal problem resolved to nodes and
+//! faces. Built from a scenario; holds no MPI or PETSc state.
+//!
+//! Later stages extend it (contact pairs and conductance, mechanical
+//! materials and constraints, joints) without changing what is here.
+
+use crate::error::{Error, Result};
+use crate::mesh::{self, TetMesh};
+use crate::scenario::{CapacityKind, LoadedScenario, MeshSpec, ThermalBcSpec};
+
+/// A material's thermal constants.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Material {
+    /// Name.
+    pub name: String,
+    /// Conductivity k (W/m/K).
+    pub conductivity: f64,
+    /// Specific heat c (J/kg/K).
+    pub specific_heat: f64,
+    /// Density ρ (kg/m³).
+    pub density: f64,
+}
+
+/// One body: a connected Tet4 mesh region with one material.
+#[derive(Debug, Clone)]
+pub struct Body {
+    /// Name (its sets are `<name>.<set>` in the combined mesh).
+    pub name: String,
+    /// Index into [`Model::materials`].
+    pub material: usize,
+    /// Initial temperature.
+    pub initial_temperature: f64,
+    /// Its nodes: `node_range.0..node_range.1` in the combined mesh.
+    pub node_range: (u32, u32),
+    /// Its elements.
+    pub elem_range: (u32, u32),
+}
+
+/// The thermal problem resolved to nodes and faces (original numbering).
+#[derive(Debug, Clone, Default)]
+pub struct ThermalProblem {
+    /// θ of the theta method.
+    pub theta: f64,
+    /// Capacity matrix form.
+    pub capacity: CapacityKind,
+    /// Prescribed temperatures (node, value); last one given wins.
+    pub dirichlet: Vec<(u32, f64)>,
+    /// Prescribed inward flux on faces (face nodes, W/m²).
+    pub flux: Vec<([u32; 3], f64)>,
+    /// Convection on faces (face nodes, h, T_env).
+    pub convection: Vec<([u32; 3], f64, f64)>,
+    /// Volumetric source per body (W/m³).
+    pub source: Vec<f64>,
+    /// Initial nodal temperatures.
+    pub initial: Vec<f64>,
+}
+
+/// Everything a run needs, independent of the rank count.
+#[derive(Debug, Clone)]
+pub struct Model {
+    /// All bodies' elements in one mesh; `mesh.body[e]` indexes `bodies`.
+    pub mesh: TetMesh,
+    /// Materials.
+    pub materials: Vec<Material>,
+    /// Bodies.
+    pub bodies: Vec<Body>,
+    /// Thermal problem.
+    pub thermal: ThermalProblem,
+    /// Time step (s).
+    pub dt: f64,
+    /// Number of steps.
+    pub steps: u64,
+    /// Steps at which fields are written (ascending, includes 0 and `steps`).
+    pub output_steps: Vec<u64>,
+}
+
+impl Model {
+    /// Build the model: load or generate every body's mesh, check it, and
+    /// resolve boundary conditions on named sets. Errors name the scenario
+    /// file, the body and the set or element.
+    pub fn from_scenario(sc: &LoadedScenario) -> Result<Model> {
+        let s = &sc.scenario;
+        let path = sc.path.display().to_string();
+        let model_err = |message: String| Error::Model {
+            path: path.clone(),
+            message,
+        };
+        let materials: Vec<Material> = s
+            .materials
+            .iter()
+            .map(|m| Material {
+                name: m.name.clone(),
+                conductivity: m.conductivity,
+                specific_heat: m.specific_heat,
+                density: m.density,
+            })
+            .collect();
+        let mut combined = TetMesh::default();
+        let mut bodies = Vec::new();
+        for (bi, b) in s.bodies.iter().enumerate() {
+            let context = format!("{path}: body `{}`", b.name);
+            let mut m = match &b.mesh {
+                MeshSpec::Box {
+                    origin,
+                    size,
+                    element_size,
+                } => mesh::generate::box_mesh(*origin, *size, *element_size),
+                MeshSpec::Gmsh { file } => mesh::gmsh::read_msh(&sc.resolve(file)),
+            }
+            .map_err(|source| Error::Mesh {
+                context: context.clone(),
+                source,
+            })?;
+            if let Some(t) = b.translate {
+                for p in m.nodes.iter_mut() {
+                    for d in 0..3 {
+                        p[d] += t[d];
+                    }
+                }
+            }
+            m.validate().map_err(|source| Error::Mesh {
+                context: context.clone(),
+                source,
+            })?;
+            if m.tets.is_empty() {
+                return Err(model_err(format!(
+                    "body `{}`: mesh has no tetrahedra",
+                    b.name
+                )));
+            }
+            // One body per scenario entry, whatever the file's volumes.
+            m.body.iter_mut().for_each(|x| *x = 0);
+            m.node_sets = std::mem::take(&mut m.node_sets)
+                .into_iter()
+                .map(|(k, v)| (format!("{}.{k}", b.name), v))
+                .collect();
+            m.face_sets = std::mem::take(&mut m.face_sets)
+                .into_iter()
+                .map(|(k, v)| (format!("{}.{k}", b.name), v))
+                .collect();
+            m.elem_sets = std::mem::take(&mut m.elem_sets)
+                .into_iter()
+                .map(|(k, v)| (format!("{}.{k}", b.name), v))
+                .collect();
+            let n0 = combined.nodes.len() as u32;
+            let e0 = combined.tets.len() as u32;
+            combined.append(m, bi as u32);
+            let material = materials
+                .iter()
+                .position(|mm| mm.name == b.material)
+                .expect("validated");
+            bodies.push(Body {
+                name: b.name.clone(),
+                material,
+                initial_temperature: b.initial_temperature,
+                node_range: (n0, combined.nodes.len() as u32),
+                elem_range: (e0, combined.tets.len() as u32),
+            });
+        }
+
+        let mut thermal = ThermalProblem {
+            theta: s.thermal.theta,
+            capacity: s.thermal.capacity,
+            source: vec![0.0; bodies.len()],
+            initial: vec![0.0; combined.nodes.len()],
+            ..Default::default()
+        };
+        for b in &bodies {
+            for n in b.node_range.0..b.node_range.1 {
+                thermal.initial[n as usize] = b.initial_temperature;
+            }
+        }
+        for (i, init) in s.thermal.initial.iter().enumerate() {
+            let nodes = resolve_nodes(&combined, &init.set)
+                .map_err(|m| model_err(format!("thermal.initial[{i}]: {m}")))?;
+            for n in nodes {
+                thermal.initial[n as usize] = init.value;
+            }
+        }
+        for (i, bc) in s.thermal.bc.iter().enumerate() {
+            let key = format!("thermal.bc[{i}]");
+            match bc {
+                ThermalBcSpec::Temperature { set, value } => {
+                    let nodes = resolve_nodes(&combined, set)
+                        .map_err(|m| model_err(format!("{key}: {m}")))?;
+                    thermal
+                        .dirichlet
+                        .extend(nodes.into_iter().map(|n| (n, *value)));
+                }
+                ThermalBcSpec::Flux { set, value } => {
+                    let faces = resolve_faces(&combined, set)
+                        .map_err(|m| model_err(format!("{key}: {m}")))?;
+                    thermal.flux.extend(faces.into_iter().map(|f| (f, *value)));
+                }
+                ThermalBcSpec::Convection { set, h, ambient } => {
+                    let faces = resolve_faces(&combined, set)
+                        .map_err(|m| model_err(format!("{key}: {m}")))?;
+                    thermal
+                        .convection
+                        .extend(faces.into_iter().map(|f| (f, *h, *ambient)));
+                }
+                ThermalBcSpec::Source { body, value } => {
+                    let b = bodies
+                        .iter()
+                        .position(|x| &x.name == body)
+                        .expect("validated");
+                    thermal.source[b] += value;
+                }
+            }
+        }
+        // Last assignment wins for nodes named by several temperature BCs.
+        let mut last = std::collections::BTreeMap::new();
+        for (n, v) in thermal.dirichlet.drain(..) {
+            last.insert(n, v);
+        }
+        thermal.dirichlet = last.into_iter().collect();
+        for &(n, v) in &thermal.dirichlet {
+            thermal.initial[n as usize] = v;
+        }
+
+        let steps = s.num_steps();
+        let dt = s.time.dt;
+        let mut output_steps = vec![0, steps];
+        if let Some(every) = s.output.every.filter(|&e| e > 0) {
+            output_steps.extend((0..=steps).step_by(every as usize));
+        }
+        for &t in &s.output.times {
+            let k = (t / dt).round() as u64;
+            if k > steps {
+                return Err(model_err(format!(
+                    "output.times: {t} s is after the end of the run ({} s)",
+                    steps as f64 * dt
+                )));
+            }
+            output_steps.push(k);
+        }
+        output_steps.sort_unstable();
+        output_steps.dedup();
+
+        Ok(Model {
+            mesh: combined,
+            materials,
+            bodies,
+            thermal,
+            dt,
+            steps,
+            output_steps,
+        })
+    }
+
+    /// Material of element `e`.
+    pub fn material_of(&self, e: usize) -> &Material {
+        &self.materials[self.bodies[self.mesh.body[e] as usize].material]
+    }
+
+    /// Body of node `n`.
+    pub fn body_of_node(&self, n: u32) -> usize {
+        self.bodies
+            .iter()
+            .position(|b| n >= b.node_range.0 && n < b.node_range.1)
+            .unwrap_or(0)
+    }
+}
+
+/// Find the set a scenario names: `<body>.<set>` exactly, or `<set>` when
+/// exactly one body has a set of that name.
+fn resolve_name<'a, V>(
+    sets: &'a std::collections::BTreeMap<String, V>,
+    other: &'a std::collections::BTreeMap<String, Vec<[u32; 3]>>,
+    name: &str,
+) -> std::result::Result<String, String> {
+    if sets.contains_key(name) || other.contains_key(name) {
+        return Ok(name.to_string());
+    }
+    let suffix = format!(".{name}");
+    let mut hits: Vec<&String> = sets
+        .keys()
+        .chain(other.keys())
+        .filter(|k| k.ends_with(&suffix))
+        .collect();
+    hits.sort();
+    hits.dedup();
+    match hits.len() {
+        1 => Ok(hits[0].clone()),
+        0 => {
+            let mut all: Vec<&String> = sets.keys().chain(other.keys()).collect();
+            all.sort();
+            all.dedup();
+            Err(format!(
+                "no set named `{name}`; available: {}",
+                all.iter()
+                    .map(|s| s.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ))
+        }
+        _ => Err(format!(
+            "set name `{name}` is ambiguous: {}; qualify it as <body>.<set>",
+            hits.iter()
+                .map(|s| s.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        )),
+    }
+}
+
+/// Nodes of a named node set or face set.
+pub fn resolve_nodes(mesh: &TetMesh, name: &str) -> std::result::Result<Vec<u32>, String> {
+    let full = resolve_name(&mesh.node_sets, &mesh.face_sets, name)?;
+    let nodes = mesh
+        .set_nodes(&full)
+        .ok_or_else(|| format!("set `{full}` has no nodes"))?;
+    if nodes.is_empty() {
+        return Err(format!("set `{full}` is empty"));
+    }
+    Ok(nodes)
+}
+
+/// Faces of a named face set.
+pub fn resolve_faces(mesh: &TetMesh, name: &str) -> std::result::Result<Vec<[u32; 3]>, String> {
+    let empty = std::collections::BTreeMap::<String, Vec<[u32; 3]>>::new();
+    let full = resolve_name(&mesh.face_sets, &empty, name)
+        .map_err(|e| format!("{e} (flux and convection need a face set)"))?;
+    let faces = mesh.face_sets.get(&full).cloned().unwrap_or_default();
+    if faces.is_empty() {
+        return Err(format!("face set `{full}` is empty"));
+    }
+    Ok(faces)
+}

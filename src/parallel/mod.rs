@@ -1,0 +1,34 @@
+//! Parallel layout: METIS partition of the element graph, node ownership,
+//! a global numbering that matches PETSc's ownership ranges, sparsity for
+//! exact preallocation, and collective error agreement.
+//!
+//! The mesh is read on every rank (replicated); elements are partitioned
+//! with METIS and each rank assembles only its own elements, adding into
+//! the distributed PETSc matrix. A node is owned by the lowest-numbered
+//! part among the elements that touch it; rank r's owned nodes get the
+//! consecutive global numbers [start_r, end_r), sorted by original id.
+
+mod layout;
+mod partition;
+
+pub use layout::Layout;
+pub use partition::{dual_graph, partition_elements};
+
+use mpi::collective::SystemOperation;
+use mpi::traits::*;
+
+/// Collective. Agree on success: if any rank failed, every rank returns an
+/// error (the failing rank its own, the others [`crate::error::Error::OtherRank`]).
+pub fn agree<T, C: Communicator>(
+    comm: &C,
+    local: crate::error::Result<T>,
+) -> crate::error::Result<T> {
+    let mine: i32 = i32::from(local.is_err());
+    let mut any = 0i32;
+    comm.all_reduce_into(&mine, &mut any, SystemOperation::max());
+    match local {
+        Err(e) => Err(e),
+        Ok(_) if any != 0 => Err(crate::error::Error::OtherRank),
+        Ok(v) => Ok(v),
+    }
+}

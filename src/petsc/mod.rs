@@ -1,0 +1,171 @@
+//! Safe RAII layer over `petsc-sys`.
+//!
+//! Lifecycle: `mpi::initialize()` first, then [`Petsc::init`] (sets
+//! `PETSC_COMM_WORLD` to the rsmpi world and calls `PetscInitialize` with the
+//! real argv so `-ksp_type`, `-pc_type`, `-ksp_monitor`, `-log_view`,
+//! `-malloc_dump` work), then objects ([`Vector`], [`Matrix`], [`Ksp`]) that
+//! borrow the guard. Rust drops in reverse order, so every PETSc object is
+//! destroyed before `PetscFinalize`, which runs before `MPI_Finalize`.
+//!
+//! PETSc objects are move-only owners with an `as_raw()` escape hatch; array
+//! access goes through borrowed views whose `Drop` restores the array.
+
+pub mod error;
+mod ksp;
+mod matrix;
+mod vector;
+
+use std::ffi::{CStr, CString};
+use std::marker::PhantomData;
+use std::os::raw::{c_char, c_int};
+
+use mpi::traits::AsRaw;
+use petsc_sys as ffi;
+
+pub use error::PetscError;
+pub use ksp::{Ksp, SolveStats};
+pub use matrix::Matrix;
+pub use vector::{Vector, VectorView, VectorViewMut};
+
+use crate::petsc_call;
+
+/// PETSc's `PetscInt` (32-bit in the build this crate requires).
+pub type PetscInt = ffi::PetscInt;
+
+/// `PETSC_DECIDE` / `PETSC_DETERMINE` (macros, not exported by bindgen).
+pub const PETSC_DECIDE: PetscInt = -1;
+/// `PETSC_DEFAULT` for tolerances (macro in PETSc).
+pub const PETSC_DEFAULT: f64 = -2.0;
+
+/// Result alias for PETSc calls.
+pub type Result<T> = std::result::Result<T, PetscError>;
+
+/// The PETSc library, initialised on a communicator. Dropping it calls
+/// `PetscFinalize` (which prints `-log_view` and `-malloc_dump` reports).
+pub struct Petsc {
+    comm: ffi::MPI_Comm,
+    // Not Send/Sync: PETSc is used from the thread that initialised it.
+    _not_send: PhantomData<*const ()>,
+}
+
+impl Petsc {
+    /// Collective. Initialise PETSc on `world` with the program's arguments
+    /// (`args[0]` is the program name). PETSc options among them are read
+    /// by PETSc; the caller is expected to have removed its own arguments or
+    /// to ignore PETSc's warnings about unused options.
+    pub fn init<C: AsRaw<Raw = ffi::MPI_Comm>>(world: &C, args: &[String]) -> Result<Petsc> {
+        let mut flag = ffi::PetscBool::PETSC_FALSE;
+        petsc_call!(PetscInitialized(&mut flag))?;
+        if flag == ffi::PetscBool::PETSC_TRUE {
+            return Err(PetscError::Usage(
+                "PETSc is already initialised in this process".into(),
+            ));
+        }
+        // PETSc keeps pointers into argv for the life of the program: leak it.
+        let cstrings: Vec<CString> = args
+            .iter()
+            .map(|a| CString::new(a.as_str()))
+            .collect::<std::result::Result<_, _>>()
+            .map_err(|_| PetscError::Usage("argument contains a NUL byte".into()))?;
+        let mut ptrs: Vec<*mut c_char> = cstrings
+            .into_iter()
+            .map(|c| c.into_raw())
+            .chain(std::iter::once(std::ptr::null_mut()))
+            .collect();
+        let argc = Box::leak(Box::new((ptrs.len() - 1) as c_int));
+        let argv_ptr = ptrs.as_mut_ptr();
+        std::mem::forget(ptrs);
+        let argv = Box::leak(Box::new(argv_ptr));
+        // SAFETY: PETSC_COMM_WORLD must be set before PetscInitialize; the
+        // communicator outlives PETSc because MPI finalises after us.
+        unsafe {
+            ffi::PETSC_COMM_WORLD = world.as_raw();
+        }
+        petsc_call!(PetscInitialize(
+            argc,
+            argv,
+            std::ptr::null(),
+            std::ptr::null()
+        ))?;
+        petsc_call!(PetscPushErrorHandler(
+            Some(error::record_error_handler),
+            std::ptr::null_mut()
+        ))?;
+        Ok(Petsc {
+            comm: world.as_raw(),
+            _not_send: PhantomData,
+        })
+    }
+
+    /// The communicator PETSc was initialised on.
+    pub fn comm(&self) -> ffi::MPI_Comm {
+        self.comm
+    }
+
+    /// PETSc's version string, e.g. "PETSc Release Version 3.18.5, ...".
+    pub fn version(&self) -> Result<String> {
+        let mut buf = [0 as c_char; 256];
+        petsc_call!(PetscGetVersion(buf.as_mut_ptr(), buf.len()))?;
+        // SAFETY: PETSc writes a NUL-terminated string into buf.
+        Ok(unsafe { CStr::from_ptr(buf.as_ptr()) }
+            .to_string_lossy()
+            .into_owned())
+    }
+
+    /// Set an option in the global options database unless the command line
+    /// (or an earlier call) already set it, so the command line wins.
+    pub fn set_default_option(&self, name: &str, value: Option<&str>) -> Result<()> {
+        let key = format!("-{}", name.trim_start_matches('-'));
+        let ckey = CString::new(key).map_err(|_| PetscError::Usage("NUL in option".into()))?;
+        let mut set = ffi::PetscBool::PETSC_FALSE;
+        petsc_call!(PetscOptionsHasName(
+            std::ptr::null_mut(),
+            std::ptr::null(),
+            ckey.as_ptr(),
+            &mut set
+        ))?;
+        if set == ffi::PetscBool::PETSC_TRUE {
+            return Ok(());
+        }
+        let cval = value
+            .map(CString::new)
+            .transpose()
+            .map_err(|_| PetscError::Usage("NUL in option value".into()))?;
+        petsc_call!(PetscOptionsSetValue(
+            std::ptr::null_mut(),
+            ckey.as_ptr(),
+            cval.as_ref().map_or(std::ptr::null(), |c| c.as_ptr())
+        ))
+    }
+
+    /// Whether an option is present in the options database.
+    pub fn has_option(&self, name: &str) -> Result<bool> {
+        let key = format!("-{}", name.trim_start_matches('-'));
+        let ckey = CString::new(key).map_err(|_| PetscError::Usage("NUL in option".into()))?;
+        let mut set = ffi::PetscBool::PETSC_FALSE;
+        petsc_call!(PetscOptionsHasName(
+            std::ptr::null_mut(),
+            std::ptr::null(),
+            ckey.as_ptr(),
+            &mut set
+        ))?;
+        Ok(set == ffi::PetscBool::PETSC_TRUE)
+    }
+}
+
+impl Drop for Petsc {
+    fn drop(&mut self) {
+        // SAFETY: all objects borrowing the guard are gone (lifetimes).
+        unsafe {
+            ffi::PetscFinalize();
+        }
+    }
+}
+
+pub(crate) fn to_bool(b: bool) -> ffi::PetscBool {
+    if b {
+        ffi::PetscBool::PETSC_TRUE
+    } else {
+        ffi::PetscBool::PETSC_FALSE
+    }
+}

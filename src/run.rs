@@ -1,0 +1,438 @@
+//! The time loop: model → partition → thermal system → steps → output.
+//!
+//! Collective: every function here is called by all ranks. Errors that one
+//! rank finds alone (an output directory it cannot create) are agreed on
+//! before the next collective call so no rank waits for a failed one.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use mpi::collective::SystemOperation;
+use mpi::topology::SimpleCommunicator;
+use mpi::traits::*;
+
+use crate::error::{Error, Result};
+use crate::io::{HistoryWriter, MeshPart, TimeSeriesWriter};
+use crate::model::Model;
+use crate::parallel::{agree, Layout};
+use crate::petsc::Petsc;
+use crate::scenario::LoadedScenario;
+use crate::thermal::system::EnergyAccount;
+use crate::thermal::ThermalSystem;
+
+/// How to run.
+#[derive(Debug, Clone, Default)]
+pub struct RunOptions {
+    /// Output directory (overrides the scenario's).
+    pub output_dir: Option<PathBuf>,
+    /// Show a progress bar on rank 0.
+    pub progress: bool,
+}
+
+/// Wall-clock seconds spent per phase (rank 0's view, max over ranks).
+#[derive(Debug, Clone, Default)]
+pub struct PhaseTimes {
+    /// Meshes, sets, checks.
+    pub model: f64,
+    /// METIS partition and numbering.
+    pub partition: f64,
+    /// Assembly and solver set-up (factorisation).
+    pub assembly: f64,
+    /// Time stepping (solves).
+    pub stepping: f64,
+    /// HDF5/XDMF/CSV output.
+    pub output: f64,
+}
+
+/// What a run did.
+#[derive(Debug, Clone)]
+pub struct RunSummary {
+    /// Ranks.
+    pub ranks: usize,
+    /// Nodes and elements.
+    pub nodes: usize,
+    /// Elements.
+    pub elements: usize,
+    /// Steps taken.
+    pub steps: u64,
+    /// Total Krylov iterations.
+    pub ksp_iterations: u64,
+    /// Solver in use.
+    pub solver: String,
+    /// Phase times.
+    pub times: PhaseTimes,
+    /// Output directory.
+    pub output_dir: PathBuf,
+    /// HDF5 file.
+    pub h5: PathBuf,
+    /// XDMF file.
+    pub xdmf: PathBuf,
+    /// History CSV.
+    pub history: PathBuf,
+    /// Final heat balance.
+    pub energy: EnergyAccount,
+    /// Peak resident memory per rank, max over ranks (bytes).
+    pub peak_memory: u64,
+}
+
+impl std::fmt::Display for RunSummary {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let t = &self.times;
+        writeln!(f, "fdem run summary")?;
+        writeln!(
+            f,
+            "  mesh        {} nodes, {} Tet4 on {} rank(s)",
+            self.nodes, self.elements, self.ranks
+        )?;
+        writeln!(f, "  solver      {}", self.solver)?;
+        writeln!(
+            f,
+            "  steps       {} ({} KSP iterations, {:.2} per step)",
+            self.steps,
+            self.ksp_iterations,
+            self.ksp_iterations as f64 / self.steps.max(1) as f64
+        )?;
+        writeln!(
+            f,
+            "  time [s]    model {:.3} | partition {:.3} | assembly+setup {:.3} | stepping {:.3} | output {:.3}",
+            t.model, t.partition, t.assembly, t.stepping, t.output
+        )?;
+        if self.steps > 0 {
+            writeln!(
+                f,
+                "  per step    {:.2} us",
+                1e6 * t.stepping / self.steps as f64
+            )?;
+        }
+        writeln!(
+            f,
+            "  heat        stored change {:.6e}, boundary in {:.6e} (balance {:.2e})",
+            self.energy.stored_change,
+            self.energy.boundary_in(),
+            self.energy.stored_change - self.energy.boundary_in()
+        )?;
+        writeln!(
+            f,
+            "  memory      peak {:.1} MiB per rank",
+            self.peak_memory as f64 / 1048576.0
+        )?;
+        writeln!(f, "  output      {}", self.xdmf.display())?;
+        write!(f, "              {}", self.history.display())
+    }
+}
+
+/// Peak resident set size of this process (VmHWM), bytes.
+pub fn peak_rss() -> u64 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("VmHWM:"))
+                .and_then(|l| l.split_whitespace().nth(1))
+                .and_then(|v| v.parse::<u64>().ok())
+        })
+        .map_or(0, |kb| kb * 1024)
+}
+
+/// Per-body statistics of the owned nodes.
+struct BodyStats {
+    body_of_owned: Vec<u32>,
+    weight_of_owned: Vec<f64>,
+    nbodies: usize,
+}
+
+impl BodyStats {
+    fn new(model: &Model, layout: &Layout) -> BodyStats {
+        let mut w = vec![0.0; model.mesh.nodes.len()];
+        for e in 0..model.mesh.tets.len() {
+            let v = model.mesh.element_volume(e) / 4.0;
+            for &n in &model.mesh.tets[e] {
+                w[n as usize] += v;
+            }
+        }
+        BodyStats {
+            body_of_owned: layout
+                .owned_nodes
+                .iter()
+                .map(|&n| model.body_of_node(n) as u32)
+                .collect(),
+            weight_of_owned: layout.owned_nodes.iter().map(|&n| w[n as usize]).collect(),
+            nbodies: model.bodies.len(),
+        }
+    }
+
+    /// Collective. (min, volume-weighted mean, max) per body.
+    fn compute(&self, comm: &SimpleCommunicator, t: &[f64]) -> Vec<[f64; 3]> {
+        let nb = self.nbodies;
+        let mut mins = vec![f64::INFINITY; nb];
+        let mut maxs = vec![f64::NEG_INFINITY; nb];
+        let mut sums = vec![0.0; 2 * nb];
+        for (i, &x) in t.iter().enumerate() {
+            let b = self.body_of_owned[i] as usize;
+            mins[b] = mins[b].min(x);
+            maxs[b] = maxs[b].max(x);
+            sums[2 * b] += self.weight_of_owned[i] * x;
+            sums[2 * b + 1] += self.weight_of_owned[i];
+        }
+        let mut gmin = vec![0.0; nb];
+        let mut gmax = vec![0.0; nb];
+        let mut gsum = vec![0.0; 2 * nb];
+        comm.all_reduce_into(&mins[..], &mut gmin[..], SystemOperation::min());
+        comm.all_reduce_into(&maxs[..], &mut gmax[..], SystemOperation::max());
+        comm.all_reduce_into(&sums[..], &mut gsum[..], SystemOperation::sum());
+        (0..nb)
+            .map(|b| [gmin[b], gsum[2 * b] / gsum[2 * b + 1], gmax[b]])
+            .collect()
+    }
+}
+
+/// Collective. Run a scenario to the end.
+pub fn run(
+    petsc: &Petsc,
+    comm: &SimpleCommunicator,
+    sc: &LoadedScenario,
+    opts: &RunOptions,
+) -> Result<RunSummary> {
+    let rank = comm.rank();
+    let mut times = PhaseTimes::default();
+
+    let clock = Instant::now();
+    let model = Model::from_scenario(sc)?;
+    times.model = clock.elapsed().as_secs_f64();
+
+    let clock = Instant::now();
+    let layout = Layout::new(comm, &model.mesh).map_err(Error::Partition)?;
+    times.partition = clock.elapsed().as_secs_f64();
+
+    let clock = Instant::now();
+    let mut sys = ThermalSystem::new(petsc, &model, &layout, &sc.scenario.solver)?;
+    times.assembly = clock.elapsed().as_secs_f64();
+
+    // Output: only now that the input is known good are files created.
+    let clock = Instant::now();
+    let stem = sc.output_stem();
+    let dir = opts
+        .output_dir
+        .clone()
+        .or_else(|| sc.scenario.output.directory.as_ref().map(|d| sc.resolve(d)))
+        .unwrap_or_else(|| PathBuf::from("output").join(&stem));
+    let made = if rank == 0 {
+        std::fs::create_dir_all(&dir).map_err(|source| Error::File {
+            path: dir.display().to_string(),
+            source,
+        })
+    } else {
+        Ok(())
+    };
+    agree(comm, made)?;
+    let mut writer = open_writer(comm, &model, &layout, &dir, &stem)?;
+    let history_path = dir.join(format!("{stem}_history.csv"));
+    let mut header: Vec<String> = vec![
+        "step".into(),
+        "time".into(),
+        "stored_heat".into(),
+        "boundary_heat_in".into(),
+        "ksp_iterations".into(),
+    ];
+    for b in &model.bodies {
+        for s in ["min", "mean", "max"] {
+            header.push(format!("{}_{s}_T", b.name));
+        }
+    }
+    let header_ref: Vec<&str> = header.iter().map(String::as_str).collect();
+    let history = HistoryWriter::create(&history_path, &header_ref);
+    let mut history = agree(comm, history.map_err(Error::from))?;
+    let stats = BodyStats::new(&model, &layout);
+    let write_output = |sys: &mut ThermalSystem,
+                        writer: &mut TimeSeriesWriter,
+                        history: &mut HistoryWriter,
+                        step: u64|
+     -> Result<()> {
+        let time = step as f64 * model.dt;
+        let t = sys.t.to_local_vec()?;
+        writer.write_step(time, &[("temperature", 1, &t)], &[])?;
+        let e = sys.energy()?;
+        let mut row = vec![
+            step as f64,
+            time,
+            e.stored,
+            e.boundary_in(),
+            sys.iterations as f64,
+        ];
+        for s in stats.compute(comm, &t) {
+            row.extend_from_slice(&s);
+        }
+        history.append(&row)?;
+        Ok(())
+    };
+    write_output(&mut sys, &mut writer, &mut history, 0)?;
+    times.output += clock.elapsed().as_secs_f64();
+
+    let bar = if opts.progress && rank == 0 {
+        let b = indicatif::ProgressBar::new(model.steps);
+        b.set_style(
+            indicatif::ProgressStyle::with_template(
+                "{spinner} thermal [{elapsed_precise}] {wide_bar} {pos}/{len} steps ({eta})",
+            )
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        );
+        Some(b)
+    } else {
+        None
+    };
+    let tick = (model.steps / 200).max(1);
+    let check_every = 1000u64;
+    let mut next_out = model
+        .output_steps
+        .iter()
+        .copied()
+        .filter(|&s| s > 0)
+        .peekable();
+    let mut stepping = 0.0;
+    let mut step = 0u64;
+    while step < model.steps {
+        // Run uninterrupted until the next output, check or progress tick.
+        let target = [
+            next_out.peek().copied().unwrap_or(model.steps),
+            (step / check_every + 1) * check_every,
+            (step / tick + 1) * tick,
+        ]
+        .into_iter()
+        .min()
+        .unwrap_or(model.steps)
+        .min(model.steps);
+        let clock = Instant::now();
+        while step < target {
+            sys.step()?;
+            step += 1;
+        }
+        stepping += clock.elapsed().as_secs_f64();
+        if let Some(b) = &bar {
+            b.set_position(step);
+        }
+        if step % check_every == 0 || Some(step) == next_out.peek().copied() {
+            check_finite(comm, &sys, &layout, step, model.dt)?;
+        }
+        if Some(step) == next_out.peek().copied() {
+            next_out.next();
+            let clock = Instant::now();
+            write_output(&mut sys, &mut writer, &mut history, step)?;
+            times.output += clock.elapsed().as_secs_f64();
+        }
+    }
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
+    times.stepping = stepping;
+    let energy = sys.energy()?;
+    let (h5, xdmf) = crate::io::output_paths(&dir, &stem);
+    writer.close()?;
+
+    let mut peak = 0u64;
+    comm.all_reduce_into(&peak_rss(), &mut peak, SystemOperation::max());
+    let mut tmax = [0.0; 5];
+    let local = [
+        times.model,
+        times.partition,
+        times.assembly,
+        times.stepping,
+        times.output,
+    ];
+    comm.all_reduce_into(&local[..], &mut tmax[..], SystemOperation::max());
+    let times = PhaseTimes {
+        model: tmax[0],
+        partition: tmax[1],
+        assembly: tmax[2],
+        stepping: tmax[3],
+        output: tmax[4],
+    };
+    Ok(RunSummary {
+        ranks: layout.size,
+        nodes: model.mesh.nodes.len(),
+        elements: model.mesh.tets.len(),
+        steps: sys.steps_done(),
+        ksp_iterations: sys.iterations,
+        solver: sys.solver_name.clone(),
+        times,
+        output_dir: dir,
+        h5,
+        xdmf,
+        history: history_path,
+        energy,
+        peak_memory: peak,
+    })
+}
+
+fn open_writer(
+    comm: &SimpleCommunicator,
+    model: &Model,
+    layout: &Layout,
+    dir: &Path,
+    stem: &str,
+) -> Result<TimeSeriesWriter> {
+    let coords: Vec<[f64; 3]> = layout
+        .owned_nodes
+        .iter()
+        .map(|&n| model.mesh.nodes[n as usize])
+        .collect();
+    let cells: Vec<[u32; 4]> = layout
+        .owned_elems
+        .iter()
+        .map(|&e| model.mesh.tets[e as usize].map(|n| layout.global_of[n as usize]))
+        .collect();
+    let ncells = cells.len() as u64;
+    let mut cell_offset = 0u64;
+    comm.exclusive_scan_into(&ncells, &mut cell_offset, SystemOperation::sum());
+    if comm.rank() == 0 {
+        cell_offset = 0;
+    }
+    let part = MeshPart {
+        global_nodes: layout.num_global() as u64,
+        node_offset: layout.owned_range().0 as u64,
+        coords: &coords,
+        global_cells: model.mesh.tets.len() as u64,
+        cell_offset,
+        cells: &cells,
+    };
+    let mut w = TimeSeriesWriter::create(comm, dir, stem, &part)?;
+    let body_node: Vec<i32> = layout
+        .owned_nodes
+        .iter()
+        .map(|&n| model.body_of_node(n) as i32)
+        .collect();
+    let node_id: Vec<i32> = layout.owned_nodes.iter().map(|&n| n as i32).collect();
+    let body_cell: Vec<i32> = layout
+        .owned_elems
+        .iter()
+        .map(|&e| model.mesh.body[e as usize] as i32)
+        .collect();
+    let rank_cell: Vec<i32> = vec![comm.rank(); cells.len()];
+    w.write_static_node_field_i32("body", &body_node)?;
+    w.write_static_node_field_i32("node_id", &node_id)?;
+    w.write_static_cell_field_i32("body", &body_cell)?;
+    w.write_static_cell_field_i32("rank", &rank_cell)?;
+    Ok(w)
+}
+
+fn check_finite(
+    comm: &SimpleCommunicator,
+    sys: &ThermalSystem,
+    layout: &Layout,
+    step: u64,
+    dt: f64,
+) -> Result<()> {
+    let bad = sys.first_non_finite()?;
+    if bad.is_none() {
+        return Ok(());
+    }
+    let local = bad
+        .and_then(|i| layout.owned_nodes.get(i))
+        .map_or(u64::MAX, |&n| n as u64);
+    let mut node = u64::MAX;
+    comm.all_reduce_into(&local, &mut node, SystemOperation::min());
+    Err(Error::NonFinite {
+        step,
+        time: step as f64 * dt,
+        node: node as usize,
+    })
+}

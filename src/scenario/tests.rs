@@ -1,0 +1,105 @@
+use std::path::Path;
+
+use super::*;
+
+const GOOD: &str = r#"
+[time]
+dt = 0.5
+steps = 4
+
+[[materials]]
+name = "m"
+conductivity = 1.0
+specific_heat = 1.0
+density = 100.0
+
+[[bodies]]
+name = "bar"
+material = "m"
+mesh = { kind = "box", size = [1.0, 0.1, 0.1], element_size = 0.1 }
+
+[[thermal.bc]]
+kind = "temperature"
+set = "bar.xmax"
+value = 1.0
+"#;
+
+fn p() -> &'static Path {
+    Path::new("scenarios/test.toml")
+}
+
+#[test]
+fn parses_good_scenario() {
+    let s = parse_str(GOOD, p(), &[]).unwrap();
+    assert_eq!(s.scenario.num_steps(), 4);
+    assert_eq!(s.scenario.thermal.theta, 1.0);
+    assert_eq!(s.output_stem(), "test");
+}
+
+#[test]
+fn unknown_key_names_file_key_and_line() {
+    let text = GOOD.replace("density = 100.0", "density = 100.0\ndensty = 3");
+    let e = parse_str(&text, p(), &[]).unwrap_err().to_string();
+    assert!(e.contains("scenarios/test.toml"), "{e}");
+    assert!(e.contains("densty"), "{e}");
+    assert!(e.contains("line"), "{e}");
+}
+
+#[test]
+fn malformed_toml_is_an_error() {
+    let e = parse_str("[time\ndt = 1", p(), &[])
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("scenarios/test.toml") && e.contains("line"),
+        "{e}"
+    );
+}
+
+#[test]
+fn negative_conductivity_names_key() {
+    let text = GOOD.replace("conductivity = 1.0", "conductivity = -1.0");
+    let e = parse_str(&text, p(), &[]).unwrap_err().to_string();
+    assert!(e.contains("materials[0].conductivity"), "{e}");
+}
+
+#[test]
+fn set_overrides_by_path_index_and_name() {
+    let sets = vec![
+        "bodies.bar.mesh.element_size=0.05".to_string(),
+        "time.dt=0.25".to_string(),
+        "thermal.theta=0.5".to_string(),
+        "thermal.bc.0.value=2".to_string(),
+    ];
+    let s = parse_str(GOOD, p(), &sets).unwrap().scenario;
+    match &s.bodies[0].mesh {
+        MeshSpec::Box { element_size, .. } => assert_eq!(*element_size, 0.05),
+        _ => panic!("box expected"),
+    }
+    assert_eq!(s.time.dt, 0.25);
+    assert_eq!(s.thermal.theta, 0.5);
+    match &s.thermal.bc[0] {
+        ThermalBcSpec::Temperature { value, .. } => assert_eq!(*value, 2.0),
+        _ => panic!(),
+    }
+}
+
+#[test]
+fn set_is_validated_like_the_file() {
+    let e = parse_str(GOOD, p(), &["thermal.theta=1.5".into()])
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("thermal.theta"), "{e}");
+    let e = parse_str(GOOD, p(), &["time.dtt=1".into()])
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("dtt"), "{e}");
+    let e = parse_str(GOOD, p(), &["bodies.nobody.name=x".into()])
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("nobody"), "{e}");
+    let e = parse_str(GOOD, p(), &["time.dt".into()])
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("KEY=VALUE"), "{e}");
+}

@@ -1,0 +1,8 @@
+//! Heat conduction: Tet4 element kernels (seed 000 eqs 14–20, pure), the
+//! distributed assembly and the theta integrator (eq 22) on PETSc.
+
+pub mod assembly;
+pub mod element;
+pub mod system;
+
+pub use system::{SolverChoice, StepStats, ThermalSystem};

@@ -1,0 +1,363 @@
+//! The theta integrator on PETSc (seed 000 eq 22).
+//!
+//! With M Ṫ + K T = f (K including convection), eq 22 gives
+//! (M/Δt + θK) Tⁿ⁺¹ = (M/Δt − (1−θ)K) Tⁿ + f.
+//! Dirichlet rows are eliminated symmetrically: A = M/Δt + θK has those
+//! rows and columns replaced by the identity, the lifting −A_fd T_d goes
+//! into a constant vector g, and B = M/Δt − (1−θ)K has those rows zeroed,
+//! so every step is one `MatMultAdd` and one `KSPSolve`:
+//!   rhs = B Tⁿ + g,  A Tⁿ⁺¹ = rhs.
+//! A and B are assembled once; the KSP keeps its preconditioner or
+//! factorisation for the whole run. θ = 0 with lumped capacity is the
+//! explicit scheme of eq 23, Tⁿ⁺¹ = E Tⁿ + g with E = I − Δt M_L⁻¹ K:
+//! one `MatMultAdd` per step and no solve.
+//!
+//! Energy account: summing the equations over all rows and steps, with
+//! reactions r on the Dirichlet rows,
+//!   Σ_i [M (T_N − T_0)]_i = t Σ f − Δt 1ᵀ K S + Δt Σ_n Σ_d rⁿ_d,
+//! where S = Σ_n (θTⁿ⁺¹ + (1−θ)Tⁿ); conductivity rows sum to zero, so
+//! 1ᵀ K S is the convection loss. [`ThermalSystem::energy`] evaluates the
+//! boundary heat from the Dirichlet rows of the unconstrained operators
+//! and the stored heat from M, so the two agree to solver tolerance.
+
+use crate::model::Model;
+use crate::parallel::Layout;
+use crate::petsc::{Ksp, Matrix, Petsc, Result, Vector};
+use crate::scenario::{CapacityKind, SolverSpec};
+
+use super::assembly::{assemble, Operators};
+
+/// Linear solver defaults by problem size (the options database wins).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SolverChoice {
+    /// KSP type.
+    pub ksp_type: String,
+    /// PC type.
+    pub pc_type: String,
+    /// Extra defaults (name, value) put into the options database unless set.
+    pub defaults: Vec<(String, String)>,
+}
+
+impl SolverChoice {
+    /// Sparse direct (Cholesky, factorised once) up to 50,000 unknowns:
+    /// PETSc's own on one rank, MUMPS on several. Above that, CG with
+    /// algebraic multigrid (GAMG), which also handles the steady limit
+    /// (large Δt) where the capacity no longer dominates the operator.
+    pub fn auto(global_rows: usize, ranks: usize) -> SolverChoice {
+        if global_rows <= 50_000 {
+            let mut defaults = vec![("pc_factor_mat_ordering_type".to_string(), "nd".to_string())];
+            if ranks > 1 {
+                defaults = vec![("pc_factor_mat_solver_type".to_string(), "mumps".to_string())];
+            }
+            SolverChoice {
+                ksp_type: "preonly".into(),
+                pc_type: "cholesky".into(),
+                defaults,
+            }
+        } else {
+            SolverChoice {
+                ksp_type: "cg".into(),
+                pc_type: "gamg".into(),
+                defaults: Vec::new(),
+            }
+        }
+    }
+}
+
+/// What one step did.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct StepStats {
+    /// Krylov iterations (0 for the explicit scheme).
+    pub iterations: i32,
+}
+
+/// Heat balance since the start (J, or the user's energy unit).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct EnergyAccount {
+    /// Stored heat now, Σ (M T)_i.
+    pub stored: f64,
+    /// Change of stored heat since t = 0.
+    pub stored_change: f64,
+    /// Heat in through prescribed-temperature nodes.
+    pub dirichlet_in: f64,
+    /// Heat in through fluxes and sources.
+    pub flux_in: f64,
+    /// Heat in by convection (negative when the body cools).
+    pub convection_in: f64,
+}
+
+impl EnergyAccount {
+    /// Total heat in through the boundary (and sources).
+    pub fn boundary_in(&self) -> f64 {
+        self.dirichlet_in + self.flux_in + self.convection_in
+    }
+}
+
+enum Scheme<'p> {
+    Explicit {
+        e: Matrix<'p>,
+        g: Vector<'p>,
+    },
+    Implicit {
+        /// The system matrix; the KSP factorises it once.
+        _a: Matrix<'p>,
+        b: Matrix<'p>,
+        g: Vector<'p>,
+        rhs: Vector<'p>,
+        ksp: Box<Ksp<'p>>,
+    },
+}
+
+/// The assembled thermal problem and its state.
+pub struct ThermalSystem<'p> {
+    ops: Operators<'p>,
+    scheme: Scheme<'p>,
+    /// Temperatures of the owned nodes (PETSc order).
+    pub t: Vector<'p>,
+    t_next: Vector<'p>,
+    t0: Vector<'p>,
+    t_sum: Vector<'p>,
+    dmask: Vector<'p>,
+    work: Vector<'p>,
+    theta: f64,
+    dt: f64,
+    steps: u64,
+    warm_start: bool,
+    /// Total Krylov iterations so far.
+    pub iterations: u64,
+    /// The solver in use ("cg/gamg", "explicit", ...).
+    pub solver_name: String,
+}
+
+impl<'p> ThermalSystem<'p> {
+    /// Collective. Assemble, apply Dirichlet conditions and set up the solver.
+    pub fn new(
+        petsc: &'p Petsc,
+        model: &Model,
+        layout: &Layout,
+        solver: &SolverSpec,
+    ) -> Result<Self> {
+        let ops = assemble(petsc, model, layout)?;
+        let theta = model.thermal.theta;
+        let dt = model.dt;
+        let owned = layout.num_owned();
+
+        let mut t = Vector::new(petsc, owned)?;
+        {
+            let mut v = t.view_mut()?;
+            for (i, &n) in layout.owned_nodes.iter().enumerate() {
+                v[i] = model.thermal.initial[n as usize];
+            }
+        }
+        let (lo, _) = layout.owned_range();
+        let d_rows: Vec<i32> = model
+            .thermal
+            .dirichlet
+            .iter()
+            .filter(|(n, _)| layout.owns(*n))
+            .map(|(n, _)| layout.global_of[*n as usize] as i32)
+            .collect();
+        let mut dmask = t.duplicate()?;
+        dmask.set(0.0)?;
+        {
+            let mut v = dmask.view_mut()?;
+            for &r in &d_rows {
+                v[r as usize - lo] = 1.0;
+            }
+        }
+        let mut free_mask = t.duplicate()?;
+        free_mask.set(1.0)?;
+        free_mask.axpy(-1.0, &dmask)?;
+        // xd: the prescribed values on Dirichlet rows, zero elsewhere.
+        let mut xd = t.duplicate()?;
+        xd.pointwise_mult(&t, &dmask)?;
+        let mut f_free = t.duplicate()?;
+        f_free.pointwise_mult(&ops.load, &free_mask)?;
+
+        let explicit = theta == 0.0 && model.thermal.capacity == CapacityKind::Lumped;
+        let mut warm_start = false;
+        let (scheme, solver_name) = if explicit {
+            // Seed 000 eq 23: Tⁿ⁺¹ = Tⁿ + Δt M_L⁻¹ (f − K Tⁿ).
+            let mut dt_minv = t.duplicate()?;
+            {
+                let ms = ops.capacity_rowsum.view()?;
+                let mut v = dt_minv.view_mut()?;
+                for i in 0..v.len() {
+                    v[i] = dt / ms[i];
+                }
+            }
+            dt_minv.pointwise_mult(&dt_minv.duplicate_from()?, &free_mask)?;
+            let mut e = ops.stiffness.duplicate()?;
+            e.scale(-1.0)?;
+            e.diagonal_scale(Some(&dt_minv), None)?;
+            e.shift(1.0)?;
+            let mut g = t.duplicate()?;
+            g.pointwise_mult(&ops.load, &dt_minv)?;
+            (
+                Scheme::Explicit { e, g },
+                "explicit (lumped, no solve)".to_string(),
+            )
+        } else {
+            let mut a = ops.capacity.duplicate()?;
+            a.scale(1.0 / dt)?;
+            if theta != 0.0 {
+                a.axpy_same_pattern(theta, &ops.stiffness)?;
+            }
+            let mut b = ops.capacity.duplicate()?;
+            b.scale(1.0 / dt)?;
+            if theta != 1.0 {
+                b.axpy_same_pattern(-(1.0 - theta), &ops.stiffness)?;
+            }
+            // g = f_free − A xd on free rows, T_d on Dirichlet rows.
+            let mut g = t.duplicate()?;
+            a.mult(&xd, &mut g)?;
+            g.scale(-1.0)?;
+            g.pointwise_mult(&g.duplicate_from()?, &free_mask)?;
+            g.axpy(1.0, &f_free)?;
+            g.axpy(1.0, &xd)?;
+            a.zero_rows_columns(&d_rows, 1.0)?;
+            b.zero_rows(&d_rows, 0.0)?;
+            a.set_symmetric(true)?;
+
+            let choice = SolverChoice::auto(layout.num_global(), layout.size);
+            for (k, v) in &choice.defaults {
+                petsc.set_default_option(k, Some(v))?;
+            }
+            for (k, v) in &solver.options {
+                petsc.set_default_option(k, if v.is_empty() { None } else { Some(v) })?;
+            }
+            let mut ksp = Box::new(Ksp::new(petsc)?);
+            ksp.set_operator(&a)?;
+            ksp.set_types(
+                solver.ksp_type.as_deref().unwrap_or(&choice.ksp_type),
+                solver.pc_type.as_deref().unwrap_or(&choice.pc_type),
+            )?;
+            ksp.set_tolerances(
+                solver.rtol.unwrap_or(1e-10),
+                solver.atol.unwrap_or(1e-50),
+                solver.max_it.unwrap_or(10_000) as i32,
+            )?;
+            ksp.set_from_options()?;
+            let (kt, pt) = ksp.types()?;
+            // Warm start from the previous step (a direct solve ignores it).
+            if kt != "preonly" {
+                ksp.set_initial_guess_nonzero(true)?;
+                warm_start = true;
+            }
+            ksp.set_up()?;
+            let rhs = t.duplicate()?;
+            (
+                Scheme::Implicit {
+                    _a: a,
+                    b,
+                    g,
+                    rhs,
+                    ksp,
+                },
+                format!("{kt}/{pt}"),
+            )
+        };
+
+        let mut t0 = t.duplicate()?;
+        t0.copy_from(&t)?;
+        let mut t_sum = t.duplicate()?;
+        t_sum.set(0.0)?;
+        let t_next = t.duplicate()?;
+        let work = t.duplicate()?;
+        Ok(ThermalSystem {
+            ops,
+            scheme,
+            t,
+            t_next,
+            t0,
+            t_sum,
+            dmask,
+            work,
+            theta,
+            dt,
+            warm_start,
+            steps: 0,
+            iterations: 0,
+            solver_name,
+        })
+    }
+
+    /// Collective. Advance one time step.
+    #[inline]
+    pub fn step(&mut self) -> Result<StepStats> {
+        let stats = match &mut self.scheme {
+            Scheme::Explicit { e, g } => {
+                e.mult_add(&self.t, g, &mut self.t_next)?;
+                StepStats { iterations: 0 }
+            }
+            Scheme::Implicit { b, g, rhs, ksp, .. } => {
+                b.mult_add(&self.t, g, rhs)?;
+                if self.warm_start {
+                    self.t_next.copy_from(&self.t)?;
+                }
+                let s = ksp.solve(rhs, &mut self.t_next)?;
+                StepStats {
+                    iterations: s.iterations,
+                }
+            }
+        };
+        std::mem::swap(&mut self.t, &mut self.t_next);
+        self.t_sum.axpy(1.0, &self.t)?;
+        self.steps += 1;
+        self.iterations += stats.iterations.max(0) as u64;
+        Ok(stats)
+    }
+
+    /// Steps taken.
+    pub fn steps_done(&self) -> u64 {
+        self.steps
+    }
+
+    /// Collective. The heat balance since t = 0 (see the module docs).
+    pub fn energy(&mut self) -> Result<EnergyAccount> {
+        let n = self.steps as f64;
+        let time = n * self.dt;
+        let ops = &self.ops;
+        // S = θ Σ_{1..N} Tⁿ + (1−θ) Σ_{0..N−1} Tⁿ = Σ_{1..N} − (1−θ)(T_N − T_0).
+        let mut s = self.t_sum.duplicate()?;
+        s.copy_from(&self.t_sum)?;
+        s.axpy(-(1.0 - self.theta), &self.t)?;
+        s.axpy(1.0 - self.theta, &self.t0)?;
+        // Residual of the unconstrained equations summed over time:
+        // R = M (T_N − T_0) + Δt K S − t f; its Dirichlet rows are the reactions.
+        let mut dtemp = self.t.duplicate()?;
+        dtemp.copy_from(&self.t)?;
+        dtemp.axpy(-1.0, &self.t0)?;
+        let mut r = self.t.duplicate()?;
+        ops.capacity.mult(&dtemp, &mut r)?;
+        ops.stiffness.mult(&s, &mut self.work)?;
+        let ks_total = self.work.sum()?;
+        r.axpy(self.dt, &self.work)?;
+        r.axpy(-time, &ops.load)?;
+        let dirichlet_in = r.dot(&self.dmask)?;
+        let stored = ops.capacity_rowsum.dot(&self.t)?;
+        let stored0 = ops.capacity_rowsum.dot(&self.t0)?;
+        let flux_in = time * ops.load_flux.sum()?;
+        let convection_in = time * ops.load_convection.sum()? - self.dt * ks_total;
+        Ok(EnergyAccount {
+            stored,
+            stored_change: stored - stored0,
+            dirichlet_in,
+            flux_in,
+            convection_in,
+        })
+    }
+
+    /// Collective. Fail if a temperature is NaN or infinite; returns the
+    /// local index of the first bad owned entry on this rank, if any.
+    pub fn first_non_finite(&self) -> Result<Option<usize>> {
+        let norm = self.t.norm_inf()?;
+        if norm.is_finite() {
+            return Ok(None);
+        }
+        let v = self.t.view()?;
+        Ok(Some(
+            v.iter().position(|x| !x.is_finite()).unwrap_or(usize::MAX),
+        ))
+    }
+}

@@ -1,0 +1,121 @@
+//! Helpers for the validation tests: run the `fdem` binary (directly or
+//! under `mpirun -n N`) and read its HDF5 output back in original node order.
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// The repository root.
+pub fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// A fresh output directory under the target dir.
+pub fn out_dir(name: &str) -> PathBuf {
+    let d = root().join("target").join("test-output").join(name);
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// Run `fdem ARGS` on `ranks` ranks.
+pub fn fdem(ranks: usize, args: &[&str]) -> Output {
+    let bin = env!("CARGO_BIN_EXE_fdem");
+    let mut cmd = if ranks > 1 {
+        let mut c = Command::new("mpirun");
+        c.args(["-n", &ranks.to_string(), "--oversubscribe", bin]);
+        c
+    } else {
+        Command::new(bin)
+    };
+    cmd.args(args)
+        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+        .env("OMPI_MCA_rmaps_base_oversubscribe", "1");
+    cmd.output().expect("cannot start fdem")
+}
+
+/// Run a scenario and panic with its output if it fails. Returns stdout.
+pub fn run_ok(ranks: usize, scenario: &Path, out: &Path, extra: &[&str]) -> String {
+    let mut args = vec![
+        "run",
+        scenario.to_str().unwrap(),
+        "--quiet",
+        "--output",
+        out.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    let o = fdem(ranks, &args);
+    let stdout = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(
+        o.status.success(),
+        "fdem {args:?} on {ranks} rank(s) failed:\n{stdout}\n{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    stdout
+}
+
+/// Results of a run, indexed by original node id.
+pub struct Results {
+    /// Output times.
+    pub times: Vec<f64>,
+    /// Coordinates by original node id.
+    pub coords: Vec<[f64; 3]>,
+    /// Temperature per output step, by original node id.
+    pub temperature: Vec<Vec<f64>>,
+}
+
+/// Read `<dir>/<stem>.h5` back, reordering rows to original node ids.
+pub fn read_results(dir: &Path, stem: &str) -> Results {
+    let h5 = dir.join(format!("{stem}.h5"));
+    let times = fdem::io::read_times(&h5).unwrap();
+    let mesh = fdem::io::read_mesh(&h5).unwrap();
+    let ids = fdem::io::read_static_node_field_i32(&h5, "node_id").unwrap();
+    let n = ids.len();
+    let mut coords = vec![[0.0; 3]; n];
+    for (row, &id) in ids.iter().enumerate() {
+        coords[id as usize] = mesh.coords[row];
+    }
+    let temperature = (0..times.len())
+        .map(|k| {
+            let t = fdem::io::read_node_field_step(&h5, "temperature", k).unwrap();
+            let mut by_id = vec![0.0; n];
+            for (row, &id) in ids.iter().enumerate() {
+                by_id[id as usize] = t[row];
+            }
+            by_id
+        })
+        .collect();
+    Results {
+        times,
+        coords,
+        temperature,
+    }
+}
+
+/// Index of the output step at time `t`.
+pub fn step_at(r: &Results, t: f64) -> usize {
+    r.times
+        .iter()
+        .position(|&x| (x - t).abs() < 1e-9 * t.max(1.0))
+        .unwrap_or_else(|| panic!("no output at t = {t}; have {:?}", r.times))
+}
+
+/// Largest relative difference between two fields, relative to the largest magnitude.
+pub fn rel_diff(a: &[f64], b: &[f64]) -> f64 {
+    assert_eq!(a.len(), b.len());
+    let scale = a
+        .iter()
+        .chain(b)
+        .fold(0.0f64, |m, x| m.max(x.abs()))
+        .max(1e-300);
+    a.iter()
+        .zip(b)
+        .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
+        / scale
+}
+
+/// Parse a "key value" figure from the run summary, e.g. "per step".
+pub fn summary_line<'a>(stdout: &'a str, key: &str) -> Option<&'a str> {
+    stdout.lines().find(|l| l.trim_start().starts_with(key))
+}

@@ -12,6 +12,10 @@
 //! - [`model`]: the data model every stage shares.
 //! - [`run`]: the time loop that ties the stages together.
 
+// `petsc_call!` evaluates its arguments inside its unsafe block; it is used
+// only by the safe PETSc layer, whose types own the handles it passes.
+#![allow(clippy::macro_metavars_in_unsafe)]
+
 pub mod error;
 pub mod io;
 pub mod mesh;

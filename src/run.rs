@@ -310,7 +310,7 @@ pub fn run(
         if let Some(b) = &bar {
             b.set_position(step);
         }
-        if step % check_every == 0 || Some(step) == next_out.peek().copied() {
+        if step.is_multiple_of(check_every) || Some(step) == next_out.peek().copied() {
             check_finite(comm, &sys, &layout, step, model.dt)?;
         }
         if Some(step) == next_out.peek().copied() {

@@ -65,3 +65,184 @@ fn slab_matches_table_2_fem_errors() {
         assert!(e1[i] / e2[i] > 3.0, "output {i}: ratio {}", e1[i] / e2[i]);
     }
 }
+
+/// Steady state: theta = 1, one step of 1e12 s, T = 0 and T = 1 held on the
+/// two ends: the linear profile T = x, exactly representable, to 1e-10.
+#[test]
+fn steady_profile_is_linear_to_1e10() {
+    let out = out_dir("slab-steady");
+    run_ok(1, &root().join("scenarios/slab-steady.toml"), &out, &[]);
+    let r = read_results(&out, "slab-steady");
+    let last = r.temperature.len() - 1;
+    let worst = r
+        .coords
+        .iter()
+        .zip(&r.temperature[last])
+        .map(|(x, &t)| (t - x[0]).abs())
+        .fold(0.0, f64::max);
+    assert!(worst < 1e-10, "max |T - x| = {worst:e}");
+}
+
+fn history(dir: &std::path::Path, stem: &str) -> (Vec<String>, Vec<Vec<f64>>) {
+    let text = std::fs::read_to_string(dir.join(format!("{stem}_history.csv"))).unwrap();
+    let mut lines = text.lines();
+    let header = lines.next().unwrap().split(',').map(String::from).collect();
+    let rows = lines
+        .map(|l| l.split(',').map(|v| v.parse::<f64>().unwrap()).collect())
+        .collect();
+    (header, rows)
+}
+
+/// Heat through the boundary (Dirichlet reactions, fluxes, convection,
+/// sources) equals the change of stored heat, at every output, for the
+/// explicit, Crank–Nicolson and backward-Euler schemes.
+#[test]
+fn energy_balance_to_solver_tolerance() {
+    let cases: [(&str, &[&str]); 4] = [
+        ("gmsh-block", &[]),
+        (
+            "slab-1d",
+            &[
+                "--set",
+                "thermal.theta=1",
+                "--set",
+                "time.end_time=10",
+                "--set",
+                "output.every=2000",
+                "--set",
+                "output.times=[]",
+            ],
+        ),
+        (
+            "slab-1d",
+            &[
+                "--set",
+                "thermal.theta=0.5",
+                "--set",
+                "time.end_time=10",
+                "--set",
+                "output.every=2000",
+                "--set",
+                "thermal.capacity=consistent",
+                "--set",
+                "output.times=[]",
+            ],
+        ),
+        (
+            "slab-1d",
+            &[
+                "--set",
+                "thermal.theta=0",
+                "--set",
+                "time.end_time=10",
+                "--set",
+                "output.every=2000",
+                "--set",
+                "output.times=[]",
+            ],
+        ),
+    ];
+    for (i, (stem, extra)) in cases.iter().enumerate() {
+        let out = out_dir(&format!("energy-{i}"));
+        run_ok(
+            1,
+            &root().join(format!("scenarios/{stem}.toml")),
+            &out,
+            extra,
+        );
+        let (h, rows) = history(&out, stem);
+        let stored = h.iter().position(|c| c == "stored_heat").unwrap();
+        let inflow = h.iter().position(|c| c == "boundary_heat_in").unwrap();
+        let e0 = rows[0][stored];
+        let scale = rows
+            .iter()
+            .map(|r| (r[stored] - e0).abs())
+            .fold(0.0, f64::max);
+        assert!(scale > 0.0, "case {i}: nothing happened");
+        assert!(rows.len() >= 3, "case {i}: too few outputs");
+        for r in &rows {
+            let bal = (r[stored] - e0 - r[inflow]).abs() / scale;
+            assert!(
+                bal < 1e-8,
+                "case {i} ({stem} {extra:?}) at t = {}: imbalance {bal:e}",
+                r[1]
+            );
+        }
+    }
+}
+
+/// Time-stepping error at t = 10 s against the exact semi-discrete solution
+/// (same mesh, eigen-decomposition): order 1 for theta = 0 and 1, order 2 for
+/// theta = 0.5.
+#[test]
+fn theta_schemes_converge_at_their_orders() {
+    use fdem::mesh::generate::box_mesh;
+    use fdem::validation::{dense_operators, semidiscrete_solution};
+    let mesh = box_mesh([0.0; 3], [1.0, 0.1, 0.1], 0.1).unwrap();
+    let xmax = mesh.set_nodes("xmax").unwrap();
+    let mut t0 = vec![0.0; mesh.nodes.len()];
+    for &n in &xmax {
+        t0[n as usize] = 1.0;
+    }
+    let t_end = 10.0;
+    // (theta, capacity, time steps, expected order)
+    let (m_l, k) = dense_operators(&mesh, 1.0, 100.0, true);
+    // Explicit stability limit 2/λmax of M_L⁻¹K.
+    let lmax = {
+        let d = m_l.map_diagonal(|x| 1.0 / x.sqrt());
+        let a = nalgebra::DMatrix::from_diagonal(&d) * &k * nalgebra::DMatrix::from_diagonal(&d);
+        a.symmetric_eigen().eigenvalues.max()
+    };
+    let dt0 = (2.0 / lmax * 0.8).min(0.1);
+    let cases = [
+        (1.0, "consistent", [0.4, 0.2, 0.1], 1.0),
+        (0.5, "consistent", [0.1, 0.05, 0.025], 2.0),
+        (0.0, "lumped", [dt0, dt0 / 2.0, dt0 / 4.0], 1.0),
+    ];
+    for (theta, cap, dts, order) in cases {
+        let (m, k) = dense_operators(&mesh, 1.0, 100.0, cap == "lumped");
+        let exact = semidiscrete_solution(&m, &k, &t0, &xmax, t_end);
+        let errs: Vec<f64> = dts
+            .iter()
+            .enumerate()
+            .map(|(j, dt)| {
+                // dt chosen so that t_end is a whole number of steps.
+                let steps = (t_end / dt).round();
+                let dt = t_end / steps;
+                let out = out_dir(&format!("order-{theta}-{j}"));
+                let sets = [
+                    format!("thermal.theta={theta}"),
+                    format!("thermal.capacity={cap}"),
+                    format!("time.dt={dt}"),
+                    format!("time.end_time={t_end}"),
+                    "output.times=[]".to_string(),
+                    "bodies.bar.mesh.element_size=0.1".to_string(),
+                ];
+                let mut args = vec![];
+                for s in &sets {
+                    args.push("--set");
+                    args.push(s.as_str());
+                }
+                run_ok(1, &root().join("scenarios/slab-1d.toml"), &out, &args);
+                let r = read_results(&out, "slab-1d");
+                let last = r.temperature.len() - 1;
+                r.temperature[last]
+                    .iter()
+                    .zip(&exact)
+                    .map(|(a, b)| (a - b).abs())
+                    .fold(0.0, f64::max)
+            })
+            .collect();
+        let p1 = (errs[0] / errs[1]).log2();
+        let p2 = (errs[1] / errs[2]).log2();
+        eprintln!("theta = {theta}: errors {errs:?}, observed orders {p1:.3}, {p2:.3}");
+        assert!(
+            errs[2] < errs[1] && errs[1] < errs[0],
+            "theta {theta}: not converging"
+        );
+        assert!(
+            (p2 - order).abs() < 0.15,
+            "theta {theta}: order {p2} (expected {order})"
+        );
+    }
+}

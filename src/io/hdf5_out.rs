@@ -16,6 +16,8 @@ use super::{check_name, output_paths, remove_outputs, IoError};
 /// Initial local-heap size of a field's step group: room for the link names of
 /// this many steps before the heap has to be moved (and its old block freed).
 const STEP_NAMES_RESERVED: usize = 16_384;
+/// Half the capacity of a symbol-table leaf node (HDF5 default 4).
+const SYMBOL_LEAF_K: u32 = 256;
 /// Chunk length of `/time`.
 const TIME_CHUNK: usize = 512;
 
@@ -475,6 +477,9 @@ impl Inner {
         };
         let file = File::with_options()
             .with_fapl(|p| p.mpio(comm.as_raw(), None))
+            // Symbol-table leaves of up to 2 * 256 links: a step group's leaf is
+            // split (new leaf + B-tree update) only every few hundred steps.
+            .with_fcpl(|p| p.sym_k(16, SYMBOL_LEAF_K))
             .create(path)
             .map_err(h5err("creating the file with the MPI-IO driver"))?;
         let xfer = CollectiveXfer::new().map_err(call("creating a transfer property list"))?;

@@ -40,7 +40,8 @@
 //! appended blocks; nothing is freed and reused, so the blocks of the last flushed
 //! state stay intact. (Each field's step group reserves local-heap room for 16384
 //! step names up front because a growing heap would be moved and its old block
-//! freed.) The file uses the default (earliest) format bounds on purpose: the 1.10
+//! freed; symbol-table leaves hold 512 links so that they rarely split.) The file
+//! uses the default (earliest) format bounds on purpose: the 1.10
 //! "latest" superblock carries open-for-write flags that make an unclosed file
 //! unreadable without `h5clear`.
 //!

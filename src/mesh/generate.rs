@@ -167,6 +167,37 @@ pub fn box_mesh(origin: [f64; 3], size: [f64; 3], h: f64) -> Result<TetMesh, Mes
     Ok(mesh)
 }
 
+/// Move every node not on the boundary by a deterministic pseudo-random
+/// offset in [−a, a]³ (a = `amplitude`), turning a structured mesh into an
+/// irregular one for tests. `seed` selects the sequence. Fails if a tet
+/// would invert (keep `amplitude` below about a fifth of the spacing).
+pub fn jitter_interior(mesh: &mut TetMesh, amplitude: f64, seed: u64) -> Result<(), MeshError> {
+    let mut on_boundary = vec![false; mesh.nodes.len()];
+    for f in mesh.boundary_faces() {
+        for n in f.nodes {
+            on_boundary[n as usize] = true;
+        }
+    }
+    // SplitMix64: small, deterministic, good enough for mesh jitter.
+    let mut state = seed.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    let mut next = move || {
+        state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = state;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^= z >> 31;
+        (z >> 11) as f64 / (1u64 << 53) as f64
+    };
+    for (n, p) in mesh.nodes.iter_mut().enumerate() {
+        if !on_boundary[n] {
+            for x in p.iter_mut() {
+                *x += amplitude * (2.0 * next() - 1.0);
+            }
+        }
+    }
+    mesh.validate()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -107,7 +107,8 @@ pub fn error_from_code(func: &'static str, code: i32) -> PetscError {
 /// Call a PETSc function and turn its error code into `Result<(), PetscError>`.
 ///
 /// `petsc_call!(VecAXPY(y, a, x))` calls `petsc_sys::VecAXPY` in an unsafe
-/// block; the caller guarantees the arguments are valid handles.
+/// block; the caller guarantees the arguments are valid handles (the macro
+/// is used only inside the safe layer, whose types own those handles).
 #[macro_export]
 macro_rules! petsc_call {
     ($func:ident ( $($arg:expr),* $(,)? )) => {{

@@ -155,8 +155,10 @@ impl Petsc {
 
 impl Drop for Petsc {
     fn drop(&mut self) {
-        // SAFETY: all objects borrowing the guard are gone (lifetimes).
+        // SAFETY: all objects borrowing the guard are gone (lifetimes);
+        // the handler pushed in `init` is popped so PETSc frees it.
         unsafe {
+            ffi::PetscPopErrorHandler();
             ffi::PetscFinalize();
         }
     }

@@ -1,0 +1,23 @@
+#!/usr/bin/env bash
+# Set up if needed, then: cargo fmt --check, clippy -D warnings, and every
+# test. The validation tests run the fdem binary on 1 rank and under
+# `mpirun -n 2` (tests/two_rank.rs, tests/bad_input.rs), so the two-rank
+# tests run here too; the last step runs a two-rank job directly.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+source scripts/env.sh
+bash scripts/setup.sh
+
+echo "== cargo fmt --check"
+cargo fmt --all -- --check
+echo "== cargo clippy -D warnings"
+cargo clippy --release --all-targets -- -D warnings
+echo "== cargo test (unit, validation, 1- and 2-rank)"
+cargo test --release --workspace
+echo "== mpirun -n 2: two-rank run of the Gmsh block with PETSc options"
+out="$(mktemp -d)"
+mpirun -n 2 --oversubscribe target/release/fdem run scenarios/gmsh-block.toml \
+  --quiet --output "$out" -ksp_type cg -pc_type gamg -ksp_rtol 1e-12
+h5dump -H "$out/gmsh-block.h5" >/dev/null
+rm -rf "$out"
+echo "== all tests passed"

@@ -1,0 +1,243 @@
+//! Bad input gives a clear error naming the file, key or element, a
+//! non-zero exit, and no corrupt output, on one and two ranks.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::Output;
+
+use common::*;
+
+fn scenario_dir(name: &str) -> PathBuf {
+    out_dir(&format!("bad-{name}"))
+}
+
+fn write(dir: &Path, file: &str, text: &str) -> PathBuf {
+    let p = dir.join(file);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+const BASE: &str = r#"
+[time]
+dt = 0.5
+steps = 4
+
+[[materials]]
+name = "m"
+conductivity = 1.0
+specific_heat = 1.0
+density = 100.0
+
+[[bodies]]
+name = "bar"
+material = "m"
+mesh = { kind = "box", size = [1.0, 0.1, 0.1], element_size = 0.1 }
+
+[[thermal.bc]]
+kind = "temperature"
+set = "bar.xmax"
+value = 1.0
+"#;
+
+fn run_bad(ranks: usize, scen: &Path, out: &Path, extra: &[&str]) -> (Output, String) {
+    let mut args = vec![
+        "run",
+        scen.to_str().unwrap(),
+        "--quiet",
+        "--output",
+        out.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    let o = fdem(ranks, &args);
+    let err = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert!(
+        !o.status.success(),
+        "{scen:?} {extra:?} should fail; stderr: {err}"
+    );
+    (o, err)
+}
+
+fn assert_no_output(out: &Path) {
+    let files: Vec<_> = std::fs::read_dir(out)
+        .map(|d| d.flatten().map(|e| e.file_name()).collect())
+        .unwrap_or_default();
+    assert!(files.is_empty(), "output left behind: {files:?}");
+}
+
+fn h5dump_ok(h5: &Path) {
+    let o = std::process::Command::new("h5dump")
+        .arg("-H")
+        .arg(h5)
+        .output()
+        .expect("h5dump");
+    assert!(
+        o.status.success(),
+        "h5dump -H {h5:?} failed: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+}
+
+#[test]
+fn malformed_toml_names_file_and_line() {
+    for ranks in [1, 2] {
+        let d = scenario_dir(&format!("malformed-{ranks}"));
+        let s = write(&d, "bad.toml", &BASE.replace("[time]", "[time"));
+        let out = d.join("out");
+        let (_, err) = run_bad(ranks, &s, &out, &[]);
+        assert!(err.contains("bad.toml") && err.contains("line"), "{err}");
+        assert_no_output(&out);
+    }
+}
+
+#[test]
+fn unknown_key_is_named() {
+    let d = scenario_dir("unknown-key");
+    let s = write(
+        &d,
+        "bad.toml",
+        &BASE.replace("density = 100.0", "density = 100.0\nconductivty = 2.0"),
+    );
+    let (_, err) = run_bad(1, &s, &d.join("out"), &[]);
+    assert!(
+        err.contains("bad.toml") && err.contains("conductivty"),
+        "{err}"
+    );
+    assert_no_output(&d.join("out"));
+}
+
+#[test]
+fn missing_mesh_file_is_named() {
+    let d = scenario_dir("missing-mesh");
+    let text = BASE.replace(
+        r#"mesh = { kind = "box", size = [1.0, 0.1, 0.1], element_size = 0.1 }"#,
+        r#"mesh = { kind = "gmsh", file = "nowhere.msh" }"#,
+    );
+    let s = write(&d, "bad.toml", &text);
+    let (_, err) = run_bad(1, &s, &d.join("out"), &[]);
+    assert!(err.contains("nowhere.msh") && err.contains("bar"), "{err}");
+    assert_no_output(&d.join("out"));
+}
+
+#[test]
+fn inverted_tet_is_named() {
+    let d = scenario_dir("inverted");
+    let mut m = fdem::mesh::generate::box_mesh([0.0; 3], [1.0, 0.1, 0.1], 0.1).unwrap();
+    m.tets[5].swap(2, 3);
+    fdem::mesh::gmsh::write_msh_ascii(&m, &d.join("inv.msh")).unwrap();
+    let text = BASE.replace(
+        r#"mesh = { kind = "box", size = [1.0, 0.1, 0.1], element_size = 0.1 }"#,
+        r#"mesh = { kind = "gmsh", file = "inv.msh" }"#,
+    );
+    let s = write(&d, "bad.toml", &text);
+    let (_, err) = run_bad(1, &s, &d.join("out"), &[]);
+    assert!(err.contains("inverted") && err.contains("inv.msh"), "{err}");
+    assert_no_output(&d.join("out"));
+}
+
+#[test]
+fn negative_conductivity_is_named() {
+    let d = scenario_dir("negative-k");
+    let s = write(
+        &d,
+        "bad.toml",
+        &BASE.replace("conductivity = 1.0", "conductivity = -1.0"),
+    );
+    let (_, err) = run_bad(2, &s, &d.join("out"), &[]);
+    assert!(
+        err.contains("materials[0].conductivity") && err.contains("bad.toml"),
+        "{err}"
+    );
+    assert_eq!(
+        err.matches("materials[0].conductivity").count(),
+        1,
+        "printed once: {err}"
+    );
+    assert_no_output(&d.join("out"));
+}
+
+#[test]
+fn unknown_set_is_named() {
+    let d = scenario_dir("unknown-set");
+    let s = write(&d, "bad.toml", &BASE.replace("bar.xmax", "bar.top"));
+    let (_, err) = run_bad(1, &s, &d.join("out"), &[]);
+    assert!(
+        err.contains("bar.top") && err.contains("bar.xmax"),
+        "lists available sets: {err}"
+    );
+    assert_no_output(&d.join("out"));
+}
+
+#[test]
+fn diverging_solver_is_an_error_and_output_stays_readable() {
+    for ranks in [1, 2] {
+        let d = scenario_dir(&format!("diverge-{ranks}"));
+        let scen = root().join("scenarios/gmsh-block.toml");
+        let out = d.join("out");
+        let (_, err) = run_bad(
+            ranks,
+            &scen,
+            &out,
+            &["-ksp_type", "cg", "-pc_type", "none", "-ksp_max_it", "2"],
+        );
+        assert!(err.contains("DIVERGED_ITS"), "{err}");
+        // The initial state was written before the failure; the file is valid.
+        h5dump_ok(&out.join("gmsh-block.h5"));
+        let times = fdem::io::read_times(&out.join("gmsh-block.h5")).unwrap();
+        assert_eq!(times, vec![0.0]);
+    }
+}
+
+#[test]
+fn blow_up_to_nan_is_reported_with_node() {
+    // theta = 0 far above the explicit stability limit.
+    let d = scenario_dir("nan");
+    let s = write(
+        &d,
+        "bad.toml",
+        &BASE.replace("steps = 4", "steps = 5000").replace(
+            "[[thermal.bc]]",
+            "[thermal]\ntheta = 0.0\ncapacity = \"lumped\"\n\n[[thermal.bc]]",
+        ),
+    );
+    let (_, err) = run_bad(1, &s, &d.join("out"), &[]);
+    assert!(
+        err.contains("non-finite temperature") && err.contains("node"),
+        "{err}"
+    );
+    h5dump_ok(&d.join("out").join("bad.h5"));
+}
+
+#[test]
+fn killed_run_leaves_readable_output() {
+    let d = scenario_dir("killed");
+    let out = d.join("out");
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_fdem"))
+        .args([
+            "run",
+            root().join("scenarios/slab-1d.toml").to_str().unwrap(),
+            "--quiet",
+            "--output",
+        ])
+        .arg(&out)
+        .args([
+            "--set",
+            "output.every=20",
+            "--set",
+            "bodies.bar.mesh.element_size=0.05",
+        ])
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(700));
+    child.kill().unwrap(); // SIGKILL
+    let _ = child.wait();
+    let h5 = out.join("slab-1d.h5");
+    h5dump_ok(&h5);
+    let xdmf = std::fs::read_to_string(out.join("slab-1d.xdmf")).unwrap();
+    let listed = xdmf.matches("<Time ").count();
+    let stored = fdem::io::read_times(&h5).unwrap().len();
+    assert!(
+        listed >= 1 && listed <= stored,
+        "xdmf lists {listed}, h5 holds {stored}"
+    );
+}

@@ -1,0 +1,104 @@
+//! One rank against two: the same nodal temperatures (relative 1e-8) for
+//! the slab (direct, explicit and CG/GAMG paths) and an irregular Gmsh mesh,
+//! with the METIS partition cutting through the body.
+
+mod common;
+
+use common::*;
+
+fn compare(tag: &str, stem: &str, extra1: &[&str], extra2: &[&str], tol: f64) {
+    let scen = root().join(format!("scenarios/{stem}.toml"));
+    let o1 = out_dir(&format!("np1-{tag}"));
+    let o2 = out_dir(&format!("np2-{tag}"));
+    run_ok(1, &scen, &o1, extra1);
+    run_ok(2, &scen, &o2, extra2);
+    let r1 = read_results(&o1, stem);
+    let r2 = read_results(&o2, stem);
+    assert_eq!(r1.times, r2.times);
+    assert_eq!(r1.coords, r2.coords, "same mesh in original numbering");
+    for k in 0..r1.times.len() {
+        let d = rel_diff(&r1.temperature[k], &r2.temperature[k]);
+        assert!(
+            d < tol,
+            "{stem} {extra2:?}: step {k} (t = {}): relative difference {d:e}",
+            r1.times[k]
+        );
+    }
+    // The partition really cuts the mesh: both ranks own elements.
+    let ranks =
+        fdem::io::read_static_cell_field_i32(&o2.join(format!("{stem}.h5")), "rank").unwrap();
+    assert!(
+        ranks.contains(&0) && ranks.contains(&1),
+        "partition did not split the mesh"
+    );
+}
+
+#[test]
+fn slab_direct_one_vs_two_ranks() {
+    let s = [
+        "--set",
+        "bodies.bar.mesh.element_size=0.05",
+        "--set",
+        "time.end_time=5",
+        "--set",
+        "output.times=[1.0, 5.0]",
+    ];
+    compare("slab-direct", "slab-1d", &s, &s, 1e-8);
+}
+
+#[test]
+fn slab_explicit_one_vs_two_ranks() {
+    let s = [
+        "--set",
+        "thermal.theta=0",
+        "--set",
+        "time.end_time=5",
+        "--set",
+        "output.times=[5.0]",
+    ];
+    compare("slab-explicit", "slab-1d", &s, &s, 1e-8);
+}
+
+#[test]
+fn gmsh_block_one_vs_two_ranks() {
+    compare("gmsh-direct", "gmsh-block", &[], &[], 1e-8);
+}
+
+#[test]
+fn gmsh_block_cg_gamg_from_command_line_matches_direct() {
+    // PETSc options pass straight through the command line.
+    let petsc = ["-ksp_type", "cg", "-pc_type", "gamg", "-ksp_rtol", "1e-13"];
+    compare("gmsh-gamg", "gmsh-block", &[], &petsc, 1e-8);
+}
+
+/// PETSc's `-malloc_dump` lists every PETSc allocation not freed by
+/// `PetscFinalize`; a run on two ranks must list none.
+#[test]
+fn no_petsc_leaks_under_malloc_dump() {
+    let out = out_dir("malloc-dump");
+    let scen = root().join("scenarios/gmsh-block.toml");
+    let o = fdem(
+        2,
+        &[
+            "run",
+            scen.to_str().unwrap(),
+            "--quiet",
+            "--output",
+            out.to_str().unwrap(),
+            "-malloc_debug",
+            "-malloc_dump",
+        ],
+    );
+    let all = format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(o.status.success(), "{all}");
+    let leaks: Vec<&str> = all.lines().filter(|l| l.contains(" bytes ")).collect();
+    assert!(
+        leaks.is_empty(),
+        "PETSc reports leaks:\n{}",
+        leaks.join("\n")
+    );
+}

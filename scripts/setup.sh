@@ -14,6 +14,7 @@ PKGS=(
   libmetis-dev
   libhdf5-openmpi-dev
   hdf5-tools          # h5dump, used by tests to check output files
+  bc                  # arithmetic in scripts/bench.sh
 )
 
 missing=()

@@ -39,20 +39,30 @@ pub struct SolverChoice {
 }
 
 impl SolverChoice {
-    /// Sparse direct (Cholesky, factorised once) up to 50,000 unknowns:
-    /// PETSc's own on one rank, MUMPS on several. Above that, CG with
-    /// algebraic multigrid (GAMG), which also handles the steady limit
-    /// (large Δt) where the capacity no longer dominates the operator.
+    /// Up to 50,000 unknowns, a sparse direct solve factorised once:
+    /// Cholesky with nested-dissection ordering on one rank; on several,
+    /// PETSc's `redundant` PC (each rank factorises the whole matrix once,
+    /// and a solve costs one gather), which beats a distributed direct
+    /// solver (MUMPS: 178 us per step on the 189-node slab, against 7 us)
+    /// at these sizes. Above that, CG with algebraic multigrid (GAMG),
+    /// which also handles the steady limit (large dt) where the capacity no
+    /// longer dominates the operator.
     pub fn auto(global_rows: usize, ranks: usize) -> SolverChoice {
-        if global_rows <= 50_000 {
-            let mut defaults = vec![("pc_factor_mat_ordering_type".to_string(), "nd".to_string())];
-            if ranks > 1 {
-                defaults = vec![("pc_factor_mat_solver_type".to_string(), "mumps".to_string())];
-            }
+        let opt = |k: &str, v: &str| (k.to_string(), v.to_string());
+        if global_rows <= 50_000 && ranks == 1 {
             SolverChoice {
                 ksp_type: "preonly".into(),
                 pc_type: "cholesky".into(),
-                defaults,
+                defaults: vec![opt("pc_factor_mat_ordering_type", "nd")],
+            }
+        } else if global_rows <= 50_000 {
+            SolverChoice {
+                ksp_type: "preonly".into(),
+                pc_type: "redundant".into(),
+                defaults: vec![
+                    opt("redundant_pc_type", "cholesky"),
+                    opt("redundant_pc_factor_mat_ordering_type", "nd"),
+                ],
             }
         } else {
             SolverChoice {

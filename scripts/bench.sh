@@ -1,0 +1,84 @@
+#!/usr/bin/env bash
+# Benchmarks: build in release mode, run each case, and write
+# docs/benchmarks.md with the machine, the commands and the figures.
+# Figures are what this run measured; nothing is copied from elsewhere.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+source scripts/env.sh
+bash scripts/setup.sh
+cargo build --release --bin fdem
+BIN=target/release/fdem
+OUT=$(mktemp -d)
+trap 'rm -rf "$OUT"' EXIT
+DOC=docs/benchmarks.md
+mkdir -p docs
+
+rows=()
+# run_case LABEL RANKS SCENARIO [args...]
+run_case() {
+  local label=$1 ranks=$2 scen=$3
+  shift 3
+  local cmd=("$BIN" run "$scen" --quiet --output "$OUT/run" "$@")
+  if [ "$ranks" -gt 1 ]; then cmd=(mpirun -n "$ranks" --oversubscribe "${cmd[@]}"); fi
+  echo "== $label: ${cmd[*]}" >&2
+  local t0 t1 log
+  t0=$(date +%s.%N)
+  log=$("${cmd[@]}")
+  t1=$(date +%s.%N)
+  echo "$log" >&2
+  local wall steps its stepping perstep mem
+  wall=$(echo "$t1 - $t0" | bc -l)
+  steps=$(echo "$log" | awk '/^  steps/ {print $2}')
+  its=$(echo "$log" | awk '/^  steps/ {gsub(/\(/,"",$3); print $3}')
+  stepping=$(echo "$log" | sed -n 's/.*stepping \([0-9.]*\).*/\1/p')
+  perstep=$(echo "$log" | awk '/^  per step/ {print $3}')
+  mem=$(echo "$log" | awk '/memory/ {print $3}')
+  local solver
+  solver=$(echo "$log" | awk '/^  solver/ {print $2}')
+  local mesh
+  mesh=$(echo "$log" | awk '/^  mesh/ {print $2" nodes, "$4" tets"}')
+  rows+=("| $label | $ranks | $mesh | $solver | $steps | $(printf '%.2f' "$(echo "$its / $steps" | bc -l)") | $perstep | $stepping | $(printf '%.2f' "$wall") | $mem |")
+  # Keep the exact command for the report.
+  cmds+=("${cmd[*]/$OUT\/run/OUT}")
+}
+cmds=()
+
+run_case "slab h=0.1 m, 200,000 steps (seed 000 sec 4.2)" 1 scenarios/slab-1d.toml
+run_case "slab h=0.05 m, 200,000 steps" 1 scenarios/slab-1d.toml --set bodies.bar.mesh.element_size=0.05
+run_case "slab h=0.05 m, 200,000 steps" 2 scenarios/slab-1d.toml --set bodies.bar.mesh.element_size=0.05
+run_case "cube 1.05M tets, 20 implicit steps" 1 scenarios/bench-cube-1m.toml
+run_case "cube 1.05M tets, 20 implicit steps" 2 scenarios/bench-cube-1m.toml
+
+{
+  echo "# Benchmarks"
+  echo
+  echo "Written by \`scripts/bench.sh\` on $(date -u +%Y-%m-%d) at commit \`$(git rev-parse --short HEAD 2>/dev/null || echo unknown)\`."
+  echo
+  echo "## Machine"
+  echo
+  echo "- CPU: $(lscpu | sed -n 's/^Model name: *//p') ($(nproc) cores available)"
+  echo "- Memory: $(free -g | awk '/Mem:/ {print $2}') GiB"
+  echo "- OS: $(. /etc/os-release; echo "$PRETTY_NAME"), $(mpirun --version | head -1), PETSc $(pkg-config --modversion PETSc)"
+  echo
+  echo "## Figures"
+  echo
+  echo "Per step = stepping time / steps (the time loop only: the matrix-vector"
+  echo "product and the solve, no set-up, no output). Wall = the whole process,"
+  echo "including start-up, mesh, assembly, factorisation and output. Peak memory"
+  echo "= VmHWM per rank, the largest over ranks."
+  echo
+  echo "| case | ranks | mesh | solver | steps | KSP its/step | per step (us) | stepping (s) | wall (s) | peak MiB/rank |"
+  echo "|---|---|---|---|---|---|---|---|---|---|"
+  for r in "${rows[@]}"; do echo "$r"; done
+  echo
+  echo "## Commands"
+  echo
+  for c in "${cmds[@]}"; do echo "- \`$c\`"; done
+  echo
+  echo "## Targets (issue 2)"
+  echo
+  echo "- Slab 0.05 m, 200,000 steps under 3 s on 1 rank (the paper: 21.4 min on a 2.3 GHz Xeon)."
+  echo "- Slab 0.1 m, 200,000 steps under 1.5 s (the paper: 2.3 min)."
+  echo "- The errors of these runs are those asserted by tests/slab.rs (docs/validation.md)."
+} > "$DOC"
+echo "wrote $DOC" >&2

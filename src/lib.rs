@@ -2,6 +2,8 @@
 //! thermo-mechanics of 3D particle systems.
 //!
 //! Module map (see README "Architecture"):
+//! - [`geometry`]: convex clipping (triangle ∩ tet), polygon area, tet overlap.
+//! - [`contact`]: contact detection (BVH broad phase, clipping narrow phase), contact surfaces and conductances.
 //! - [`mesh`]: Tet4 meshes, boundary faces, quality checks, Gmsh import, generators.
 //! - [`thermal`]: element matrices and loads (seed 000 eqs 14–20), theta integrator (eq 22).
 //! - [`parallel`]: METIS partition, owned/ghost numbering matching PETSc ownership.
@@ -16,7 +18,9 @@
 // only by the safe PETSc layer, whose types own the handles it passes.
 #![allow(clippy::macro_metavars_in_unsafe)]
 
+pub mod contact;
 pub mod error;
+pub mod geometry;
 pub mod io;
 pub mod mesh;
 pub mod model;

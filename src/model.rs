@@ -5,9 +5,10 @@
 //! Later stages extend it (contact pairs and conductance, mechanical
 //! materials and constraints, joints) without changing what is here.
 
+use crate::contact::DeltaT;
 use crate::error::{Error, Result};
 use crate::mesh::{self, TetMesh};
-use crate::scenario::{CapacityKind, LoadedScenario, MeshSpec, ThermalBcSpec};
+use crate::scenario::{contact_resistance, CapacityKind, LoadedScenario, MeshSpec, ThermalBcSpec};
 
 /// A material's thermal constants.
 #[derive(Debug, Clone, PartialEq)]
@@ -27,6 +28,8 @@ pub struct Material {
 pub struct Body {
     /// Name (its sets are `<name>.<set>` in the combined mesh).
     pub name: String,
+    /// The scenario entry it comes from (differs from `name` for lattice copies).
+    pub template: String,
     /// Index into [`Model::materials`].
     pub material: usize,
     /// Initial temperature.
@@ -56,6 +59,17 @@ pub struct ThermalProblem {
     pub initial: Vec<f64>,
 }
 
+/// Contact heat transfer settings resolved to material indices.
+#[derive(Debug, Clone)]
+pub struct ContactModel {
+    /// Rc between materials i and j (symmetric; infinite: no heat).
+    pub resistance: Vec<Vec<f64>>,
+    /// How ΔT is taken.
+    pub delta_t: DeltaT,
+    /// Detection cadence in steps (0: once).
+    pub every: u64,
+}
+
 /// Everything a run needs, independent of the rank count.
 #[derive(Debug, Clone)]
 pub struct Model {
@@ -67,6 +81,8 @@ pub struct Model {
     pub bodies: Vec<Body>,
     /// Thermal problem.
     pub thermal: ThermalProblem,
+    /// Contact heat transfer, when the scenario has a `[contact]` table.
+    pub contact: Option<ContactModel>,
     /// Time step (s).
     pub dt: f64,
     /// Number of steps.
@@ -98,7 +114,7 @@ impl Model {
             .collect();
         let mut combined = TetMesh::default();
         let mut bodies = Vec::new();
-        for (bi, b) in s.bodies.iter().enumerate() {
+        for b in &s.bodies {
             let context = format!("{path}: body `{}`", b.name);
             let mut m = match &b.mesh {
                 MeshSpec::Box {
@@ -106,18 +122,27 @@ impl Model {
                     size,
                     element_size,
                 } => mesh::generate::box_mesh(*origin, *size, *element_size),
+                MeshSpec::Cylinder {
+                    center,
+                    radius,
+                    width,
+                    element_size,
+                } => mesh::generate::cylinder_mesh(*center, *radius, *width, *element_size),
                 MeshSpec::Gmsh { file } => mesh::gmsh::read_msh(&sc.resolve(file)),
             }
             .map_err(|source| Error::Mesh {
                 context: context.clone(),
                 source,
             })?;
-            if let Some(t) = b.translate {
+            if let Some(r) = b.rotate {
+                let rot = rotation_xyz_degrees(r);
                 for p in m.nodes.iter_mut() {
-                    for d in 0..3 {
-                        p[d] += t[d];
-                    }
+                    let q = rot * nalgebra::Vector3::new(p[0], p[1], p[2]);
+                    *p = [q.x, q.y, q.z];
                 }
+            }
+            if let Some(t) = b.translate {
+                translate(&mut m, t);
             }
             m.validate().map_err(|source| Error::Mesh {
                 context: context.clone(),
@@ -131,32 +156,48 @@ impl Model {
             }
             // One body per scenario entry, whatever the file's volumes.
             m.body.iter_mut().for_each(|x| *x = 0);
-            m.node_sets = std::mem::take(&mut m.node_sets)
-                .into_iter()
-                .map(|(k, v)| (format!("{}.{k}", b.name), v))
-                .collect();
-            m.face_sets = std::mem::take(&mut m.face_sets)
-                .into_iter()
-                .map(|(k, v)| (format!("{}.{k}", b.name), v))
-                .collect();
-            m.elem_sets = std::mem::take(&mut m.elem_sets)
-                .into_iter()
-                .map(|(k, v)| (format!("{}.{k}", b.name), v))
-                .collect();
-            let n0 = combined.nodes.len() as u32;
-            let e0 = combined.tets.len() as u32;
-            combined.append(m, bi as u32);
             let material = materials
                 .iter()
                 .position(|mm| mm.name == b.material)
                 .expect("validated");
-            bodies.push(Body {
-                name: b.name.clone(),
-                material,
-                initial_temperature: b.initial_temperature,
-                node_range: (n0, combined.nodes.len() as u32),
-                elem_range: (e0, combined.tets.len() as u32),
-            });
+            // The body itself, or its copies on a lattice.
+            let copies: Vec<(String, [f64; 3])> = match &b.lattice {
+                None => vec![(b.name.clone(), [0.0; 3])],
+                Some(l) => {
+                    let mut v = Vec::new();
+                    for k in 0..l.count[2] {
+                        for j in 0..l.count[1] {
+                            for i in 0..l.count[0] {
+                                let off = [
+                                    i as f64 * l.spacing[0],
+                                    j as f64 * l.spacing[1],
+                                    k as f64 * l.spacing[2],
+                                ];
+                                v.push((format!("{}_{i}_{j}_{k}", b.name), off));
+                            }
+                        }
+                    }
+                    v
+                }
+            };
+            for (name, off) in copies {
+                let mut c = m.clone();
+                translate(&mut c, off);
+                c.node_sets = prefix_sets(std::mem::take(&mut c.node_sets), &name);
+                c.face_sets = prefix_sets(std::mem::take(&mut c.face_sets), &name);
+                c.elem_sets = prefix_sets(std::mem::take(&mut c.elem_sets), &name);
+                let n0 = combined.nodes.len() as u32;
+                let e0 = combined.tets.len() as u32;
+                combined.append(c, bodies.len() as u32);
+                bodies.push(Body {
+                    name,
+                    template: b.name.clone(),
+                    material,
+                    initial_temperature: b.initial_temperature,
+                    node_range: (n0, combined.nodes.len() as u32),
+                    elem_range: (e0, combined.tets.len() as u32),
+                });
+            }
         }
 
         let mut thermal = ThermalProblem {
@@ -238,11 +279,42 @@ impl Model {
         output_steps.sort_unstable();
         output_steps.dedup();
 
+        let contact = match &s.contact {
+            None => None,
+            Some(c) => {
+                let default = contact_resistance(c.resistance, c.conductance)
+                    .map_err(|m| model_err(format!("contact: {m}")))?
+                    .unwrap_or(f64::INFINITY);
+                let nm = materials.len();
+                let mut rc = vec![vec![default; nm]; nm];
+                for p in &c.pair {
+                    let r = contact_resistance(p.resistance, p.conductance)
+                        .map_err(|m| model_err(format!("contact.pair: {m}")))?
+                        .unwrap_or(f64::INFINITY);
+                    let idx = |n: &str| {
+                        materials
+                            .iter()
+                            .position(|m| m.name == n)
+                            .expect("validated")
+                    };
+                    let (a, b) = (idx(&p.materials[0]), idx(&p.materials[1]));
+                    rc[a][b] = r;
+                    rc[b][a] = r;
+                }
+                Some(ContactModel {
+                    resistance: rc,
+                    delta_t: c.delta_t,
+                    every: c.every,
+                })
+            }
+        };
+
         Ok(Model {
             mesh: combined,
             materials,
             bodies,
             thermal,
+            contact,
             dt,
             steps,
             output_steps,
@@ -254,6 +326,28 @@ impl Model {
         &self.materials[self.bodies[self.mesh.body[e] as usize].material]
     }
 
+    /// Contact resistance between the materials of elements `a` and `b`.
+    pub fn contact_resistance(&self, a: usize, b: usize) -> f64 {
+        let ma = self.bodies[self.mesh.body[a] as usize].material;
+        let mb = self.bodies[self.mesh.body[b] as usize].material;
+        self.contact
+            .as_ref()
+            .map_or(f64::INFINITY, |c| c.resistance[ma][mb])
+    }
+
+    /// Heat capacity ρcV/4 carried by each node (the row sums of M).
+    pub fn node_capacity(&self) -> Vec<f64> {
+        let mut w = vec![0.0; self.mesh.nodes.len()];
+        for e in 0..self.mesh.tets.len() {
+            let m = self.material_of(e);
+            let c = m.density * m.specific_heat * self.mesh.element_volume(e) / 4.0;
+            for &n in &self.mesh.tets[e] {
+                w[n as usize] += c;
+            }
+        }
+        w
+    }
+
     /// Body of node `n`.
     pub fn body_of_node(&self, n: u32) -> usize {
         self.bodies
@@ -261,6 +355,32 @@ impl Model {
             .position(|b| n >= b.node_range.0 && n < b.node_range.1)
             .unwrap_or(0)
     }
+}
+
+fn prefix_sets<V>(
+    sets: std::collections::BTreeMap<String, V>,
+    name: &str,
+) -> std::collections::BTreeMap<String, V> {
+    sets.into_iter()
+        .map(|(k, v)| (format!("{name}.{k}"), v))
+        .collect()
+}
+
+fn translate(m: &mut TetMesh, t: [f64; 3]) {
+    for p in m.nodes.iter_mut() {
+        for d in 0..3 {
+            p[d] += t[d];
+        }
+    }
+}
+
+/// Rotation by angles (degrees) about x, then y, then z.
+pub fn rotation_xyz_degrees(r: [f64; 3]) -> nalgebra::Matrix3<f64> {
+    let [ax, ay, az] = r.map(f64::to_radians);
+    let rx = nalgebra::Rotation3::from_axis_angle(&nalgebra::Vector3::x_axis(), ax);
+    let ry = nalgebra::Rotation3::from_axis_angle(&nalgebra::Vector3::y_axis(), ay);
+    let rz = nalgebra::Rotation3::from_axis_angle(&nalgebra::Vector3::z_axis(), az);
+    (rz * ry * rx).into_inner()
 }
 
 /// Find the set a scenario names: `<body>.<set>` exactly, or `<set>` when

@@ -11,6 +11,7 @@ use mpi::collective::SystemOperation;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
 
+use crate::contact::{detect_contacts, BoundaryTets, ContactPair, ContactSet, ContactSurface};
 use crate::error::{Error, Result};
 use crate::io::{HistoryWriter, MeshPart, TimeSeriesWriter};
 use crate::model::Model;
@@ -38,6 +39,8 @@ pub struct PhaseTimes {
     pub partition: f64,
     /// Assembly and solver set-up (factorisation).
     pub assembly: f64,
+    /// Contact detection and surfaces.
+    pub contact: f64,
     /// Time stepping (solves).
     pub stepping: f64,
     /// HDF5/XDMF/CSV output.
@@ -73,6 +76,12 @@ pub struct RunSummary {
     pub energy: EnergyAccount,
     /// Peak resident memory per rank, max over ranks (bytes).
     pub peak_memory: u64,
+    /// Contact pairs and total contact area at the end.
+    pub contacts: (usize, f64),
+    /// Contact detections run.
+    pub detections: u64,
+    /// Times the thermal operator was assembled.
+    pub assemblies: u64,
 }
 
 impl std::fmt::Display for RunSummary {
@@ -94,8 +103,13 @@ impl std::fmt::Display for RunSummary {
         )?;
         writeln!(
             f,
-            "  time [s]    model {:.3} | partition {:.3} | assembly+setup {:.3} | stepping {:.3} | output {:.3}",
-            t.model, t.partition, t.assembly, t.stepping, t.output
+            "  time [s]    model {:.3} | partition {:.3} | contact {:.3} | assembly+setup {:.3} | stepping {:.3} | output {:.3}",
+            t.model, t.partition, t.contact, t.assembly, t.stepping, t.output
+        )?;
+        writeln!(
+            f,
+            "  contact     {} pairs, area {:.6e} m^2; {} detection(s), operator assembled {} time(s)",
+            self.contacts.0, self.contacts.1, self.detections, self.assemblies
         )?;
         if self.steps > 0 {
             writeln!(
@@ -186,6 +200,50 @@ impl BodyStats {
     }
 }
 
+const PAIR_F64S: usize = 12;
+
+/// Collective. Detect contacts: each rank queries its own boundary tets,
+/// then all ranks gather every pair (for preallocation and statistics).
+pub fn find_contacts(
+    comm: &SimpleCommunicator,
+    model: &Model,
+    layout: &Layout,
+    bt: &BoundaryTets,
+) -> ContactSet {
+    if model.contact.is_none() {
+        return ContactSet::default();
+    }
+    let rank = layout.rank as u32;
+    let local = detect_contacts(&model.mesh, bt, |e| layout.elem_part[e as usize] == rank);
+    let mut flat = Vec::with_capacity(local.len() * PAIR_F64S);
+    for p in &local {
+        flat.extend_from_slice(&[
+            p.target as f64,
+            p.contactor as f64,
+            p.surface.s_target,
+            p.surface.s_contactor,
+        ]);
+        flat.extend_from_slice(&p.surface.w_target);
+        flat.extend_from_slice(&p.surface.w_contactor);
+    }
+    let gathered = crate::parallel::all_gather_f64(comm, &flat);
+    let mut all: Vec<ContactPair> = gathered
+        .chunks_exact(PAIR_F64S)
+        .map(|c| ContactPair {
+            target: c[0] as u32,
+            contactor: c[1] as u32,
+            surface: ContactSurface {
+                s_target: c[2],
+                s_contactor: c[3],
+                w_target: [c[4], c[5], c[6], c[7]],
+                w_contactor: [c[8], c[9], c[10], c[11]],
+            },
+        })
+        .collect();
+    all.sort_by_key(|p| (p.target, p.contactor));
+    ContactSet { all, local }
+}
+
 /// Collective. Run a scenario to the end.
 pub fn run(
     petsc: &Petsc,
@@ -205,8 +263,16 @@ pub fn run(
     times.partition = clock.elapsed().as_secs_f64();
 
     let clock = Instant::now();
-    let mut sys = ThermalSystem::new(petsc, &model, &layout, &sc.scenario.solver)?;
+    let bt = BoundaryTets::new(&model.mesh);
+    let mut contacts = find_contacts(comm, &model, &layout, &bt);
+    let mut detections = u64::from(model.contact.is_some());
+    times.contact = clock.elapsed().as_secs_f64();
+
+    let clock = Instant::now();
+    let solver = &sc.scenario.solver;
+    let mut sys = ThermalSystem::new(petsc, &model, &layout, solver, &contacts)?;
     times.assembly = clock.elapsed().as_secs_f64();
+    let detect_every = model.contact.as_ref().map_or(0, |c| c.every);
 
     // Output: only now that the input is known good are files created.
     let clock = Instant::now();
@@ -233,6 +299,8 @@ pub fn run(
         "stored_heat".into(),
         "boundary_heat_in".into(),
         "ksp_iterations".into(),
+        "contacts".into(),
+        "contact_area".into(),
     ];
     for b in &model.bodies {
         for s in ["min", "mean", "max"] {
@@ -246,6 +314,7 @@ pub fn run(
     let write_output = |sys: &mut ThermalSystem,
                         writer: &mut TimeSeriesWriter,
                         history: &mut HistoryWriter,
+                        contacts: &ContactSet,
                         step: u64|
      -> Result<()> {
         let time = step as f64 * model.dt;
@@ -258,6 +327,8 @@ pub fn run(
             e.stored,
             e.boundary_in(),
             sys.iterations as f64,
+            contacts.all.len() as f64,
+            contacts.total_area(),
         ];
         for s in stats.compute(comm, &t) {
             row.extend_from_slice(&s);
@@ -265,7 +336,7 @@ pub fn run(
         history.append(&row)?;
         Ok(())
     };
-    write_output(&mut sys, &mut writer, &mut history, 0)?;
+    write_output(&mut sys, &mut writer, &mut history, &contacts, 0)?;
     times.output += clock.elapsed().as_secs_f64();
 
     let bar = if opts.progress && rank == 0 {
@@ -292,10 +363,16 @@ pub fn run(
     let mut step = 0u64;
     while step < model.steps {
         // Run uninterrupted until the next output, check or progress tick.
+        let next_detect = if detect_every > 0 {
+            (step / detect_every + 1) * detect_every
+        } else {
+            model.steps
+        };
         let target = [
             next_out.peek().copied().unwrap_or(model.steps),
             (step / check_every + 1) * check_every,
             (step / tick + 1) * tick,
+            next_detect,
         ]
         .into_iter()
         .min()
@@ -310,13 +387,26 @@ pub fn run(
         if let Some(b) = &bar {
             b.set_position(step);
         }
+        if detect_every > 0 && step.is_multiple_of(detect_every) && step < model.steps {
+            // Rebuild the operator only when the contact set or its areas changed.
+            let clock = Instant::now();
+            let found = find_contacts(comm, &model, &layout, &bt);
+            detections += 1;
+            times.contact += clock.elapsed().as_secs_f64();
+            if !found.same_as(&contacts, 1e-12) {
+                let clock = Instant::now();
+                contacts = found;
+                sys.rebuild(petsc, &model, &layout, solver, &contacts)?;
+                times.assembly += clock.elapsed().as_secs_f64();
+            }
+        }
         if step.is_multiple_of(check_every) || Some(step) == next_out.peek().copied() {
             check_finite(comm, &sys, &layout, step, model.dt)?;
         }
         if Some(step) == next_out.peek().copied() {
             next_out.next();
             let clock = Instant::now();
-            write_output(&mut sys, &mut writer, &mut history, step)?;
+            write_output(&mut sys, &mut writer, &mut history, &contacts, step)?;
             times.output += clock.elapsed().as_secs_f64();
         }
     }
@@ -330,13 +420,14 @@ pub fn run(
 
     let mut peak = 0u64;
     comm.all_reduce_into(&peak_rss(), &mut peak, SystemOperation::max());
-    let mut tmax = [0.0; 5];
+    let mut tmax = [0.0; 6];
     let local = [
         times.model,
         times.partition,
         times.assembly,
         times.stepping,
         times.output,
+        times.contact,
     ];
     comm.all_reduce_into(&local[..], &mut tmax[..], SystemOperation::max());
     let times = PhaseTimes {
@@ -345,6 +436,7 @@ pub fn run(
         assembly: tmax[2],
         stepping: tmax[3],
         output: tmax[4],
+        contact: tmax[5],
     };
     Ok(RunSummary {
         ranks: layout.size,
@@ -360,6 +452,9 @@ pub fn run(
         history: history_path,
         energy,
         peak_memory: peak,
+        contacts: (contacts.all.len(), contacts.total_area()),
+        detections,
+        assemblies: sys.assemblies,
     })
 }
 

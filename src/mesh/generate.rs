@@ -1,8 +1,9 @@
-//! Structured mesh generators (no external mesher needed): [`box_mesh`].
+//! Structured mesh generators (no external mesher needed): [`box_mesh`] and
+//! [`cylinder_mesh`].
 
 use std::collections::BTreeMap;
 
-use super::{MeshError, TetMesh};
+use super::{tet_signed_volume, MeshError, TetMesh};
 
 /// Kuhn (Freudenthal) split of the unit cube into 6 positively oriented
 /// tetrahedra sharing the main diagonal from corner 0 to corner 7. Corner
@@ -198,10 +199,264 @@ pub fn jitter_interior(mesh: &mut TetMesh, amplitude: f64, seed: u64) -> Result<
     mesh.validate()
 }
 
+/// Triangulation of a disc centred at the origin, built by [`disc_triangulation`].
+struct Disc {
+    /// Node coordinates relative to the disc centre; node 0 is the centre,
+    /// then the rings from the inside out; the last `n_boundary` nodes are
+    /// the boundary ring, starting at angle 0.
+    points: Vec<[f64; 2]>,
+    /// Counter-clockwise triangles.
+    tris: Vec<[u32; 3]>,
+}
+
+/// Number of nodes on each of the `n_r` rings (inner to outer) of the disc
+/// triangulation: `max(3, round(n_b * i / n_r))` on ring `i`, so the spacing
+/// along every ring is close to the boundary spacing, and exactly `n_b` on
+/// the boundary ring.
+fn ring_sizes(n_b: usize, n_r: usize) -> Vec<usize> {
+    (1..=n_r)
+        .map(|i| {
+            if i == n_r {
+                n_b
+            } else {
+                (n_b as f64 * i as f64 / n_r as f64).round().max(3.0) as usize
+            }
+        })
+        .collect()
+}
+
+/// Angle of node `j` (`0 <= j <= m`, `j = m` being node 0 again, one turn
+/// later) on a ring of `m` nodes. Rings are staggered by half a spacing on
+/// every other ring counted from the boundary, which has a node at angle 0.
+fn ring_angle(ring: usize, n_r: usize, m: usize, j: usize) -> f64 {
+    let step = std::f64::consts::TAU / m as f64;
+    let offset = if (n_r - ring) % 2 == 1 {
+        0.5 * step
+    } else {
+        0.0
+    };
+    offset + step * j as f64
+}
+
+/// Disc of radius `radius` triangulated with `n_r` concentric rings (ring
+/// `i` at radius `radius * i / n_r`, node counts from [`ring_sizes`]) around
+/// a single centre node. The centre is joined to ring 1 by a fan; each
+/// annulus between consecutive rings is triangulated by a merge walk over
+/// the node angles (advance the ring whose next node has the smaller angle,
+/// the inner ring on ties), which closes on the starting edge after
+/// `m_inner + m_outer` triangles. Adjacent annuli share their ring's edges,
+/// so the triangulation is conforming.
+fn disc_triangulation(radius: f64, n_b: usize, n_r: usize) -> Disc {
+    let sizes = ring_sizes(n_b, n_r);
+    let mut points = Vec::with_capacity(1 + sizes.iter().sum::<usize>());
+    points.push([0.0, 0.0]);
+    let mut start = Vec::with_capacity(n_r);
+    for (i, &m) in sizes.iter().enumerate() {
+        let ring = i + 1;
+        start.push(points.len());
+        let rho = if ring == n_r {
+            radius
+        } else {
+            radius * ring as f64 / n_r as f64
+        };
+        for j in 0..m {
+            let (s, c) = ring_angle(ring, n_r, m, j).sin_cos();
+            points.push([rho * c, rho * s]);
+        }
+    }
+    let mut tris = Vec::new();
+    let m1 = sizes[0];
+    for j in 0..m1 {
+        let a = start[0] + j;
+        let b = start[0] + (j + 1) % m1;
+        tris.push([0, a as u32, b as u32]);
+    }
+    for i in 1..n_r {
+        let (ma, mb) = (sizes[i - 1], sizes[i]);
+        let a = |k: usize| (start[i - 1] + k % ma) as u32;
+        let b = |k: usize| (start[i] + k % mb) as u32;
+        let (mut ia, mut ib) = (0, 0);
+        while ia < ma || ib < mb {
+            let advance_inner = ib == mb
+                || (ia < ma
+                    && ring_angle(i, n_r, ma, ia + 1) <= ring_angle(i + 1, n_r, mb, ib + 1));
+            if advance_inner {
+                tris.push([a(ia), b(ib), a(ia + 1)]);
+                ia += 1;
+            } else {
+                tris.push([a(ia), b(ib), b(ib + 1)]);
+                ib += 1;
+            }
+        }
+    }
+    Disc { points, tris }
+}
+
+/// Tetrahedral mesh of a solid circular cylinder (a thick disc) with its
+/// axis along z through `(center[0], center[1])`, extending from
+/// `z = center[2] - width/2` to `center[2] + width/2`, with target element
+/// size `h`.
+///
+/// * Cross-section: `n_b = max(8, round(2 pi radius / h))` boundary nodes
+///   evenly spaced exactly on the circle of radius `radius`, one at angle 0
+///   (the +x direction, node `center + (radius, 0, z)` on every layer), so
+///   the meshed cross-section is the inscribed regular `n_b`-gon.
+///   Inside, `n_r = max(1, round(radius / h))` concentric rings (ring `i` at
+///   radius `radius * i / n_r` with `max(3, round(n_b i / n_r))` nodes,
+///   alternate rings staggered by half a spacing) around a centre node,
+///   triangulated by a fan at the centre and a merge walk over angles in
+///   each annulus (deterministic, conforming, counter-clockwise).
+/// * Extrusion: `n_z = max(1, round(width / h))` uniform layers. Each prism
+///   (triangle x layer) is split into 3 tetrahedra by the sorted-vertex
+///   rule: with the triangle's nodes ordered by global index `a < b < c`
+///   (primes on the top layer), every quad face is cut along the diagonal
+///   from its lowest-index bottom node, giving `(a,b,c,c')`, `(a,b,b',c')`,
+///   `(a,a',b',c')`. The rule depends only on the nodes of the shared quad,
+///   so neighbouring prisms match and the mesh is conforming. Elements are
+///   reoriented (local nodes 2 and 3 swapped) where needed to be positive.
+/// * Node numbering: layer by layer from the bottom (`z` min), each layer
+///   numbered like the cross-section (centre, rings inside out, boundary ring
+///   last, counter-clockwise from angle 0). Elements are ordered by layer,
+///   then triangle, 3 per prism.
+/// * Body id 0 for all elements. Face sets and node sets `side`, `zmin`,
+///   `zmax` (faces oriented outward), and an element set `all`.
+///
+/// Errors: non-finite centre, non-positive or non-finite radius, width or
+/// `h` ([`MeshError::InvalidParameter`]); more than `u32::MAX` nodes or
+/// elements ([`MeshError::TooLarge`]); degenerate elements for extreme
+/// aspect ratios (`width` many orders of magnitude below `h`, from
+/// [`TetMesh::validate`]).
+pub fn cylinder_mesh(
+    center: [f64; 3],
+    radius: f64,
+    width: f64,
+    h: f64,
+) -> Result<TetMesh, MeshError> {
+    if !center.iter().all(|v| v.is_finite()) {
+        return Err(MeshError::InvalidParameter(format!(
+            "cylinder center {center:?} must be finite"
+        )));
+    }
+    for (name, v) in [("radius", radius), ("width", width), ("element size h", h)] {
+        if !(v.is_finite() && v > 0.0) {
+            return Err(MeshError::InvalidParameter(format!(
+                "cylinder {name} = {v} must be positive and finite"
+            )));
+        }
+    }
+    let n_b_f = (std::f64::consts::TAU * radius / h).round().max(8.0);
+    let n_r_f = (radius / h).round().max(1.0);
+    let n_z_f = (width / h).round().max(1.0);
+    // Beyond these the mesh certainly exceeds u32::MAX nodes (the rings hold
+    // at least about n_b n_r / 2 nodes per layer, with n_b >= 8).
+    if n_b_f * n_r_f > 1e11 || n_z_f > 1e10 {
+        return Err(MeshError::TooLarge(format!(
+            "cylinder mesh with {n_b_f} boundary nodes, {n_r_f} rings and {n_z_f} layers \
+             (radius {radius}, width {width}, h {h}) exceeds {} nodes; increase h",
+            u32::MAX
+        )));
+    }
+    let (n_b, n_r, n_z) = (n_b_f as usize, n_r_f as usize, n_z_f as usize);
+    let sizes = ring_sizes(n_b, n_r);
+    let n2d = 1 + sizes.iter().map(|&m| m as u128).sum::<u128>();
+    let n_tri = sizes[0] as u128
+        + sizes
+            .windows(2)
+            .map(|w| (w[0] + w[1]) as u128)
+            .sum::<u128>();
+    let num_nodes = n2d * (n_z as u128 + 1);
+    let num_elems = 3 * n_tri * n_z as u128;
+    if num_nodes > u32::MAX as u128 || num_elems > u32::MAX as u128 {
+        return Err(MeshError::TooLarge(format!(
+            "cylinder mesh with {n_b} boundary nodes, {n_r} rings and {n_z} layers has \
+             {num_nodes} nodes and {num_elems} elements (limit {} each); increase h",
+            u32::MAX
+        )));
+    }
+
+    let disc = disc_triangulation(radius, n_b, n_r);
+    let n2d = disc.points.len();
+    let z_lo = center[2] - 0.5 * width;
+    let z_hi = center[2] + 0.5 * width;
+    let layer_z = |k: usize| {
+        if k == n_z {
+            z_hi
+        } else {
+            z_lo + width * (k as f64 / n_z as f64)
+        }
+    };
+    let mut nodes = Vec::with_capacity(num_nodes as usize);
+    for k in 0..=n_z {
+        let z = layer_z(k);
+        for p in &disc.points {
+            nodes.push([center[0] + p[0], center[1] + p[1], z]);
+        }
+    }
+
+    let mut tets = Vec::with_capacity(num_elems as usize);
+    for k in 0..n_z {
+        let (bot, top) = ((k * n2d) as u32, ((k + 1) * n2d) as u32);
+        for t in &disc.tris {
+            let mut s = *t;
+            s.sort_unstable();
+            let [a, b, c] = s.map(|v| v + bot);
+            let [a1, b1, c1] = s.map(|v| v + top);
+            for mut tet in [[a, b, c, c1], [a, b, b1, c1], [a, a1, b1, c1]] {
+                let x = tet.map(|v| nodes[v as usize]);
+                if tet_signed_volume(&x) < 0.0 {
+                    tet.swap(2, 3);
+                }
+                tets.push(tet);
+            }
+        }
+    }
+    let ne = tets.len();
+    let mut mesh = TetMesh {
+        nodes,
+        tets,
+        body: vec![0; ne],
+        node_sets: BTreeMap::new(),
+        face_sets: BTreeMap::new(),
+        elem_sets: BTreeMap::new(),
+    };
+    // No element may be degenerate (only possible for extreme aspect ratios).
+    mesh.validate()?;
+
+    let layer = |v: u32| v as usize / n2d;
+    let (mut side, mut zmin, mut zmax) = (Vec::new(), Vec::new(), Vec::new());
+    for bf in mesh.boundary_faces() {
+        if bf.nodes.iter().all(|&v| layer(v) == 0) {
+            zmin.push(bf.nodes);
+        } else if bf.nodes.iter().all(|&v| layer(v) == n_z) {
+            zmax.push(bf.nodes);
+        } else {
+            side.push(bf.nodes);
+        }
+    }
+    mesh.face_sets.insert("side".to_string(), side);
+    mesh.face_sets.insert("zmin".to_string(), zmin);
+    mesh.face_sets.insert("zmax".to_string(), zmax);
+    let side_nodes = (0..=n_z)
+        .flat_map(|k| (k * n2d + n2d - n_b)..((k + 1) * n2d))
+        .map(|v| v as u32)
+        .collect();
+    mesh.node_sets.insert("side".to_string(), side_nodes);
+    mesh.node_sets
+        .insert("zmin".to_string(), (0..n2d as u32).collect());
+    mesh.node_sets.insert(
+        "zmax".to_string(),
+        ((n_z * n2d) as u32..((n_z + 1) * n2d) as u32).collect(),
+    );
+    mesh.elem_sets
+        .insert("all".to_string(), (0..ne as u32).collect());
+    Ok(mesh)
+}
+
 #[cfg(test)]
 mod tests {
+    use std::collections::HashMap;
+
     use super::*;
-    use crate::mesh::tet_signed_volume;
 
     fn rel(a: f64, b: f64) -> f64 {
         (a - b).abs() / b.abs()
@@ -321,5 +576,219 @@ mod tests {
         }
         let e = box_mesh([0.0; 3], [1.0; 3], 1e-6).unwrap_err();
         assert!(matches!(e, MeshError::TooLarge(_)), "{e}");
+    }
+    /// Signed area of a 2D triangle.
+    fn tri_area(p: &[[f64; 2]], t: [u32; 3]) -> f64 {
+        let [a, b, c] = t.map(|v| p[v as usize]);
+        0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]))
+    }
+
+    /// Area of the regular n-gon inscribed in a circle of radius r.
+    fn polygon_area(n: usize, r: f64) -> f64 {
+        0.5 * n as f64 * r * r * (std::f64::consts::TAU / n as f64).sin()
+    }
+
+    #[test]
+    fn disc_triangulation_is_valid_and_conforming() {
+        // Every (n_b, n_r) pair cylinder_mesh produces for radius/h up to 40.
+        let pairs: std::collections::BTreeSet<(usize, usize)> = (1..=2000)
+            .map(|i| {
+                let rho = 0.02 * i as f64;
+                let n_b = ((std::f64::consts::TAU * rho).round() as usize).max(8);
+                (n_b, (rho.round() as usize).max(1))
+            })
+            .collect();
+        let mut min_q = f64::INFINITY;
+        for (n_b, n_r) in pairs {
+            let d = disc_triangulation(1.3, n_b, n_r);
+            let sizes = ring_sizes(n_b, n_r);
+            assert_eq!(d.points.len(), 1 + sizes.iter().sum::<usize>());
+            let n_tri = sizes[0] + sizes.windows(2).map(|w| w[0] + w[1]).sum::<usize>();
+            assert_eq!(d.tris.len(), n_tri);
+            let mut area = 0.0;
+            let mut edges: HashMap<(u32, u32), usize> = HashMap::new();
+            for &t in &d.tris {
+                let a = tri_area(&d.points, t);
+                assert!(a > 0.0, "n_b {n_b} n_r {n_r}: triangle {t:?} area {a}");
+                area += a;
+                let [p, q, r] = t.map(|v| d.points[v as usize]);
+                let l2 = |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2);
+                let quality = 4.0 * 3f64.sqrt() * a / (l2(p, q) + l2(q, r) + l2(r, p));
+                min_q = min_q.min(quality);
+                for k in 0..3 {
+                    let (u, v) = (t[k], t[(k + 1) % 3]);
+                    *edges.entry((u.min(v), u.max(v))).or_default() += 1;
+                }
+            }
+            assert!(rel(area, polygon_area(n_b, 1.3)) < 1e-12);
+            let first_b = (d.points.len() - n_b) as u32;
+            let mut n_boundary_edges = 0;
+            for ((u, v), count) in edges {
+                assert!(count <= 2);
+                if count == 1 {
+                    assert!(u >= first_b && v >= first_b);
+                    n_boundary_edges += 1;
+                }
+            }
+            assert_eq!(n_boundary_edges, n_b);
+            assert_eq!(d.points[first_b as usize], [1.3, 0.0]);
+        }
+        assert!(min_q > 0.4, "worst triangle quality {min_q}");
+    }
+
+    /// Checks a cylinder mesh thoroughly; returns (nodes, tets, min quality).
+    fn check_cylinder(center: [f64; 3], r: f64, w: f64, h: f64) -> (usize, usize, f64) {
+        let m = cylinder_mesh(center, r, w, h).unwrap();
+        m.validate().unwrap();
+        let n_b = ((std::f64::consts::TAU * r / h).round() as usize).max(8);
+        let n_z = ((w / h).round() as usize).max(1);
+        let n_layer = m.num_nodes() / (n_z + 1);
+        assert_eq!(n_layer * (n_z + 1), m.num_nodes());
+        assert!(m.body.iter().all(|&b| b == 0));
+        assert_eq!(
+            m.elem_sets["all"],
+            (0..m.num_elems() as u32).collect::<Vec<_>>()
+        );
+
+        // Volume and surface of the inscribed-polygon prism.
+        let area = polygon_area(n_b, r);
+        assert!(rel(m.total_volume(), area * w) < 1e-12);
+        let perimeter = n_b as f64 * 2.0 * r * (std::f64::consts::PI / n_b as f64).sin();
+        let bf = m.boundary_faces();
+        let surf: f64 = bf.iter().map(|f| m.face_area_normal(f.nodes).0).sum();
+        assert!(rel(surf, perimeter * w + 2.0 * area) < 1e-12);
+
+        // Conforming: no face shared by more than two tets, and the boundary
+        // faces are exactly the named sides.
+        let mut faces: HashMap<[u32; 3], usize> = HashMap::new();
+        for e in 0..m.num_elems() {
+            for f in 0..4 {
+                let mut k = m.local_face_nodes(e, f);
+                k.sort_unstable();
+                *faces.entry(k).or_default() += 1;
+            }
+        }
+        assert!(faces.values().all(|&c| c <= 2));
+        let n_tri = m.face_sets["zmin"].len();
+        assert_eq!(m.face_sets["zmax"].len(), n_tri);
+        assert_eq!(m.face_sets["side"].len(), 2 * n_b * n_z);
+        assert_eq!(bf.len(), 2 * n_tri + 2 * n_b * n_z);
+        assert_eq!(m.num_elems(), 3 * n_tri * n_z);
+
+        // Outward normals and areas of the named sides.
+        let (z_lo, z_hi) = (center[2] - 0.5 * w, center[2] + 0.5 * w);
+        for (name, nz) in [("zmin", -1.0), ("zmax", 1.0)] {
+            let mut a = 0.0;
+            for f in &m.face_sets[name] {
+                let (fa, n) = m.face_area_normal(*f);
+                a += fa;
+                assert!((n[2] - nz).abs() < 1e-12, "{name}: {n:?}");
+            }
+            assert!(rel(a, area) < 1e-12, "{name}");
+        }
+        let mut a = 0.0;
+        for f in &m.face_sets["side"] {
+            let (fa, n) = m.face_area_normal(*f);
+            a += fa;
+            let c: Vec<f64> = (0..2)
+                .map(|d| f.iter().map(|&v| m.nodes[v as usize][d]).sum::<f64>() / 3.0 - center[d])
+                .collect();
+            let radial = (n[0] * c[0] + n[1] * c[1]) / c[0].hypot(c[1]);
+            assert!(n[2].abs() < 1e-12 && radial > 0.99, "side normal {n:?}");
+        }
+        assert!(rel(a, perimeter * w) < 1e-12);
+
+        // Node sets.
+        for name in ["side", "zmin", "zmax"] {
+            assert_eq!(
+                m.node_sets[name],
+                m.nodes_of_face_set(name).unwrap(),
+                "{name}"
+            );
+        }
+        assert_eq!(m.node_sets["side"].len(), n_b * (n_z + 1));
+        for &v in &m.node_sets["side"] {
+            let p = m.nodes[v as usize];
+            let d = (p[0] - center[0]).hypot(p[1] - center[1]);
+            assert!((d - r).abs() < 1e-12 * r, "side node {v} at distance {d}");
+        }
+        for (name, z) in [("zmin", z_lo), ("zmax", z_hi)] {
+            assert_eq!(m.node_sets[name].len(), n_layer);
+            assert!(m.node_sets[name]
+                .iter()
+                .all(|&v| m.nodes[v as usize][2] == z));
+        }
+
+        // A node at angle 0 on every layer.
+        let mut zs: Vec<f64> = m
+            .nodes
+            .iter()
+            .filter(|p| p[0] == center[0] + r && p[1] == center[1])
+            .map(|p| p[2])
+            .collect();
+        zs.sort_by(f64::total_cmp);
+        assert_eq!(zs.len(), n_z + 1);
+        for (k, z) in zs.iter().enumerate() {
+            let expect = z_lo + w * k as f64 / n_z as f64;
+            assert!((z - expect).abs() < 1e-12 * w.max(center[2].abs()));
+        }
+        assert_eq!((zs[0], zs[n_z]), (z_lo, z_hi));
+        let (lo, hi) = m.bounding_box().unwrap();
+        assert_eq!((lo[2], hi[2]), (z_lo, z_hi));
+        assert_eq!(hi[0], center[0] + r);
+
+        assert_eq!(
+            m,
+            cylinder_mesh(center, r, w, h).unwrap(),
+            "not deterministic"
+        );
+        let (q, _) = m.min_quality().unwrap();
+        (m.num_nodes(), m.num_elems(), q)
+    }
+
+    #[test]
+    fn cylinder_seed_000_table3_sizes() {
+        for h in [0.08, 0.04] {
+            let (nn, ne, q) = check_cylinder([0.0; 3], 1.0, 0.1, h);
+            println!("cylinder r=1 w=0.1 h={h}: {nn} nodes, {ne} tets, min quality {q:.3}");
+            assert!(q > 0.1, "h = {h}: min quality {q}");
+        }
+    }
+
+    #[test]
+    fn cylinder_various_sizes_and_offsets() {
+        for (c, r, w, h) in [
+            ([0.0; 3], 1.0, 0.1, 1.0),
+            ([0.0; 3], 1.0, 0.1, 10.0),
+            ([2.0, -1.0, 0.5], 1.0, 0.1, 0.5),
+            ([1.99, 0.0, 0.0], 1.0, 0.1, 0.08),
+            ([0.0; 3], 0.3, 1.0, 0.05),
+            ([-0.1, 0.2, 0.3], 0.05, 0.02, 0.007),
+            ([0.0; 3], 2.0, 0.3, 0.1),
+        ] {
+            let (_, _, q) = check_cylinder(c, r, w, h);
+            assert!(q > 0.05, "r {r} w {w} h {h}: min quality {q}");
+        }
+    }
+
+    #[test]
+    fn cylinder_rejects_bad_parameters() {
+        for (c, r, w, h) in [
+            ([0.0; 3], 0.0, 0.1, 0.1),
+            ([0.0; 3], -1.0, 0.1, 0.1),
+            ([0.0; 3], f64::NAN, 0.1, 0.1),
+            ([0.0; 3], 1.0, 0.0, 0.1),
+            ([0.0; 3], 1.0, f64::INFINITY, 0.1),
+            ([0.0; 3], 1.0, 0.1, 0.0),
+            ([0.0; 3], 1.0, 0.1, -0.1),
+            ([0.0, f64::NAN, 0.0], 1.0, 0.1, 0.1),
+        ] {
+            let e = cylinder_mesh(c, r, w, h).unwrap_err();
+            assert!(matches!(e, MeshError::InvalidParameter(_)), "{e}");
+        }
+        for (r, w, h) in [(1.0, 0.1, 1e-6), (1.0, 1e12, 1.0), (1.0, 0.1, 2e-4)] {
+            let e = cylinder_mesh([0.0; 3], r, w, h).unwrap_err();
+            assert!(matches!(e, MeshError::TooLarge(_)), "{e}");
+        }
     }
 }

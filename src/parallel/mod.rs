@@ -32,3 +32,26 @@ pub fn agree<T, C: Communicator>(
         Ok(v) => Ok(v),
     }
 }
+
+/// Collective. Concatenate every rank's `local` values in rank order.
+pub fn all_gather_f64<C: Communicator>(comm: &C, local: &[f64]) -> Vec<f64> {
+    let size = comm.size() as usize;
+    let n = local.len() as i32;
+    let mut counts = vec![0i32; size];
+    comm.all_gather_into(&n, &mut counts[..]);
+    let displs: Vec<i32> = counts
+        .iter()
+        .scan(0, |acc, &c| {
+            let d = *acc;
+            *acc += c;
+            Some(d)
+        })
+        .collect();
+    let total: i32 = counts.iter().sum();
+    let mut out = vec![0.0f64; total as usize];
+    {
+        let mut part = mpi::datatype::PartitionMut::new(&mut out[..], counts, displs);
+        comm.all_gather_varcount_into(local, &mut part);
+    }
+    out
+}

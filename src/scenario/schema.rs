@@ -27,6 +27,64 @@ pub struct Scenario {
     /// Output files.
     #[serde(default)]
     pub output: OutputSpec,
+    /// Contact heat transfer between bodies (absent: bodies exchange no heat).
+    #[serde(default)]
+    pub contact: Option<ContactSpec>,
+}
+
+/// Contact heat transfer (seed 000 sec 3).
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ContactSpec {
+    /// Default contact resistance Rc for every pair of materials (m² K / W:
+    /// the flux is ΔT / Rc). Give `resistance` or `conductance`, not both.
+    #[serde(default)]
+    pub resistance: Option<f64>,
+    /// Default contact conductance 1/Rc (W / m² / K).
+    #[serde(default)]
+    pub conductance: Option<f64>,
+    /// Temperature drop: `local` (contact faces, default) or `average` (bodies' means).
+    #[serde(default)]
+    pub delta_t: crate::contact::DeltaT,
+    /// Re-run detection every N steps (0: once, at the start).
+    #[serde(default)]
+    pub every: u64,
+    /// Values for particular pairs of materials.
+    #[serde(default)]
+    pub pair: Vec<ContactPairSpec>,
+}
+
+/// Contact resistance between two materials.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ContactPairSpec {
+    /// The two material names (order does not matter).
+    pub materials: [String; 2],
+    /// Rc for this pair.
+    #[serde(default)]
+    pub resistance: Option<f64>,
+    /// 1/Rc for this pair.
+    #[serde(default)]
+    pub conductance: Option<f64>,
+}
+
+/// Resistance from a `resistance`/`conductance` choice (infinite: no contact heat).
+pub fn contact_resistance(
+    resistance: Option<f64>,
+    conductance: Option<f64>,
+) -> Result<Option<f64>, String> {
+    match (resistance, conductance) {
+        (Some(_), Some(_)) => Err("give `resistance` or `conductance`, not both".into()),
+        (Some(r), None) if !(r.is_finite() && r > 0.0) => {
+            Err(format!("resistance must be positive, got {r}"))
+        }
+        (Some(r), None) => Ok(Some(r)),
+        (None, Some(g)) if !(g.is_finite() && g >= 0.0) => {
+            Err(format!("conductance must be non-negative, got {g}"))
+        }
+        (None, Some(g)) => Ok(Some(if g == 0.0 { f64::INFINITY } else { 1.0 / g })),
+        (None, None) => Ok(None),
+    }
 }
 
 /// Time stepping: `dt` and either `steps` or `end_time`.
@@ -70,9 +128,26 @@ pub struct BodySpec {
     pub initial_temperature: f64,
     /// Where the mesh comes from.
     pub mesh: MeshSpec,
+    /// Rotation (degrees) about x, then y, then z, through the origin,
+    /// applied to the mesh before `translate`.
+    #[serde(default)]
+    pub rotate: Option<[f64; 3]>,
     /// Rigid translation applied to the mesh (m).
     #[serde(default)]
     pub translate: Option<[f64; 3]>,
+    /// Replicate this body on a regular grid: bodies `<name>_i_j_k`.
+    #[serde(default)]
+    pub lattice: Option<LatticeSpec>,
+}
+
+/// A regular grid of copies of one body.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LatticeSpec {
+    /// Copies along x, y, z.
+    pub count: [u32; 3],
+    /// Offset between neighbouring copies (m).
+    pub spacing: [f64; 3],
 }
 
 /// Mesh source of a body.
@@ -87,6 +162,18 @@ pub enum MeshSpec {
         /// Edge lengths (m).
         size: [f64; 3],
         /// Target element size h (m): round(L/h) cells per axis.
+        element_size: f64,
+    },
+    /// A solid cylinder (disc) with its axis along z (named sets side, zmin, zmax).
+    Cylinder {
+        /// Centre (m).
+        #[serde(default)]
+        center: [f64; 3],
+        /// Radius (m).
+        radius: f64,
+        /// Width along z (m).
+        width: f64,
+        /// Target element size h (m).
         element_size: f64,
     },
     /// A Gmsh MSH 4.1 file (ASCII or binary); physical groups become named sets.
@@ -326,6 +413,64 @@ impl Scenario {
                 }
                 if origin.iter().any(|o| !o.is_finite()) {
                     return bad(&key("mesh.origin"), "must be finite".into());
+                }
+            }
+        }
+        if let Some(c) = &self.contact {
+            contact_resistance(c.resistance, c.conductance)
+                .map_err(|m| ("contact".to_string(), m))?;
+            for (i, p) in c.pair.iter().enumerate() {
+                let key = format!("contact.pair[{i}]");
+                match contact_resistance(p.resistance, p.conductance) {
+                    Err(m) => return bad(&key, m),
+                    Ok(None) => return bad(&key, "give `resistance` or `conductance`".into()),
+                    Ok(Some(_)) => {}
+                }
+                for m in &p.materials {
+                    if !self.materials.iter().any(|x| &x.name == m) {
+                        return bad(
+                            &format!("{key}.materials"),
+                            format!("no material named `{m}`"),
+                        );
+                    }
+                }
+            }
+        }
+        for (i, b) in self.bodies.iter().enumerate() {
+            if let MeshSpec::Cylinder {
+                radius,
+                width,
+                element_size,
+                center,
+            } = &b.mesh
+            {
+                for (f, v) in [
+                    ("radius", radius),
+                    ("width", width),
+                    ("element_size", element_size),
+                ] {
+                    if !(v.is_finite() && *v > 0.0) {
+                        return bad(
+                            &format!("bodies[{i}].mesh.{f}"),
+                            format!("must be positive, got {v}"),
+                        );
+                    }
+                }
+                if center.iter().any(|c| !c.is_finite()) {
+                    return bad(&format!("bodies[{i}].mesh.center"), "must be finite".into());
+                }
+            }
+            if let Some(l) = &b.lattice {
+                if l.count.contains(&0) || l.spacing.iter().any(|x| !x.is_finite()) {
+                    return bad(
+                        &format!("bodies[{i}].lattice"),
+                        "counts must be positive and spacings finite".into(),
+                    );
+                }
+            }
+            if let Some(r) = b.rotate {
+                if r.iter().any(|x| !x.is_finite()) {
+                    return bad(&format!("bodies[{i}].rotate"), "must be finite".into());
                 }
             }
         }

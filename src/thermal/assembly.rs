@@ -2,6 +2,7 @@
 //! element blocks of its owned elements (and the face terms of faces whose
 //! first node it owns) into PETSc matrices with global (PETSc) numbering.
 
+use crate::contact::{local_conductance_block, ContactSet, DeltaT};
 use crate::model::Model;
 use crate::parallel::Layout;
 use crate::petsc::{Matrix, Petsc, Result, Vector};
@@ -25,9 +26,67 @@ pub struct Operators<'p> {
     pub load_convection: Vector<'p>,
 }
 
-/// Collective. Assemble M, K + H and f for this rank's share of `model`.
-pub fn assemble<'p>(petsc: &'p Petsc, model: &Model, layout: &Layout) -> Result<Operators<'p>> {
-    let (d_nnz, o_nnz) = layout.preallocation(&model.mesh, &[]);
+/// Node couplings the contact conductance adds to the element pattern.
+fn contact_couplings(model: &Model, contacts: &ContactSet, mode: DeltaT) -> Vec<(u32, u32)> {
+    let mesh = &model.mesh;
+    let mut extra = Vec::new();
+    match mode {
+        DeltaT::Local => {
+            for p in &contacts.all {
+                for &a in &mesh.tets[p.target as usize] {
+                    for &b in &mesh.tets[p.contactor as usize] {
+                        extra.push((a, b));
+                    }
+                }
+            }
+        }
+        DeltaT::Average => {
+            // Contact nodes of each body pair couple to every node of both bodies.
+            for ((ba, bb), nodes) in average_rows(model, &contacts.all) {
+                let (ra, rb) = (model.bodies[ba].node_range, model.bodies[bb].node_range);
+                for (&n, _) in nodes.iter() {
+                    extra.extend((ra.0..ra.1).chain(rb.0..rb.1).map(|m| (n, m)));
+                }
+            }
+        }
+    }
+    extra.sort_unstable();
+    extra.dedup();
+    extra
+}
+
+/// Per (target body, contactor body): Σ over pairs of g v_i per node (seed
+/// 000 sec 5.2, exact form): rows of the average-ΔT conductance.
+fn average_rows(
+    model: &Model,
+    pairs: &[crate::contact::ContactPair],
+) -> std::collections::BTreeMap<(usize, usize), std::collections::BTreeMap<u32, f64>> {
+    let mut rows: std::collections::BTreeMap<(usize, usize), std::collections::BTreeMap<u32, f64>> =
+        Default::default();
+    for p in pairs {
+        let (t, c) = (p.target as usize, p.contactor as usize);
+        let g = p.area() / model.contact_resistance(t, c);
+        let key = (model.mesh.body[t] as usize, model.mesh.body[c] as usize);
+        let r = rows.entry(key).or_default();
+        for i in 0..4 {
+            *r.entry(model.mesh.tets[t][i]).or_default() += g * p.surface.w_target[i];
+            *r.entry(model.mesh.tets[c][i]).or_default() -= g * p.surface.w_contactor[i];
+        }
+    }
+    rows
+}
+
+/// Collective. Assemble M, K + H + Ch and f for this rank's share of
+/// `model`, with the contact conductance of `contacts` (seed 000 eqs 24–30).
+pub fn assemble<'p>(
+    petsc: &'p Petsc,
+    model: &Model,
+    layout: &Layout,
+    contacts: &ContactSet,
+) -> Result<Operators<'p>> {
+    let mode = model.contact.as_ref().map_or(DeltaT::Local, |c| c.delta_t);
+    let extra = contact_couplings(model, contacts, mode);
+    let (d_nnz, o_nnz) = layout.preallocation(&model.mesh, &extra);
     let owned = layout.num_owned();
     let mut capacity = Matrix::new_aij(petsc, owned, &d_nnz, &o_nnz)?;
     let mut stiffness = Matrix::new_aij(petsc, owned, &d_nnz, &o_nnz)?;
@@ -69,6 +128,60 @@ pub fn assemble<'p>(petsc: &'p Petsc, model: &Model, layout: &Layout) -> Result<
             let idx = f.map(g);
             stiffness.add_values(&idx, &idx, &hm)?;
             load_convection.set_values(&idx, &hl, true)?;
+        }
+    }
+    // Contact conductance; the capacity gets explicit zeros at the same
+    // places so every operator shares one pattern.
+    match mode {
+        DeltaT::Local => {
+            for p in &contacts.local {
+                let (t, c) = (p.target as usize, p.contactor as usize);
+                let rc = model.contact_resistance(t, c);
+                if !rc.is_finite() {
+                    continue;
+                }
+                let mut idx = [0i32; 8];
+                for i in 0..4 {
+                    idx[i] = g(model.mesh.tets[t][i]);
+                    idx[4 + i] = g(model.mesh.tets[c][i]);
+                }
+                stiffness.add_values(&idx, &idx, &local_conductance_block(p, rc))?;
+                capacity.add_values(&idx, &idx, &[0.0; 64])?;
+            }
+        }
+        DeltaT::Average => {
+            // Row i: g v_i (a_A − a_B), a_X = node capacity / body capacity.
+            let cap = model.node_capacity();
+            let body_cap: Vec<f64> = model
+                .bodies
+                .iter()
+                .map(|b| {
+                    cap[b.node_range.0 as usize..b.node_range.1 as usize]
+                        .iter()
+                        .sum()
+                })
+                .collect();
+            for ((ba, bb), rows) in average_rows(model, &contacts.local) {
+                let (ra, rb) = (model.bodies[ba].node_range, model.bodies[bb].node_range);
+                let cols: Vec<u32> = (ra.0..ra.1).chain(rb.0..rb.1).collect();
+                let a: Vec<f64> = cols
+                    .iter()
+                    .map(|&m| {
+                        if m >= ra.0 && m < ra.1 {
+                            cap[m as usize] / body_cap[ba]
+                        } else {
+                            -cap[m as usize] / body_cap[bb]
+                        }
+                    })
+                    .collect();
+                let gcols: Vec<i32> = cols.iter().map(|&m| g(m)).collect();
+                let zeros = vec![0.0; cols.len()];
+                for (&n, &w) in &rows {
+                    let vals: Vec<f64> = a.iter().map(|x| w * x).collect();
+                    stiffness.add_values(&[g(n)], &gcols, &vals)?;
+                    capacity.add_values(&[g(n)], &gcols, &zeros)?;
+                }
+            }
         }
     }
     capacity.assemble()?;

@@ -20,6 +20,7 @@
 //! boundary heat from the Dirichlet rows of the unconstrained operators
 //! and the stored heat from M, so the two agree to solver tolerance.
 
+use crate::contact::{ContactSet, DeltaT};
 use crate::model::Model;
 use crate::parallel::Layout;
 use crate::petsc::{Ksp, Matrix, Petsc, Result, Vector};
@@ -47,12 +48,16 @@ impl SolverChoice {
     /// at these sizes. Above that, CG with algebraic multigrid (GAMG),
     /// which also handles the steady limit (large dt) where the capacity no
     /// longer dominates the operator.
-    pub fn auto(global_rows: usize, ranks: usize) -> SolverChoice {
+    ///
+    /// A non-symmetric operator (average-ΔT contact) uses LU instead of
+    /// Cholesky, and GMRES instead of CG.
+    pub fn auto(global_rows: usize, ranks: usize, symmetric: bool) -> SolverChoice {
         let opt = |k: &str, v: &str| (k.to_string(), v.to_string());
+        let factor = if symmetric { "cholesky" } else { "lu" };
         if global_rows <= 50_000 && ranks == 1 {
             SolverChoice {
                 ksp_type: "preonly".into(),
-                pc_type: "cholesky".into(),
+                pc_type: factor.into(),
                 defaults: vec![opt("pc_factor_mat_ordering_type", "nd")],
             }
         } else if global_rows <= 50_000 {
@@ -60,13 +65,13 @@ impl SolverChoice {
                 ksp_type: "preonly".into(),
                 pc_type: "redundant".into(),
                 defaults: vec![
-                    opt("redundant_pc_type", "cholesky"),
+                    opt("redundant_pc_type", factor),
                     opt("redundant_pc_factor_mat_ordering_type", "nd"),
                 ],
             }
         } else {
             SolverChoice {
-                ksp_type: "cg".into(),
+                ksp_type: if symmetric { "cg" } else { "gmres" }.into(),
                 pc_type: "gamg".into(),
                 defaults: Vec::new(),
             }
@@ -132,7 +137,12 @@ pub struct ThermalSystem<'p> {
     theta: f64,
     dt: f64,
     steps: u64,
+    steps_total: u64,
     warm_start: bool,
+    /// Heat balance carried over from before the last rebuild.
+    base: EnergyAccount,
+    /// Times the operator was assembled (1 + rebuilds after contact changes).
+    pub assemblies: u64,
     /// Total Krylov iterations so far.
     pub iterations: u64,
     /// The solver in use ("cg/gamg", "explicit", ...).
@@ -146,8 +156,13 @@ impl<'p> ThermalSystem<'p> {
         model: &Model,
         layout: &Layout,
         solver: &SolverSpec,
+        contacts: &ContactSet,
     ) -> Result<Self> {
-        let ops = assemble(petsc, model, layout)?;
+        let ops = assemble(petsc, model, layout, contacts)?;
+        let symmetric = model
+            .contact
+            .as_ref()
+            .is_none_or(|c| c.delta_t == DeltaT::Local || contacts.all.is_empty());
         let theta = model.thermal.theta;
         let dt = model.dt;
         let owned = layout.num_owned();
@@ -227,9 +242,11 @@ impl<'p> ThermalSystem<'p> {
             g.axpy(1.0, &xd)?;
             a.zero_rows_columns(&d_rows, 1.0)?;
             b.zero_rows(&d_rows, 0.0)?;
-            a.set_symmetric(true)?;
+            if symmetric {
+                a.set_symmetric(true)?;
+            }
 
-            let choice = SolverChoice::auto(layout.num_global(), layout.size);
+            let choice = SolverChoice::auto(layout.num_global(), layout.size, symmetric);
             for (k, v) in &choice.defaults {
                 petsc.set_default_option(k, Some(v))?;
             }
@@ -286,7 +303,10 @@ impl<'p> ThermalSystem<'p> {
             theta,
             dt,
             warm_start,
+            base: EnergyAccount::default(),
+            assemblies: 1,
             steps: 0,
+            steps_total: 0,
             iterations: 0,
             solver_name,
         })
@@ -314,13 +334,14 @@ impl<'p> ThermalSystem<'p> {
         std::mem::swap(&mut self.t, &mut self.t_next);
         self.t_sum.axpy(1.0, &self.t)?;
         self.steps += 1;
+        self.steps_total += 1;
         self.iterations += stats.iterations.max(0) as u64;
         Ok(stats)
     }
 
     /// Steps taken.
     pub fn steps_done(&self) -> u64 {
-        self.steps
+        self.steps_total
     }
 
     /// Collective. The heat balance since t = 0 (see the module docs).
@@ -349,13 +370,36 @@ impl<'p> ThermalSystem<'p> {
         let stored0 = ops.capacity_rowsum.dot(&self.t0)?;
         let flux_in = time * ops.load_flux.sum()?;
         let convection_in = time * ops.load_convection.sum()? - self.dt * ks_total;
+        let b = self.base;
         Ok(EnergyAccount {
             stored,
-            stored_change: stored - stored0,
-            dirichlet_in,
-            flux_in,
-            convection_in,
+            stored_change: b.stored_change + stored - stored0,
+            dirichlet_in: b.dirichlet_in + dirichlet_in,
+            flux_in: b.flux_in + flux_in,
+            convection_in: b.convection_in + convection_in,
         })
+    }
+
+    /// Collective. Re-assemble with a new contact set, keeping the current
+    /// temperatures, step count and heat balance.
+    pub fn rebuild(
+        &mut self,
+        petsc: &'p Petsc,
+        model: &Model,
+        layout: &Layout,
+        solver: &SolverSpec,
+        contacts: &ContactSet,
+    ) -> Result<()> {
+        let account = self.energy()?;
+        let mut next = ThermalSystem::new(petsc, model, layout, solver, contacts)?;
+        next.t.copy_from(&self.t)?;
+        next.t0.copy_from(&self.t)?;
+        next.base = account;
+        next.iterations = self.iterations;
+        next.assemblies = self.assemblies + 1;
+        next.steps_total = self.steps_total;
+        *self = next;
+        Ok(())
     }
 
     /// Collective. Fail if a temperature is NaN or infinite; returns the

@@ -1,7 +1,12 @@
 //! Analytic and exact reference solutions the validation tests compare against.
 
+pub mod pipe_network;
 pub mod semidiscrete;
 pub mod slab;
 
+pub use pipe_network::{
+    circle_overlap_half_angle, circle_overlap_surface, contact_half_angle, particle_resistance,
+    PipeNetwork,
+};
 pub use semidiscrete::{dense_operators, semidiscrete_solution};
 pub use slab::{slab_dirichlet_series, SlabProblem};

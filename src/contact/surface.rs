@@ -1,0 +1,194 @@
+//! The contact surface between a target and a contactor tet (seed 000
+//! sec 3.1, eq 25) and the face-node weights that carry its heat.
+
+use crate::geometry::{cross, dot, face_tet_clip, polygon_area, sub};
+
+/// Surfaces and nodal weights of one tet pair.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ContactSurface {
+    /// Area of the target's boundary faces inside the contactor (S_tar).
+    pub s_target: f64,
+    /// Area of the contactor's boundary faces inside the target (S_con).
+    pub s_contactor: f64,
+    /// Weight of each target node (sums to 1): each boundary face gives a
+    /// third of its clipped area share to each of its nodes (eq 24's 1/3).
+    pub w_target: [f64; 4],
+    /// Same for the contactor's nodes.
+    pub w_contactor: [f64; 4],
+}
+
+impl ContactSurface {
+    /// Seed 000 eq 25: S = (S_tar + S_con)/2.
+    pub fn area(&self) -> f64 {
+        0.5 * (self.s_target + self.s_contactor)
+    }
+}
+
+/// Local node indices of face `f` (opposite node f).
+const FACE_NODES: [[usize; 3]; 4] = [[1, 2, 3], [0, 2, 3], [0, 1, 3], [0, 1, 2]];
+
+/// Clip each listed boundary face of `a` by the volume of `b`: the total
+/// area, the node weights (area-weighted thirds, normalised; zero when no
+/// area) and the area-weighted centroid of the clipped polygons.
+fn side(a: &[[f64; 3]; 4], faces_a: &[u8], b: &[[f64; 3]; 4]) -> (f64, [f64; 4], [f64; 3]) {
+    let mut s = 0.0;
+    let mut w = [0.0; 4];
+    let mut centroid = [0.0; 3];
+    for &f in faces_a {
+        let fl = FACE_NODES[f as usize];
+        let tri = [a[fl[0]], a[fl[1]], a[fl[2]]];
+        // Outward: away from the node opposite the face.
+        let mut n = cross(sub(tri[1], tri[0]), sub(tri[2], tri[0]));
+        if dot(n, sub(a[f as usize], tri[0])) > 0.0 {
+            n = [-n[0], -n[1], -n[2]];
+        }
+        let poly = face_tet_clip(&tri, n, b);
+        let area = polygon_area(&poly);
+        if area > 0.0 {
+            s += area;
+            for &k in &fl {
+                w[k] += area / 3.0;
+            }
+            let c = polygon_centroid(&poly);
+            for d in 0..3 {
+                centroid[d] += area * c[d];
+            }
+        }
+    }
+    if s > 0.0 {
+        for x in w.iter_mut() {
+            *x /= s;
+        }
+        for c in centroid.iter_mut() {
+            *c /= s;
+        }
+    }
+    (s, w, centroid)
+}
+
+/// Area centroid of a planar convex polygon (fan of triangles).
+fn polygon_centroid(p: &[[f64; 3]]) -> [f64; 3] {
+    let mut c = [0.0; 3];
+    let mut total = 0.0;
+    for i in 1..p.len() - 1 {
+        let t = cross(sub(p[i], p[0]), sub(p[i + 1], p[0]));
+        let a = 0.5 * dot(t, t).sqrt();
+        for d in 0..3 {
+            c[d] += a * (p[0][d] + p[i][d] + p[i + 1][d]) / 3.0;
+        }
+        total += a;
+    }
+    if total > 0.0 {
+        c.map(|x| x / total)
+    } else {
+        p[0]
+    }
+}
+
+/// Barycentric coordinates (the Tet4 shape functions N_i) of `p` in `t`,
+/// clamped to [0, 1] and renormalised against round-off.
+fn barycentric(t: &[[f64; 3]; 4], p: [f64; 3]) -> [f64; 4] {
+    let g = crate::thermal::element::tet4_geometry(t);
+    let mut n = [0.0; 4];
+    for (i, ni) in n.iter_mut().enumerate() {
+        // N_i is linear with gradient g.grad[i] and N_i(x_i) = 1.
+        *ni = (1.0 + dot(g.grad[i], sub(p, t[i]))).clamp(0.0, 1.0);
+    }
+    let s: f64 = n.iter().sum();
+    n.map(|x| x / s)
+}
+
+/// Seed 000 sec 3.1: the surface between target tet `t` (boundary faces
+/// `faces_t`, local face i opposite node i) and contactor `c`.
+///
+/// A side whose own faces have no area inside the other tet (an interior
+/// tet, or an edge-on contact) takes its temperature where the other side's
+/// clipped faces lie: the weights are its shape functions at their centroid.
+pub fn tet_tet_contact_surface(
+    t: &[[f64; 3]; 4],
+    faces_t: &[u8],
+    c: &[[f64; 3]; 4],
+    faces_c: &[u8],
+) -> ContactSurface {
+    let (s_target, mut w_target, cen_t) = side(t, faces_t, c);
+    let (s_contactor, mut w_contactor, cen_c) = side(c, faces_c, t);
+    if s_target == 0.0 && s_contactor > 0.0 {
+        w_target = barycentric(t, cen_c);
+    }
+    if s_contactor == 0.0 && s_target > 0.0 {
+        w_contactor = barycentric(c, cen_t);
+    }
+    ContactSurface {
+        s_target,
+        s_contactor,
+        w_target,
+        w_contactor,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn corner(s: f64, d: [f64; 3]) -> [[f64; 3]; 4] {
+        [[0.0, 0.0, 0.0], [s, 0.0, 0.0], [0.0, s, 0.0], [0.0, 0.0, s]]
+            .map(|p| [p[0] + d[0], p[1] + d[1], p[2] + d[2]])
+    }
+
+    #[test]
+    fn symmetric_under_swap() {
+        let a = corner(1.0, [0.0; 3]);
+        let b = corner(1.0, [0.2, 0.1, -0.6]);
+        let all = [0u8, 1, 2, 3];
+        let ab = tet_tet_contact_surface(&a, &all, &b, &all);
+        let ba = tet_tet_contact_surface(&b, &all, &a, &all);
+        assert_eq!(ab.s_target, ba.s_contactor);
+        assert_eq!(ab.w_target, ba.w_contactor);
+        assert!((ab.area() - ba.area()).abs() < 1e-15);
+        assert!(ab.area() > 0.0);
+        assert!((ab.w_target.iter().sum::<f64>() - 1.0).abs() < 1e-14);
+    }
+
+    #[test]
+    fn face_to_face_overlap_area() {
+        // Target: corner tet; its face z = 0 (face 3, opposite node 3) is its
+        // only boundary face. Contactor: a big tet whose volume covers the
+        // region just below and above z = 0 around that face, penetrating it.
+        let t = corner(1.0, [0.0; 3]);
+        let c = [
+            [-10.0, -10.0, 0.01],
+            [10.0, -10.0, 0.01],
+            [0.0, 12.0, 0.01],
+            [0.0, 0.0, -5.0],
+        ];
+        let s = tet_tet_contact_surface(&t, &[3], &c, &[]);
+        // The whole face z = 0 (area 1/2) is inside the contactor.
+        assert!((s.s_target - 0.5).abs() < 1e-12, "{}", s.s_target);
+        assert_eq!(s.s_contactor, 0.0);
+        // Weights: a third on each node of face 3 (nodes 0, 1, 2).
+        for i in 0..3 {
+            assert!((s.w_target[i] - 1.0 / 3.0).abs() < 1e-14);
+        }
+        assert_eq!(s.w_target[3], 0.0);
+        assert!((s.area() - 0.25).abs() < 1e-12);
+        // The contactor has no face in the target: its weights are its shape
+        // functions at the centroid (1/3, 1/3, 0) of the target's face.
+        let want = barycentric(&c, [1.0 / 3.0, 1.0 / 3.0, 0.0]);
+        assert_eq!(s.w_contactor, want);
+        assert!((s.w_contactor.iter().sum::<f64>() - 1.0).abs() < 1e-14);
+        assert!(s.w_contactor.iter().all(|&x| x >= 0.0));
+    }
+
+    #[test]
+    fn barycentric_reproduces_vertices_and_centroid() {
+        let t = corner(2.0, [1.0, 0.0, 0.0]);
+        for i in 0..4 {
+            let n = barycentric(&t, t[i]);
+            for j in 0..4 {
+                assert!((n[j] - f64::from(u8::from(i == j))).abs() < 1e-14);
+            }
+        }
+        let c = [1.5, 0.5, 0.5];
+        assert!(barycentric(&t, c).iter().all(|x| (x - 0.25).abs() < 1e-14));
+    }
+}

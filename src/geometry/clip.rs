@@ -1,0 +1,292 @@
+//! Triangle ∩ tetrahedron by Sutherland–Hodgman clipping against the tet's
+//! four half-spaces, and tet–tet overlap by separating axes.
+//!
+//! Seed 000 sec 3.1: the contact surface on a target boundary face is the
+//! part of the face inside the contactor tet's volume. Half-spaces are
+//! closed with a tolerance scaled to the tet's size, so faces lying in a
+//! tet's face plane (touching, coplanar) count as inside rather than
+//! flickering with round-off.
+
+use super::{cross, dot, sub};
+
+/// A planar convex polygon in 3D (at most 3 + 4 vertices after clipping a
+/// triangle by four planes).
+pub type Polygon = Vec<[f64; 3]>;
+
+/// Area of a planar polygon (magnitude of its vector area).
+pub fn polygon_area(p: &[[f64; 3]]) -> f64 {
+    if p.len() < 3 {
+        return 0.0;
+    }
+    let mut s = [0.0; 3];
+    for i in 1..p.len() - 1 {
+        let c = cross(sub(p[i], p[0]), sub(p[i + 1], p[0]));
+        s[0] += c[0];
+        s[1] += c[1];
+        s[2] += c[2];
+    }
+    0.5 * dot(s, s).sqrt()
+}
+
+/// Outward unit normals and offsets of a tet's face planes: point p is
+/// inside when n_i · p − c_i ≤ 0 for every face i (face i opposite node i).
+fn tet_planes(t: &[[f64; 3]; 4]) -> [([f64; 3], f64); 4] {
+    let mut planes = [([0.0; 3], 0.0); 4];
+    for (i, plane) in planes.iter_mut().enumerate() {
+        let (a, b, c) = match i {
+            0 => (t[1], t[2], t[3]),
+            1 => (t[0], t[2], t[3]),
+            2 => (t[0], t[1], t[3]),
+            _ => (t[0], t[1], t[2]),
+        };
+        let mut n = cross(sub(b, a), sub(c, a));
+        let len = dot(n, n).sqrt();
+        if len > 0.0 {
+            n = [n[0] / len, n[1] / len, n[2] / len];
+        }
+        // Orient away from the opposite node.
+        if dot(n, sub(t[i], a)) > 0.0 {
+            n = [-n[0], -n[1], -n[2]];
+        }
+        *plane = (n, dot(n, a));
+    }
+    planes
+}
+
+fn tet_size(t: &[[f64; 3]; 4]) -> f64 {
+    let mut m: f64 = 0.0;
+    for i in 0..4 {
+        for j in i + 1..4 {
+            let d = sub(t[i], t[j]);
+            m = m.max(dot(d, d));
+        }
+    }
+    m.sqrt()
+}
+
+/// The part of triangle `tri` inside tet `tet` (seed 000 sec 3.1, Fig 3).
+///
+/// `outward` is the unit normal pointing out of the triangle's own body.
+/// A triangle lying in one of the tet's face planes counts as inside when
+/// the two face each other (opposite normals: touching contact) and as
+/// outside when they point the same way (two surfaces side by side, as the
+/// flanks of two overlapping aligned bars), so only facing surfaces make
+/// contact area.
+pub fn face_tet_clip(tri: &[[f64; 3]; 3], outward: [f64; 3], tet: &[[f64; 3]; 4]) -> Polygon {
+    let eps = 1e-12 * tet_size(tet);
+    let mut poly: Polygon = tri.to_vec();
+    let mut next: Polygon = Vec::with_capacity(8);
+    for (n, c) in tet_planes(tet) {
+        if poly.is_empty() {
+            break;
+        }
+        next.clear();
+        let d: Vec<f64> = poly.iter().map(|p| dot(n, *p) - c).collect();
+        if d.iter().all(|x| x.abs() <= eps) && dot(n, outward) > 0.0 {
+            return Vec::new();
+        }
+        for i in 0..poly.len() {
+            let j = (i + 1) % poly.len();
+            let (pi, pj, di, dj) = (poly[i], poly[j], d[i], d[j]);
+            if di <= eps {
+                next.push(pi);
+            }
+            // The edge crosses the plane strictly: add the crossing point.
+            if (di < -eps && dj > eps) || (di > eps && dj < -eps) {
+                let s = di / (di - dj);
+                next.push([
+                    pi[0] + s * (pj[0] - pi[0]),
+                    pi[1] + s * (pj[1] - pi[1]),
+                    pi[2] + s * (pj[2] - pi[2]),
+                ]);
+            }
+        }
+        std::mem::swap(&mut poly, &mut next);
+    }
+    poly
+}
+
+/// Area of the part of `tri` inside `tet`; the triangle's outward normal
+/// follows its vertex order (right-hand rule).
+pub fn triangle_in_tet_area(tri: &[[f64; 3]; 3], tet: &[[f64; 3]; 4]) -> f64 {
+    let n = cross(sub(tri[1], tri[0]), sub(tri[2], tri[0]));
+    polygon_area(&face_tet_clip(tri, n, tet))
+}
+
+/// Whether two tets' closed volumes overlap by more than touching, by the
+/// separating axis theorem (4 + 4 face normals, 6 × 6 edge cross products).
+pub fn tet_tet_overlap(a: &[[f64; 3]; 4], b: &[[f64; 3]; 4]) -> bool {
+    let eps = 1e-12 * tet_size(a).max(tet_size(b));
+    let separated = |axis: [f64; 3]| {
+        let len = dot(axis, axis).sqrt();
+        if len < 1e-300 {
+            return false;
+        }
+        let (mut amin, mut amax, mut bmin, mut bmax) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
+        for p in a {
+            let x = dot(axis, *p) / len;
+            amin = amin.min(x);
+            amax = amax.max(x);
+        }
+        for p in b {
+            let x = dot(axis, *p) / len;
+            bmin = bmin.min(x);
+            bmax = bmax.max(x);
+        }
+        amax <= bmin + eps || bmax <= amin + eps
+    };
+    for (n, _) in tet_planes(a).iter().chain(tet_planes(b).iter()) {
+        if separated(*n) {
+            return false;
+        }
+    }
+    const EDGES: [(usize, usize); 6] = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)];
+    for (i, j) in EDGES {
+        for (k, l) in EDGES {
+            if separated(cross(sub(a[j], a[i]), sub(b[l], b[k]))) {
+                return false;
+            }
+        }
+    }
+    true
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The tet with corners at the origin and the three unit points, scaled.
+    fn corner_tet(s: f64) -> [[f64; 3]; 4] {
+        [[0.0, 0.0, 0.0], [s, 0.0, 0.0], [0.0, s, 0.0], [0.0, 0.0, s]]
+    }
+
+    /// A big tet containing the box [-1, 1]^2 × [z0, z1] region used below.
+    fn slab_tet() -> [[f64; 3]; 4] {
+        // Large enough that its faces are far from the test triangles except
+        // for the bottom plane z = 0.
+        [
+            [-50.0, -50.0, 0.0],
+            [50.0, -50.0, 0.0],
+            [0.0, 60.0, 0.0],
+            [0.0, 0.0, 80.0],
+        ]
+    }
+
+    fn rot(p: [f64; 3], ang: f64, axis: usize) -> [f64; 3] {
+        let (c, s) = (ang.cos(), ang.sin());
+        let (i, j) = match axis {
+            0 => (1, 2),
+            1 => (2, 0),
+            _ => (0, 1),
+        };
+        let mut q = p;
+        q[i] = c * p[i] - s * p[j];
+        q[j] = s * p[i] + c * p[j];
+        q
+    }
+
+    #[test]
+    fn area_of_simple_polygons() {
+        let sq = [
+            [0.0, 0.0, 0.0],
+            [2.0, 0.0, 0.0],
+            [2.0, 1.0, 0.0],
+            [0.0, 1.0, 0.0],
+        ];
+        assert!((polygon_area(&sq) - 2.0).abs() < 1e-15);
+        assert_eq!(polygon_area(&sq[..2]), 0.0);
+    }
+
+    #[test]
+    fn face_inside_is_kept_whole() {
+        let tet = corner_tet(10.0);
+        let tri = [[1.0, 1.0, 1.0], [2.0, 1.0, 1.0], [1.0, 2.0, 1.0]];
+        assert!((triangle_in_tet_area(&tri, &tet) - 0.5).abs() < 1e-14);
+    }
+
+    #[test]
+    fn face_outside_gives_zero() {
+        let tet = corner_tet(1.0);
+        let tri = [[2.0, 2.0, 2.0], [3.0, 2.0, 2.0], [2.0, 3.0, 2.0]];
+        assert_eq!(triangle_in_tet_area(&tri, &tet), 0.0);
+        // Outside but with an overlapping bounding box.
+        let tri = [[0.6, 0.6, 0.1], [0.9, 0.5, 0.1], [0.5, 0.9, 0.1]];
+        assert_eq!(triangle_in_tet_area(&tri, &tet), 0.0);
+    }
+
+    #[test]
+    fn half_covered_face() {
+        // A vertical triangle crossing the plane z = 0: the part with z ≥ 0
+        // is inside the big tet. Triangle (−1,0,−1), (1,0,−1), (0,0,1):
+        // area 2; the part above z = 0 is a triangle of base 1, height 1.
+        let tri = [[-1.0, 0.0, -1.0], [1.0, 0.0, -1.0], [0.0, 0.0, 1.0]];
+        let a = triangle_in_tet_area(&tri, &slab_tet());
+        assert!((a - 0.5).abs() < 1e-13, "{a}");
+    }
+
+    #[test]
+    fn rotated_cases_match_by_hand() {
+        // The same half-covered configuration under rotations of both shapes.
+        let tri = [[-1.0, 0.0, -1.0], [1.0, 0.0, -1.0], [0.0, 0.0, 1.0]];
+        for (k, ang) in [0.3, 1.1, 2.5, -0.7].iter().enumerate() {
+            let axis = k % 3;
+            let tri_r = tri.map(|p| rot(p, *ang, axis));
+            let tet_r = slab_tet().map(|p| rot(p, *ang, axis));
+            let a = triangle_in_tet_area(&tri_r, &tet_r);
+            assert!((a - 0.5).abs() < 1e-12, "rotation {ang} about {axis}: {a}");
+        }
+        // A triangle in the plane z = 0.5 cutting the corner tet: the
+        // section of the tet at height z is the triangle x, y ≥ 0, x + y ≤ 1 − z.
+        let tet = corner_tet(1.0);
+        let big = [[-1.0, -1.0, 0.5], [3.0, -1.0, 0.5], [-1.0, 3.0, 0.5]];
+        let a = triangle_in_tet_area(&big, &tet);
+        assert!((a - 0.125).abs() < 1e-14, "{a}");
+    }
+
+    #[test]
+    fn coplanar_touching_face_counts_its_overlap() {
+        // Triangle lying in the tet's face plane z = 0 (touching contact).
+        let tet = corner_tet(1.0);
+        let tri = [[0.0, 0.0, 0.0], [0.5, 0.0, 0.0], [0.0, 0.5, 0.0]];
+        let a = triangle_in_tet_area(&tri, &tet);
+        assert!((a - 0.125).abs() < 1e-14, "{a}");
+        // The same triangle facing the same way as the tet's face (side by
+        // side, not touching): no contact area.
+        let flipped = [tri[0], tri[2], tri[1]];
+        assert_eq!(triangle_in_tet_area(&flipped, &tet), 0.0);
+        // Just below the face: nothing.
+        let below = tri.map(|p| [p[0], p[1], -1e-9]);
+        assert_eq!(triangle_in_tet_area(&below, &tet), 0.0);
+    }
+
+    #[test]
+    fn edge_on_and_vertex_on_give_zero_area_without_nan() {
+        let tet = corner_tet(1.0);
+        // Triangle touching the tet along an edge only.
+        let tri = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.5, -1.0, -1.0]];
+        let a = triangle_in_tet_area(&tri, &tet);
+        assert!(a.is_finite() && a.abs() < 1e-14, "{a}");
+        // Triangle touching at a vertex only.
+        let tri = [[1.0, 0.0, 0.0], [2.0, 0.0, -1.0], [2.0, -1.0, 0.0]];
+        let a = triangle_in_tet_area(&tri, &tet);
+        assert!(a.is_finite() && a.abs() < 1e-14, "{a}");
+    }
+
+    #[test]
+    fn tet_overlap_by_separating_axes() {
+        let a = corner_tet(1.0);
+        let shifted = |d: [f64; 3]| a.map(|p| [p[0] + d[0], p[1] + d[1], p[2] + d[2]]);
+        assert!(tet_tet_overlap(&a, &shifted([0.1, 0.1, 0.1])));
+        assert!(!tet_tet_overlap(&a, &shifted([2.0, 0.0, 0.0])));
+        // Touching across the slanted face only: no overlap.
+        assert!(!tet_tet_overlap(&a, &shifted([1.0, 0.0, 0.0])));
+        // Overlapping bounding boxes, separated by the slanted face plane.
+        let b = [
+            [0.6, 0.6, 0.6],
+            [1.6, 0.6, 0.6],
+            [0.6, 1.6, 0.6],
+            [0.6, 0.6, 1.6],
+        ];
+        assert!(!tet_tet_overlap(&a, &b));
+    }
+}

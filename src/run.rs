@@ -363,11 +363,9 @@ pub fn run(
     let mut step = 0u64;
     while step < model.steps {
         // Run uninterrupted until the next output, check or progress tick.
-        let next_detect = if detect_every > 0 {
-            (step / detect_every + 1) * detect_every
-        } else {
-            model.steps
-        };
+        let next_detect = step
+            .checked_div(detect_every)
+            .map_or(model.steps, |k| (k + 1) * detect_every);
         let target = [
             next_out.peek().copied().unwrap_or(model.steps),
             (step / check_every + 1) * check_every,

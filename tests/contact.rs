@@ -189,7 +189,7 @@ fn swapping_target_and_contactor_changes_nothing() {
             .zip(&r.temperature[k])
             .map(|(x, &t)| (key(x, t), t))
             .collect();
-        v.sort_by(|a, b| a.0.cmp(&b.0));
+        v.sort_by_key(|a| a.0);
         v.into_iter().map(|(_, t)| t).collect::<Vec<f64>>()
     };
     let d = rel_diff(&last(&r1), &last(&r2));
@@ -339,4 +339,26 @@ fn discs_against_pipe_network() {
     // Local ΔT exchanges less heat than the mean temperatures suggest when
     // conduction inside the discs is slow: a clearly larger error.
     assert!(local > 2.0 * avg && local > 0.01, "local-dT {local}");
+}
+
+/// Detection at a cadence: the contact set of the static bars never
+/// changes, so the operator is assembled once however often it is checked;
+/// the histories carry the contact count and area.
+#[test]
+fn redetection_keeps_the_operator_when_contacts_are_unchanged() {
+    let out = out_dir("redetect");
+    let s = [
+        "contact.every=1000".to_string(),
+        "time.end_time=5".to_string(),
+        "output.times=[]".to_string(),
+        "output.every=2000".to_string(),
+    ];
+    let stdout = run_ok(2, &root().join("scenarios/two-bars.toml"), &out, &sets(&s));
+    let line = summary_line(&stdout, "contact").unwrap();
+    assert!(line.contains("10 detection(s)") && line.contains("assembled 1 time(s)"), "{line}");
+    let (h, rows) = history(&out, "two-bars");
+    for r in &rows {
+        assert!(r[col(&h, "contacts")] > 0.0);
+        assert!((r[col(&h, "contact_area")] - 0.01).abs() < 1e-12);
+    }
 }

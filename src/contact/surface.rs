@@ -184,8 +184,8 @@ mod tests {
         let t = corner(2.0, [1.0, 0.0, 0.0]);
         for i in 0..4 {
             let n = barycentric(&t, t[i]);
-            for j in 0..4 {
-                assert!((n[j] - f64::from(u8::from(i == j))).abs() < 1e-14);
+            for (j, nj) in n.iter().enumerate() {
+                assert!((nj - f64::from(u8::from(i == j))).abs() < 1e-14);
             }
         }
         let c = [1.5, 0.5, 0.5];

@@ -40,27 +40,29 @@ pub struct SolverChoice {
 }
 
 impl SolverChoice {
-    /// Up to 50,000 unknowns, a sparse direct solve factorised once:
-    /// Cholesky with nested-dissection ordering on one rank; on several,
-    /// PETSc's `redundant` PC (each rank factorises the whole matrix once,
-    /// and a solve costs one gather), which beats a distributed direct
-    /// solver (MUMPS: 178 us per step on the 189-node slab, against 7 us)
-    /// at these sizes. Above that, CG with algebraic multigrid (GAMG),
-    /// which also handles the steady limit (large dt) where the capacity no
-    /// longer dominates the operator.
+    /// Sparse direct solves, factorised once, up to 50,000 unknowns:
+    /// - up to 10,000: PETSc's own Cholesky on one rank (1–6 us per step on
+    ///   the seed's bars); on several ranks the `redundant` PC (every rank
+    ///   factorises the whole matrix once, a solve costs one gather: 7 us
+    ///   per step on 2 ranks against 178 us for a distributed solve);
+    /// - 10,000 to 50,000: MUMPS, whose factorisation stays fast when
+    ///   contacts couple many nodes (0.7 s where PETSc's own took 24 s on
+    ///   the 512-cube contact lattice), at a higher cost per solve.
+    /// Above that, CG with algebraic multigrid (GAMG), which also handles
+    /// the steady limit (large dt) where the capacity no longer dominates.
     ///
-    /// A non-symmetric operator (average-ΔT contact) uses LU instead of
+    /// A non-symmetric operator (average-dT contact) uses LU instead of
     /// Cholesky, and GMRES instead of CG.
     pub fn auto(global_rows: usize, ranks: usize, symmetric: bool) -> SolverChoice {
         let opt = |k: &str, v: &str| (k.to_string(), v.to_string());
         let factor = if symmetric { "cholesky" } else { "lu" };
-        if global_rows <= 50_000 && ranks == 1 {
+        if global_rows <= 10_000 && ranks == 1 {
             SolverChoice {
                 ksp_type: "preonly".into(),
                 pc_type: factor.into(),
                 defaults: vec![opt("pc_factor_mat_ordering_type", "nd")],
             }
-        } else if global_rows <= 50_000 {
+        } else if global_rows <= 10_000 {
             SolverChoice {
                 ksp_type: "preonly".into(),
                 pc_type: "redundant".into(),
@@ -68,6 +70,12 @@ impl SolverChoice {
                     opt("redundant_pc_type", factor),
                     opt("redundant_pc_factor_mat_ordering_type", "nd"),
                 ],
+            }
+        } else if global_rows <= 50_000 {
+            SolverChoice {
+                ksp_type: "preonly".into(),
+                pc_type: factor.into(),
+                defaults: vec![opt("pc_factor_mat_solver_type", "mumps")],
             }
         } else {
             SolverChoice {

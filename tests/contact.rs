@@ -355,7 +355,10 @@ fn redetection_keeps_the_operator_when_contacts_are_unchanged() {
     ];
     let stdout = run_ok(2, &root().join("scenarios/two-bars.toml"), &out, &sets(&s));
     let line = summary_line(&stdout, "contact").unwrap();
-    assert!(line.contains("10 detection(s)") && line.contains("assembled 1 time(s)"), "{line}");
+    assert!(
+        line.contains("10 detection(s)") && line.contains("assembled 1 time(s)"),
+        "{line}"
+    );
     let (h, rows) = history(&out, "two-bars");
     for r in &rows {
         assert!(r[col(&h, "contacts")] > 0.0);

@@ -48,6 +48,7 @@ impl SolverChoice {
     /// - 10,000 to 50,000: MUMPS, whose factorisation stays fast when
     ///   contacts couple many nodes (0.7 s where PETSc's own took 24 s on
     ///   the 512-cube contact lattice), at a higher cost per solve.
+    ///
     /// Above that, CG with algebraic multigrid (GAMG), which also handles
     /// the steady limit (large dt) where the capacity no longer dominates.
     ///

@@ -177,7 +177,7 @@ fn dispatch(
                     "MPI:   {}",
                     mpi::environment::library_version()
                         .unwrap_or_default()
-                        .trim()
+                        .trim_matches(|c: char| c == '\0' || c.is_whitespace())
                 );
                 let v = hdf5::library_version();
                 println!("HDF5:  {}.{}.{} (MPI-IO driver)", v.0, v.1, v.2);

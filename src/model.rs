@@ -448,3 +448,76 @@ pub fn resolve_faces(mesh: &TetMesh, name: &str) -> std::result::Result<Vec<[u32
     }
     Ok(faces)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::Path;
+
+    const TWO: &str = r#"
+[time]
+dt = 1.0
+steps = 1
+[[materials]]
+name = "steel"
+conductivity = 50.0
+specific_heat = 500.0
+density = 7800.0
+[[materials]]
+name = "glass"
+conductivity = 1.0
+specific_heat = 800.0
+density = 2500.0
+[[bodies]]
+name = "a"
+material = "steel"
+mesh = { kind = "box", size = [0.1, 0.1, 0.1], element_size = 0.1 }
+rotate = [0.0, 0.0, 90.0]
+[[bodies]]
+name = "g"
+material = "glass"
+mesh = { kind = "box", size = [0.1, 0.1, 0.1], element_size = 0.1 }
+lattice = { count = [2, 1, 1], spacing = [0.2, 0.0, 0.0] }
+[contact]
+resistance = 0.01
+[[contact.pair]]
+materials = ["glass", "steel"]
+conductance = 50.0
+"#;
+
+    fn model() -> Model {
+        let sc = crate::scenario::parse_str(TWO, Path::new("t.toml"), &[]).unwrap();
+        Model::from_scenario(&sc).unwrap()
+    }
+
+    #[test]
+    fn pair_resistance_overrides_the_default() {
+        let m = model();
+        let steel = m.bodies[0].elem_range.0 as usize;
+        let glass = m.bodies[1].elem_range.0 as usize;
+        let glass2 = m.bodies[2].elem_range.0 as usize;
+        assert_eq!(m.contact_resistance(steel, glass), 1.0 / 50.0);
+        assert_eq!(m.contact_resistance(glass, steel), 1.0 / 50.0);
+        assert_eq!(m.contact_resistance(glass, glass2), 0.01);
+    }
+
+    #[test]
+    fn rotation_and_lattice_place_the_copies() {
+        let m = model();
+        assert_eq!(m.bodies.len(), 3);
+        assert_eq!(m.bodies[1].name, "g_0_0_0");
+        assert_eq!(m.bodies[2].name, "g_1_0_0");
+        assert_eq!(m.bodies[2].template, "g");
+        // 90° about z maps (0.1, 0, 0) to (0, 0.1, 0): body a spans x in [-0.1, 0].
+        let (lo, hi) = m.bodies[0].node_range;
+        let xs: Vec<f64> = (lo..hi).map(|n| m.mesh.nodes[n as usize][0]).collect();
+        assert!(xs.iter().all(|&x| (-0.1 - 1e-12..=1e-12).contains(&x)));
+        // The second copy is shifted by the spacing.
+        let (lo2, _) = m.bodies[2].node_range;
+        let (lo1, _) = m.bodies[1].node_range;
+        assert!(
+            (m.mesh.nodes[lo2 as usize][0] - m.mesh.nodes[lo1 as usize][0] - 0.2).abs() < 1e-15
+        );
+        assert!(m.mesh.face_sets.contains_key("g_1_0_0.xmax"));
+    }
+}

@@ -5,26 +5,8 @@
 
 mod common;
 
-use std::path::Path;
-
 use common::*;
 use fdem::validation::{circle_overlap_surface, PipeNetwork, SlabProblem};
-
-fn history(dir: &Path, stem: &str) -> (Vec<String>, Vec<Vec<f64>>) {
-    let text = std::fs::read_to_string(dir.join(format!("{stem}_history.csv"))).unwrap();
-    let mut lines = text.lines();
-    let header = lines.next().unwrap().split(',').map(String::from).collect();
-    let rows = lines
-        .map(|l| l.split(',').map(|v| v.parse::<f64>().unwrap()).collect())
-        .collect();
-    (header, rows)
-}
-
-fn col(h: &[String], name: &str) -> usize {
-    h.iter()
-        .position(|c| c == name)
-        .unwrap_or_else(|| panic!("no column {name} in {h:?}"))
-}
 
 fn sets(list: &[String]) -> Vec<&str> {
     list.iter().flat_map(|s| ["--set", s.as_str()]).collect()

@@ -83,16 +83,6 @@ fn steady_profile_is_linear_to_1e10() {
     assert!(worst < 1e-10, "max |T - x| = {worst:e}");
 }
 
-fn history(dir: &std::path::Path, stem: &str) -> (Vec<String>, Vec<Vec<f64>>) {
-    let text = std::fs::read_to_string(dir.join(format!("{stem}_history.csv"))).unwrap();
-    let mut lines = text.lines();
-    let header = lines.next().unwrap().split(',').map(String::from).collect();
-    let rows = lines
-        .map(|l| l.split(',').map(|v| v.parse::<f64>().unwrap()).collect())
-        .collect();
-    (header, rows)
-}
-
 /// Heat through the boundary (Dirichlet reactions, fluxes, convection,
 /// sources) equals the change of stored heat, at every output, for the
 /// explicit, Crank–Nicolson and backward-Euler schemes.

@@ -119,3 +119,21 @@ pub fn rel_diff(a: &[f64], b: &[f64]) -> f64 {
 pub fn summary_line<'a>(stdout: &'a str, key: &str) -> Option<&'a str> {
     stdout.lines().find(|l| l.trim_start().starts_with(key))
 }
+
+/// The history CSV of a run: header and rows.
+pub fn history(dir: &Path, stem: &str) -> (Vec<String>, Vec<Vec<f64>>) {
+    let text = std::fs::read_to_string(dir.join(format!("{stem}_history.csv"))).unwrap();
+    let mut lines = text.lines();
+    let header = lines.next().unwrap().split(',').map(String::from).collect();
+    let rows = lines
+        .map(|l| l.split(',').map(|v| v.parse::<f64>().unwrap()).collect())
+        .collect();
+    (header, rows)
+}
+
+/// Index of a history column.
+pub fn col(h: &[String], name: &str) -> usize {
+    h.iter()
+        .position(|c| c == name)
+        .unwrap_or_else(|| panic!("no column {name} in {h:?}"))
+}

@@ -34,6 +34,8 @@ pub struct Body {
     pub material: usize,
     /// Initial temperature.
     pub initial_temperature: f64,
+    /// Prescribed rigid translation velocity (m/s).
+    pub velocity: [f64; 3],
     /// Its nodes: `node_range.0..node_range.1` in the combined mesh.
     pub node_range: (u32, u32),
     /// Its elements.
@@ -194,6 +196,7 @@ impl Model {
                     template: b.name.clone(),
                     material,
                     initial_temperature: b.initial_temperature,
+                    velocity: b.velocity.unwrap_or([0.0; 3]),
                     node_range: (n0, combined.nodes.len() as u32),
                     elem_range: (e0, combined.tets.len() as u32),
                 });
@@ -335,6 +338,25 @@ impl Model {
             .map_or(f64::INFINITY, |c| c.resistance[ma][mb])
     }
 
+    /// Whether any body moves.
+    pub fn has_motion(&self) -> bool {
+        self.bodies.iter().any(|b| b.velocity != [0.0; 3])
+    }
+
+    /// Node positions at time `t` (bodies translated by their velocities).
+    pub fn positions_at(&self, t: f64, out: &mut [[f64; 3]]) {
+        for b in &self.bodies {
+            for n in b.node_range.0..b.node_range.1 {
+                let p = self.mesh.nodes[n as usize];
+                out[n as usize] = [
+                    p[0] + b.velocity[0] * t,
+                    p[1] + b.velocity[1] * t,
+                    p[2] + b.velocity[2] * t,
+                ];
+            }
+        }
+    }
+
     /// Heat capacity ρcV/4 carried by each node (the row sums of M).
     pub fn node_capacity(&self) -> Vec<f64> {
         let mut w = vec![0.0; self.mesh.nodes.len()];
@@ -348,12 +370,11 @@ impl Model {
         w
     }
 
-    /// Body of node `n`.
+    /// Body of node `n` (bodies own consecutive, ascending node ranges).
     pub fn body_of_node(&self, n: u32) -> usize {
         self.bodies
-            .iter()
-            .position(|b| n >= b.node_range.0 && n < b.node_range.1)
-            .unwrap_or(0)
+            .partition_point(|b| b.node_range.1 <= n)
+            .min(self.bodies.len().saturating_sub(1))
     }
 }
 

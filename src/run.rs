@@ -204,9 +204,11 @@ const PAIR_F64S: usize = 12;
 
 /// Collective. Detect contacts: each rank queries its own boundary tets,
 /// then all ranks gather every pair (for preallocation and statistics).
+/// `mesh` is the model's mesh at the current positions.
 pub fn find_contacts(
     comm: &SimpleCommunicator,
     model: &Model,
+    mesh: &crate::mesh::TetMesh,
     layout: &Layout,
     bt: &BoundaryTets,
 ) -> ContactSet {
@@ -214,7 +216,7 @@ pub fn find_contacts(
         return ContactSet::default();
     }
     let rank = layout.rank as u32;
-    let local = detect_contacts(&model.mesh, bt, |e| layout.elem_part[e as usize] == rank);
+    let local = detect_contacts(mesh, bt, |e| layout.elem_part[e as usize] == rank);
     let mut flat = Vec::with_capacity(local.len() * PAIR_F64S);
     for p in &local {
         flat.extend_from_slice(&[
@@ -264,7 +266,9 @@ pub fn run(
 
     let clock = Instant::now();
     let bt = BoundaryTets::new(&model.mesh);
-    let mut contacts = find_contacts(comm, &model, &layout, &bt);
+    // Positions of moving bodies are updated at each detection.
+    let mut mesh_now = model.mesh.clone();
+    let mut contacts = find_contacts(comm, &model, &mesh_now, &layout, &bt);
     let mut detections = u64::from(model.contact.is_some());
     times.contact = clock.elapsed().as_secs_f64();
 
@@ -319,7 +323,25 @@ pub fn run(
      -> Result<()> {
         let time = step as f64 * model.dt;
         let t = sys.t.to_local_vec()?;
-        writer.write_step(time, &[("temperature", 1, &t)], &[])?;
+        if model.has_motion() {
+            // Rigid displacement of each owned node (ParaView: Warp By Vector).
+            let u: Vec<f64> = layout
+                .owned_nodes
+                .iter()
+                .flat_map(|&n| {
+                    model.bodies[model.body_of_node(n)]
+                        .velocity
+                        .map(|v| v * time)
+                })
+                .collect();
+            writer.write_step(
+                time,
+                &[("temperature", 1, &t), ("displacement", 3, &u)],
+                &[],
+            )?;
+        } else {
+            writer.write_step(time, &[("temperature", 1, &t)], &[])?;
+        }
         let e = sys.energy()?;
         let mut row = vec![
             step as f64,
@@ -388,7 +410,10 @@ pub fn run(
         if detect_every > 0 && step.is_multiple_of(detect_every) && step < model.steps {
             // Rebuild the operator only when the contact set or its areas changed.
             let clock = Instant::now();
-            let found = find_contacts(comm, &model, &layout, &bt);
+            if model.has_motion() {
+                model.positions_at(step as f64 * model.dt, &mut mesh_now.nodes);
+            }
+            let found = find_contacts(comm, &model, &mesh_now, &layout, &bt);
             detections += 1;
             times.contact += clock.elapsed().as_secs_f64();
             if !found.same_as(&contacts, 1e-12) {

@@ -42,7 +42,7 @@ pub struct ContactSet {
 impl ContactSet {
     /// Total contact area Σ S.
     pub fn total_area(&self) -> f64 {
-        self.all.iter().map(ContactPair::area).sum()
+        self.all.iter().fold(0.0, |s, p| s + p.area())
     }
 
     /// Whether two sets have the same pairs and the same areas to `rtol`.

@@ -135,6 +135,11 @@ pub struct BodySpec {
     /// Rigid translation applied to the mesh (m).
     #[serde(default)]
     pub translate: Option<[f64; 3]>,
+    /// Prescribed rigid translation velocity (m/s): a kinematic body (a
+    /// heated punch, a conveyor) whose contacts change as it moves. Needs
+    /// `contact.every > 0` to see the changes.
+    #[serde(default)]
+    pub velocity: Option<[f64; 3]>,
     /// Replicate this body on a regular grid: bodies `<name>_i_j_k`.
     #[serde(default)]
     pub lattice: Option<LatticeSpec>,
@@ -465,6 +470,18 @@ impl Scenario {
                     return bad(
                         &format!("bodies[{i}].lattice"),
                         "counts must be positive and spacings finite".into(),
+                    );
+                }
+            }
+            if let Some(v) = b.velocity {
+                if v.iter().any(|x| !x.is_finite()) {
+                    return bad(&format!("bodies[{i}].velocity"), "must be finite".into());
+                }
+                let every = self.contact.as_ref().map_or(0, |c| c.every);
+                if v != [0.0; 3] && self.contact.is_some() && every == 0 {
+                    return bad(
+                        &format!("bodies[{i}].velocity"),
+                        "a moving body needs `contact.every` > 0 to re-detect its contacts".into(),
                     );
                 }
             }

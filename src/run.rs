@@ -266,9 +266,10 @@ pub fn run(
 
     let clock = Instant::now();
     let bt = BoundaryTets::new(&model.mesh);
-    // Positions of moving bodies are updated at each detection.
-    let mut mesh_now = model.mesh.clone();
-    let mut contacts = find_contacts(comm, &model, &mesh_now, &layout, &bt);
+    // Positions of moving bodies are updated at each detection (a copy of
+    // the mesh only when something moves).
+    let mut moved = model.has_motion().then(|| model.mesh.clone());
+    let mut contacts = find_contacts(comm, &model, &model.mesh, &layout, &bt);
     let mut detections = u64::from(model.contact.is_some());
     times.contact = clock.elapsed().as_secs_f64();
 
@@ -410,10 +411,11 @@ pub fn run(
         if detect_every > 0 && step.is_multiple_of(detect_every) && step < model.steps {
             // Rebuild the operator only when the contact set or its areas changed.
             let clock = Instant::now();
-            if model.has_motion() {
-                model.positions_at(step as f64 * model.dt, &mut mesh_now.nodes);
+            if let Some(m) = moved.as_mut() {
+                model.positions_at(step as f64 * model.dt, &mut m.nodes);
             }
-            let found = find_contacts(comm, &model, &mesh_now, &layout, &bt);
+            let mesh_now = moved.as_ref().unwrap_or(&model.mesh);
+            let found = find_contacts(comm, &model, mesh_now, &layout, &bt);
             detections += 1;
             times.contact += clock.elapsed().as_secs_f64();
             if !found.same_as(&contacts, 1e-12) {

@@ -5,6 +5,7 @@
 //! - [`geometry`]: convex clipping (triangle ∩ tet), polygon area, tet overlap.
 //! - [`contact`]: contact detection (BVH broad phase, clipping narrow phase), contact surfaces and conductances.
 //! - [`mesh`]: Tet4 meshes, boundary faces, quality checks, Gmsh import, generators.
+//! - [`mechanics`]: finite-strain Tet4 stress/forces with thermal expansion (seed 004 eqs 1–38), explicit integrator.
 //! - [`thermal`]: element matrices and loads (seed 000 eqs 14–20), theta integrator (eq 22).
 //! - [`parallel`]: METIS partition, owned/ghost numbering matching PETSc ownership.
 //! - [`petsc`]: safe RAII layer over `petsc-sys`.
@@ -22,6 +23,7 @@ pub mod contact;
 pub mod error;
 pub mod geometry;
 pub mod io;
+pub mod mechanics;
 pub mod mesh;
 pub mod model;
 pub mod parallel;

@@ -1,0 +1,32 @@
+//! Finite-strain explicit mechanics with thermal expansion: pure kernels,
+//! free of MPI and PETSc, usable serially or as the per-rank kernel.
+//!
+//! Implements seed 004 (thermo-mechanical FDEM) sec 2.1–2.6:
+//! - [`element`]: constant-strain Tet4 with the deformation gradient F,
+//!   J and B (eqs 1–7), velocity gradient L and rate of deformation D
+//!   (eqs 8–15), the thermal split F = F_T F_e with F_T = (1 + α ΔT) I
+//!   (eqs 16–33), the Cauchy stress of eq 34 on the elastic part with the
+//!   viscous stress of eq 35, nodal internal forces and stored energy; the
+//!   fixed heated element reproduces eq 38 (sec 3.1, Table 1).
+//! - [`material`]: [`ElasticMaterial`] (E, ν, ρ, α, η) and its Lamé constants.
+//! - [`explicit`]: lumped mass, central-difference update with gravity,
+//!   mass-proportional damping and velocity boundary conditions, stable
+//!   time step, and the serial [`ExplicitSolver`] (sec 3.2 free expansion).
+//! - `error`: [`MechanicsError`].
+//!
+//! Conventions: tension-positive Cauchy stress; nodal force arrays hold the
+//! forces acting on the nodes (M a = f); ΔT is the element temperature
+//! minus the stress-free reference temperature.
+
+pub mod element;
+mod error;
+pub mod explicit;
+pub mod material;
+
+pub use element::{element_response, ElementResponse, Kinematics, Tet4Reference, ThermalState};
+pub use error::MechanicsError;
+pub use explicit::{
+    critical_dt, CriticalDt, Energies, ExplicitConfig, ExplicitSolver, MechElement, ThermalLoad,
+    VelocityBc,
+};
+pub use material::ElasticMaterial;

@@ -136,17 +136,26 @@ fn main() -> ExitCode {
             r
         }
     };
-    drop(universe);
-    match result {
+    let code = match &result {
         Ok(()) => ExitCode::SUCCESS,
         Err(Error::OtherRank) => ExitCode::FAILURE,
         Err(e) => {
-            if rank == 0 || !deterministic(&e) {
+            if rank == 0 || !deterministic(e) {
                 eprintln!("error: {e}");
             }
             ExitCode::FAILURE
         }
+    };
+    // Every rank returns here (errors are agreed collectively), so wait for
+    // all before leaving: a rank exiting non-zero early makes mpirun kill
+    // the others, possibly before rank 0 has printed the message.
+    if result.is_err() {
+        use std::io::Write;
+        let _ = std::io::stderr().flush();
+        world.barrier();
     }
+    drop(universe);
+    code
 }
 
 /// Errors every rank finds identically are printed by rank 0 only.

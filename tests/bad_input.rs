@@ -228,7 +228,18 @@ fn killed_run_leaves_readable_output() {
         ])
         .spawn()
         .unwrap();
-    std::thread::sleep(std::time::Duration::from_millis(700));
+    // Wait until the run has written its first outputs (at most 20 s),
+    // then let it write more and kill it mid-run.
+    let xdmf_path = out.join("slab-1d.xdmf");
+    let start = std::time::Instant::now();
+    while !xdmf_path.exists() && start.elapsed().as_secs() < 20 {
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    std::thread::sleep(std::time::Duration::from_millis(300));
+    assert!(
+        child.try_wait().unwrap().is_none(),
+        "the run ended before it could be killed"
+    );
     child.kill().unwrap(); // SIGKILL
     let _ = child.wait();
     let h5 = out.join("slab-1d.h5");

@@ -69,6 +69,11 @@ for n in 2 4 8 16; do
   done
 done
 
+# Mechanics kernel throughput (issue 4, the first part built).
+cargo build --release --example mech_kernel_bench
+kernel_line=$(target/release/examples/mech_kernel_bench)
+echo "$kernel_line" >&2
+
 {
   echo "# Benchmarks"
   echo
@@ -101,6 +106,14 @@ done
   echo "| bodies | ranks | tets | contact pairs | detection + surfaces (s) | pairs/s | assembly + factorisation (s) |"
   echo "|---|---|---|---|---|---|---|"
   for r in "${crow[@]}"; do echo "$r"; done
+  echo
+  echo "## Mechanics kernel"
+  echo
+  echo "\`cargo run --release --example mech_kernel_bench\` (finite-strain Tet4 internal"
+  echo "forces with thermal split and viscous stress, one core; issue 4 targets at least"
+  echo "10 million tet updates per second per core):"
+  echo
+  echo "- $kernel_line"
   echo
   echo "## Commands"
   echo

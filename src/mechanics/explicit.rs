@@ -185,6 +185,29 @@ fn check_len(what: &'static str, got: usize, expected: usize) -> Result<(), Mech
     }
 }
 
+/// The material of `el`, checking its material index and node indices
+/// against `materials` and the `n` nodes.
+fn checked_material<'m>(
+    el: &MechElement,
+    materials: &'m [ElasticMaterial],
+    n: usize,
+) -> Result<&'m ElasticMaterial, MechanicsError> {
+    if let Some(&bad) = el.nodes.iter().find(|&&i| i as usize >= n) {
+        return Err(MechanicsError::SizeMismatch {
+            what: "node index of an element",
+            got: bad as usize,
+            expected: n,
+        });
+    }
+    materials
+        .get(el.material as usize)
+        .ok_or(MechanicsError::SizeMismatch {
+            what: "materials",
+            got: materials.len(),
+            expected: el.material as usize + 1,
+        })
+}
+
 /// Adds the internal forces of `elements` at positions `x` and velocities
 /// `v` into `forces` (not zeroed first, so several element blocks can
 /// accumulate into one array), writes each element's Cauchy stress into
@@ -212,20 +235,7 @@ pub fn internal_forces(
     }
     let mut energy = 0.0;
     for (e, el) in elements.iter().enumerate() {
-        let material = materials
-            .get(el.material as usize)
-            .ok_or(MechanicsError::SizeMismatch {
-                what: "materials",
-                got: materials.len(),
-                expected: el.material as usize + 1,
-            })?;
-        if let Some(&bad) = el.nodes.iter().find(|&&i| i as usize >= n) {
-            return Err(MechanicsError::SizeMismatch {
-                what: "node index of an element",
-                got: bad as usize,
-                expected: n,
-            });
-        }
+        let material = checked_material(el, materials, n)?;
         let idx = el.nodes.map(|i| i as usize);
         let xe = idx.map(|i| x[i]);
         let ve = idx.map(|i| v[i]);
@@ -356,20 +366,7 @@ pub fn elements_critical_dt(
         elem: 0,
     };
     for (e, el) in elements.iter().enumerate() {
-        let mat = materials
-            .get(el.material as usize)
-            .ok_or(MechanicsError::SizeMismatch {
-                what: "materials",
-                got: materials.len(),
-                expected: el.material as usize + 1,
-            })?;
-        if let Some(&bad) = el.nodes.iter().find(|&&i| i as usize >= x.len()) {
-            return Err(MechanicsError::SizeMismatch {
-                what: "node index of an element",
-                got: bad as usize,
-                expected: x.len(),
-            });
-        }
+        let mat = checked_material(el, materials, x.len())?;
         let dt = element_critical_dt(&el.nodes.map(|i| x[i as usize]), mat);
         if dt < best.dt {
             best = CriticalDt { dt, elem: e };

@@ -140,17 +140,29 @@ impl Tet4Reference {
     }
 }
 
-/// F⁻¹, or an error if J = det F is not positive and finite.
+/// F⁻¹ = adj(F)/J, or an error if J = det F is not positive and finite.
+#[inline]
 fn invert_deformation(f: &Matrix3<f64>, j: f64) -> Result<Matrix3<f64>, MechanicsError> {
-    let inverted = MechanicsError::Inverted {
-        elem: None,
-        what: "J = det F",
-        value: j,
-    };
     if !(j > 0.0 && j.is_finite()) {
-        return Err(inverted);
+        return Err(MechanicsError::Inverted {
+            elem: None,
+            what: "J = det F",
+            value: j,
+        });
     }
-    f.try_inverse().ok_or(inverted)
+    let r = 1.0 / j;
+    let m = |a: usize, b: usize| f[(a, b)];
+    Ok(Matrix3::new(
+        (m(1, 1) * m(2, 2) - m(1, 2) * m(2, 1)) * r,
+        (m(0, 2) * m(2, 1) - m(0, 1) * m(2, 2)) * r,
+        (m(0, 1) * m(1, 2) - m(0, 2) * m(1, 1)) * r,
+        (m(1, 2) * m(2, 0) - m(1, 0) * m(2, 2)) * r,
+        (m(0, 0) * m(2, 2) - m(0, 2) * m(2, 0)) * r,
+        (m(0, 2) * m(1, 0) - m(0, 0) * m(1, 2)) * r,
+        (m(1, 0) * m(2, 1) - m(1, 1) * m(2, 0)) * r,
+        (m(0, 1) * m(2, 0) - m(0, 0) * m(2, 1)) * r,
+        (m(0, 0) * m(1, 1) - m(0, 1) * m(1, 0)) * r,
+    ))
 }
 
 /// Kinematic tensors of a constant-strain Tet4 (seed 004 eqs 5–15).
@@ -229,7 +241,8 @@ pub fn thermal_split(
         });
     }
     // Seed 004 eqs 16, 26: F = F_T F_e with F_T = Υ I ⇒ F_e = F/Υ.
-    let f_e = k.f / stretch;
+    let inv_stretch = 1.0 / stretch;
+    let f_e = k.f * inv_stretch;
     let h = f_e - Matrix3::identity();
     // Seed 004 eqs 27–28: J = J_T J_e with J_T = Υ³; J_e − 1 = det(I + H) − 1 = I1 + I2 + I3 of H.
     let tr = h.trace();
@@ -237,10 +250,10 @@ pub fn thermal_split(
     let j_e = 1.0 + j_e_minus_1;
     let ln_j_e = j_e_minus_1.ln_1p();
     // Seed 004 eqs 31–32: B = B_T B_e with B_T = Υ² I ⇒ B_e = F_e F_eᵀ = I + H + Hᵀ + H Hᵀ.
-    let b_e = k.b / (stretch * stretch);
+    let b_e = k.b * (inv_stretch * inv_stretch);
     let b_e_minus_i = h + h.transpose() + h * h.transpose();
     // Seed 004 eqs 18, 25: L_T = Υ̇/Υ I = α Ṫ/Υ I (symmetric, so D_T = L_T).
-    let d_t = alpha * thermal.rate / stretch;
+    let d_t = alpha * thermal.rate * inv_stretch;
     // Seed 004 eqs 30, 33: D = D_T + D_e ⇒ D_e = D − D_T.
     let d_e = k.d - Matrix3::identity() * d_t;
     Ok(ElasticKinematics {
@@ -259,7 +272,7 @@ pub fn thermal_split(
 pub fn cauchy_stress(mu: f64, lambda: f64, eta: f64, e: &ElasticKinematics) -> Matrix3<f64> {
     let i = Matrix3::identity();
     // Seed 004 eq 34 on the elastic part: σ = μ/J_e (B_e − I) + λ/J_e ln(J_e) I.
-    let elastic = (e.b_e_minus_i * mu + i * (lambda * e.ln_j_e)) / e.j_e;
+    let elastic = (e.b_e_minus_i * mu + i * (lambda * e.ln_j_e)) * (1.0 / e.j_e);
     // Seed 004 eq 35: C_D = 2 η D (with D_e, see the module header).
     elastic + e.d_e * (2.0 * eta)
 }

@@ -194,10 +194,7 @@ fn cube_stack_one_vs_two_ranks() {
     );
     let r1 = read_results(&o1, "cube-stack");
     let r2 = read_results(&o2, "cube-stack");
-    for k in 0..r1.times.len() {
-        let d = rel_diff(&r1.temperature[k], &r2.temperature[k]);
-        assert!(d < 1e-8, "step {k}: relative difference {d:e}");
-    }
+    assert_same_temperatures(&r1, &r2, 1e-8, "cube stack, 1 vs 2 ranks");
     let ranks = fdem::io::read_static_cell_field_i32(&o2.join("cube-stack.h5"), "rank").unwrap();
     let bodies = fdem::io::read_static_cell_field_i32(&o2.join("cube-stack.h5"), "body").unwrap();
     // Each rank holds some cubes; every cube touches three others, so
@@ -411,8 +408,5 @@ fn moving_punch_rebuilds_on_contact_changes() {
     );
     let r1 = read_results(&o1, "moving-punch");
     let r2 = read_results(&o2, "moving-punch");
-    for k in 0..r1.times.len() {
-        let d = rel_diff(&r1.temperature[k], &r2.temperature[k]);
-        assert!(d < 1e-8, "step {k}: 1 vs 2 ranks differ by {d:e}");
-    }
+    assert_same_temperatures(&r1, &r2, 1e-8, "moving punch, 1 vs 2 ranks");
 }

@@ -11,6 +11,33 @@ use super::{tet_tet_contact_surface, ContactPair};
 use crate::geometry::tet_tet_overlap;
 use crate::mesh::TetMesh;
 
+/// Up to four local face indices, held inline (no allocation in the
+/// detection loop).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct FaceList {
+    faces: [u8; 4],
+    len: u8,
+}
+
+impl FaceList {
+    /// The faces whose bits are set in `mask` (bit i: face opposite node i).
+    pub fn from_mask(mask: u8) -> FaceList {
+        let mut l = FaceList::default();
+        for f in 0..4u8 {
+            if mask & (1 << f) != 0 {
+                l.faces[l.len as usize] = f;
+                l.len += 1;
+            }
+        }
+        l
+    }
+
+    /// The faces as a slice.
+    pub fn as_slice(&self) -> &[u8] {
+        &self.faces[..self.len as usize]
+    }
+}
+
 /// The tets with at least one boundary face, with those faces.
 #[derive(Debug, Clone, Default)]
 pub struct BoundaryTets {
@@ -38,10 +65,8 @@ impl BoundaryTets {
     }
 
     /// Local boundary faces of boundary tet `i`.
-    pub fn faces(&self, i: usize) -> Vec<u8> {
-        (0..4u8)
-            .filter(|f| self.face_mask[i] & (1 << f) != 0)
-            .collect()
+    pub fn faces(&self, i: usize) -> FaceList {
+        FaceList::from_mask(self.face_mask[i])
     }
 
     /// Number of boundary tets.
@@ -89,11 +114,7 @@ pub fn detect_contacts(
     for (i, &e) in bt.elems.iter().enumerate() {
         mask[e as usize] = bt.face_mask[i];
     }
-    let faces = |e: u32| -> Vec<u8> {
-        (0..4u8)
-            .filter(|f| mask[e as usize] & (1 << f) != 0)
-            .collect()
-    };
+    let faces = |e: u32| FaceList::from_mask(mask[e as usize]);
     let boxes: Vec<Aabb> = (0..ne).map(|e| aabb(&mesh.element_coords(e))).collect();
     let bvh = Bvh::from_leaves(BvhBuildStrategy::Binned, &boxes);
     let mut pairs = Vec::new();
@@ -120,13 +141,13 @@ pub fn detect_contacts(
                 ContactPair {
                     target: x,
                     contactor: y,
-                    surface: tet_tet_contact_surface(&cx, &fx, &cy, &fy),
+                    surface: tet_tet_contact_surface(&cx, fx.as_slice(), &cy, fy.as_slice()),
                 }
             } else {
                 ContactPair {
                     target: y,
                     contactor: x,
-                    surface: tet_tet_contact_surface(&cy, &fy, &cx, &fx),
+                    surface: tet_tet_contact_surface(&cy, fy.as_slice(), &cx, fx.as_slice()),
                 }
             };
             if pair.area() > 0.0 {

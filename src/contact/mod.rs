@@ -8,7 +8,7 @@
 mod detect;
 mod surface;
 
-pub use detect::{detect_contacts, BoundaryTets};
+pub use detect::{detect_contacts, BoundaryTets, FaceList};
 pub use surface::{tet_tet_contact_surface, ContactSurface};
 
 /// One contact: a boundary tet of one body overlapping a boundary tet of

@@ -405,17 +405,7 @@ mod tests {
     use crate::mesh::generate::box_mesh;
     use nalgebra::{Rotation3, SymmetricEigen};
 
-    /// Seed 004 Table 1 (E = 20 GPa, ν = 0.2, α = 1e-6 /K per the seeds
-    /// README); density is not in the table (2400 kg/m³, concrete).
-    fn table1() -> ElasticMaterial {
-        ElasticMaterial {
-            young: 20e9,
-            poisson: 0.2,
-            density: 2400.0,
-            expansion: 1e-6,
-            viscosity: 0.0,
-        }
-    }
+    use crate::mechanics::material::table1_concrete as table1;
 
     /// An irregular, positively oriented tet.
     fn skew_tet() -> [Vector3<f64>; 4] {

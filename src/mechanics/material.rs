@@ -78,47 +78,49 @@ impl ElasticMaterial {
     }
 }
 
+/// Seed 004 Table 1 (concrete): E = 20 GPa, ν = 0.2, α = 1e-6 /K (per the
+/// seeds README); the table gives no density, so 2400 kg/m³. For tests.
+#[cfg(test)]
+pub(crate) fn table1_concrete() -> ElasticMaterial {
+    ElasticMaterial {
+        young: 20e9,
+        poisson: 0.2,
+        density: 2400.0,
+        expansion: 1e-6,
+        viscosity: 0.0,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    /// Seed 004 Table 1 (concrete): E = 20 GPa, ν = 0.2; density not given there.
-    fn table1() -> ElasticMaterial {
-        ElasticMaterial {
-            young: 20e9,
-            poisson: 0.2,
-            density: 2400.0,
-            expansion: 1e-6,
-            viscosity: 0.0,
-        }
-    }
-
     #[test]
     fn lame_constants_match_table_1() {
-        let (mu, lambda) = table1().lame();
+        let (mu, lambda) = table1_concrete().lame();
         // Table 1 prints 8.33 and 5.56 GPa: tolerance half a unit of the last digit (0.005 GPa).
         assert!((mu - 8.33e9).abs() <= 0.005e9, "mu = {mu}");
         assert!((lambda - 5.56e9).abs() <= 0.005e9, "lambda = {lambda}");
         // λ + 2μ = E(1−ν)/((1+ν)(1−2ν)) exactly (round-off tolerance).
         let m = 20e9 * 0.8 / (1.2 * 0.6);
-        assert!((table1().p_wave_modulus() / m - 1.0).abs() < 1e-14);
+        assert!((table1_concrete().p_wave_modulus() / m - 1.0).abs() < 1e-14);
         let c = (m / 2400.0).sqrt();
-        assert!((table1().p_wave_speed() / c - 1.0).abs() < 1e-14);
+        assert!((table1_concrete().p_wave_speed() / c - 1.0).abs() < 1e-14);
     }
 
     #[test]
     fn validation_rejects_unphysical_constants() {
-        assert!(table1().validate().is_ok());
-        let mut m = table1();
+        assert!(table1_concrete().validate().is_ok());
+        let mut m = table1_concrete();
         m.poisson = 0.5;
         assert!(m.validate().is_err());
-        let mut m = table1();
+        let mut m = table1_concrete();
         m.density = 0.0;
         assert!(m.validate().is_err());
-        let mut m = table1();
+        let mut m = table1_concrete();
         m.viscosity = -1.0;
         assert!(m.validate().is_err());
-        let mut m = table1();
+        let mut m = table1_concrete();
         m.young = f64::NAN;
         assert!(m.validate().is_err());
     }

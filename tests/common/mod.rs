@@ -137,3 +137,17 @@ pub fn col(h: &[String], name: &str) -> usize {
         .position(|c| c == name)
         .unwrap_or_else(|| panic!("no column {name} in {h:?}"))
 }
+
+/// Assert two runs produced the same output times and temperatures at every
+/// output step, to `tol` relative (`rel_diff`).
+pub fn assert_same_temperatures(r1: &Results, r2: &Results, tol: f64, what: &str) {
+    assert_eq!(r1.times, r2.times, "{what}: output times differ");
+    for k in 0..r1.times.len() {
+        let d = rel_diff(&r1.temperature[k], &r2.temperature[k]);
+        assert!(
+            d < tol,
+            "{what}: step {k} (t = {}): relative difference {d:e}",
+            r1.times[k]
+        );
+    }
+}

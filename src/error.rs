@@ -41,6 +41,9 @@ pub enum Error {
         /// Original node id.
         node: usize,
     },
+    /// The explicit mechanics failed (inverted element, blow-up, bad step).
+    #[error("mechanics: {0}")]
+    Mechanics(String),
     /// Another rank failed; its error is printed by that rank.
     #[error("another MPI rank reported an error")]
     OtherRank,

@@ -7,10 +7,15 @@
 
 use crate::contact::DeltaT;
 use crate::error::{Error, Result};
+use crate::mechanics::explicit::VelocityBc;
+use crate::mechanics::ElasticMaterial;
 use crate::mesh::{self, TetMesh};
-use crate::scenario::{contact_resistance, CapacityKind, LoadedScenario, MeshSpec, ThermalBcSpec};
+use crate::scenario::{
+    contact_resistance, CapacityKind, LoadedScenario, MechanicsBcSpec, MeshSpec, PenaltySpec,
+    ThermalBcSpec,
+};
 
-/// A material's thermal constants.
+/// A material's constants (thermal ones are 0 in a purely mechanical run).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Material {
     /// Name.
@@ -21,6 +26,8 @@ pub struct Material {
     pub specific_heat: f64,
     /// Density ρ (kg/m³).
     pub density: f64,
+    /// Elastic constants, when the scenario gives them.
+    pub elastic: Option<ElasticMaterial>,
 }
 
 /// One body: a connected Tet4 mesh region with one material.
@@ -40,6 +47,35 @@ pub struct Body {
     pub node_range: (u32, u32),
     /// Its elements.
     pub elem_range: (u32, u32),
+    /// Held in place (mechanics).
+    pub fixed: bool,
+    /// Initial velocity of a free body (m/s).
+    pub initial_velocity: [f64; 3],
+    /// Stress-free temperature.
+    pub reference_temperature: f64,
+    /// Prescribed uniform heating (final temperature, duration).
+    pub heating: Option<(f64, f64)>,
+}
+
+/// The explicit mechanics resolved to nodes and faces (original numbering).
+#[derive(Debug, Clone)]
+pub struct MechanicsModel {
+    /// Explicit step given by the scenario (else from the critical step).
+    pub dt: Option<f64>,
+    /// Fraction of the critical step.
+    pub safety: f64,
+    /// Substeps per thermal step, when decoupled (quasi-static coupling).
+    pub substeps: Option<u64>,
+    /// Gravity (m/s²).
+    pub gravity: [f64; 3],
+    /// Mass-proportional damping (1/s).
+    pub damping: f64,
+    /// Velocity conditions per node (fixed and kinematic bodies included).
+    pub bc: Vec<VelocityBc>,
+    /// Dead-load nodal forces from tractions (N), per node.
+    pub traction: Vec<[f64; 3]>,
+    /// Penalty contact.
+    pub contact: Option<PenaltySpec>,
 }
 
 /// The thermal problem resolved to nodes and faces (original numbering).
@@ -85,6 +121,12 @@ pub struct Model {
     pub thermal: ThermalProblem,
     /// Contact heat transfer, when the scenario has a `[contact]` table.
     pub contact: Option<ContactModel>,
+    /// Whether the thermal problem is solved.
+    pub thermal_active: bool,
+    /// Mechanics, when the scenario has a `[mechanics]` table.
+    pub mechanics: Option<MechanicsModel>,
+    /// Material of every element (index into `materials`).
+    pub elem_material: Vec<u32>,
     /// Time step (s).
     pub dt: f64,
     /// Number of steps.
@@ -109,13 +151,30 @@ impl Model {
             .iter()
             .map(|m| Material {
                 name: m.name.clone(),
-                conductivity: m.conductivity,
-                specific_heat: m.specific_heat,
+                conductivity: m.conductivity.unwrap_or(0.0),
+                specific_heat: m.specific_heat.unwrap_or(0.0),
                 density: m.density,
+                elastic: m
+                    .young
+                    .zip(m.poisson)
+                    .map(|(young, poisson)| ElasticMaterial {
+                        young,
+                        poisson,
+                        density: m.density,
+                        expansion: m.expansion,
+                        viscosity: m.viscosity,
+                    }),
             })
             .collect();
+        let material_index = |n: &str| {
+            materials
+                .iter()
+                .position(|mm| mm.name == n)
+                .expect("validated") as u32
+        };
         let mut combined = TetMesh::default();
         let mut bodies = Vec::new();
+        let mut elem_material: Vec<u32> = Vec::new();
         for b in &s.bodies {
             let context = format!("{path}: body `{}`", b.name);
             let mut m = match &b.mesh {
@@ -130,6 +189,32 @@ impl Model {
                     width,
                     element_size,
                 } => mesh::generate::cylinder_mesh(*center, *radius, *width, *element_size),
+                MeshSpec::Annulus {
+                    center,
+                    inner_radius,
+                    radius,
+                    width,
+                    element_size,
+                } => mesh::generate::annulus_mesh(
+                    *center,
+                    *inner_radius,
+                    *radius,
+                    *width,
+                    *element_size,
+                ),
+                MeshSpec::Concentric {
+                    center,
+                    core_radius,
+                    radius,
+                    width,
+                    element_size,
+                } => mesh::generate::concentric_cylinder_mesh(
+                    *center,
+                    *core_radius,
+                    *radius,
+                    *width,
+                    *element_size,
+                ),
                 MeshSpec::Gmsh { file } => mesh::gmsh::read_msh(&sc.resolve(file)),
             }
             .map_err(|source| Error::Mesh {
@@ -158,10 +243,22 @@ impl Model {
             }
             // One body per scenario entry, whatever the file's volumes.
             m.body.iter_mut().for_each(|x| *x = 0);
-            let material = materials
-                .iter()
-                .position(|mm| mm.name == b.material)
-                .expect("validated");
+            let material = material_index(&b.material) as usize;
+            // Element materials: the body's, or a region's.
+            let mut mat_of_elem = vec![material as u32; m.tets.len()];
+            for (set, mat) in &b.regions {
+                let elems = m.elem_sets.get(set).ok_or_else(|| {
+                    let names: Vec<&str> = m.elem_sets.keys().map(String::as_str).collect();
+                    model_err(format!(
+                        "body `{}`: regions: no element set `{set}` in its mesh; available: {}",
+                        b.name,
+                        names.join(", ")
+                    ))
+                })?;
+                for &e in elems {
+                    mat_of_elem[e as usize] = material_index(mat);
+                }
+            }
             // The body itself, or its copies on a lattice.
             let copies: Vec<(String, [f64; 3])> = match &b.lattice {
                 None => vec![(b.name.clone(), [0.0; 3])],
@@ -199,13 +296,19 @@ impl Model {
                     velocity: b.velocity.unwrap_or([0.0; 3]),
                     node_range: (n0, combined.nodes.len() as u32),
                     elem_range: (e0, combined.tets.len() as u32),
+                    fixed: b.fixed,
+                    initial_velocity: b.initial_velocity.unwrap_or([0.0; 3]),
+                    reference_temperature: b.reference_temperature.unwrap_or(b.initial_temperature),
+                    heating: b.heating.map(|h| (h.to, h.over)),
                 });
+                elem_material.extend_from_slice(&mat_of_elem);
             }
         }
 
+        let thermal_spec = s.thermal_spec();
         let mut thermal = ThermalProblem {
-            theta: s.thermal.theta,
-            capacity: s.thermal.capacity,
+            theta: thermal_spec.theta,
+            capacity: thermal_spec.capacity,
             source: vec![0.0; bodies.len()],
             initial: vec![0.0; combined.nodes.len()],
             ..Default::default()
@@ -215,14 +318,14 @@ impl Model {
                 thermal.initial[n as usize] = b.initial_temperature;
             }
         }
-        for (i, init) in s.thermal.initial.iter().enumerate() {
+        for (i, init) in thermal_spec.initial.iter().enumerate() {
             let nodes = resolve_nodes(&combined, &init.set)
                 .map_err(|m| model_err(format!("thermal.initial[{i}]: {m}")))?;
             for n in nodes {
                 thermal.initial[n as usize] = init.value;
             }
         }
-        for (i, bc) in s.thermal.bc.iter().enumerate() {
+        for (i, bc) in thermal_spec.bc.iter().enumerate() {
             let key = format!("thermal.bc[{i}]");
             match bc {
                 ThermalBcSpec::Temperature { set, value } => {
@@ -312,6 +415,97 @@ impl Model {
             }
         };
 
+        let mechanics = match &s.mechanics {
+            None => None,
+            Some(ms) => {
+                let nn = combined.nodes.len();
+                let mut bc: Vec<VelocityBc> = vec![[None; 3]; nn];
+                for b in &bodies {
+                    let held = if b.fixed {
+                        Some([0.0; 3])
+                    } else if b.velocity != [0.0; 3] {
+                        Some(b.velocity)
+                    } else {
+                        None
+                    };
+                    if let Some(v) = held {
+                        for n in b.node_range.0..b.node_range.1 {
+                            bc[n as usize] = v.map(Some);
+                        }
+                    }
+                }
+                let mut traction = vec![[0.0; 3]; nn];
+                for (i, spec) in ms.bc.iter().enumerate() {
+                    let key = format!("mechanics.bc[{i}]");
+                    match spec {
+                        MechanicsBcSpec::Fixed { set, components } => {
+                            let nodes = resolve_nodes(&combined, set)
+                                .map_err(|m| model_err(format!("{key}: {m}")))?;
+                            let comps: Vec<usize> = match components {
+                                None => vec![0, 1, 2],
+                                Some(c) => c
+                                    .iter()
+                                    .map(|x| match x.as_str() {
+                                        "x" => 0,
+                                        "y" => 1,
+                                        _ => 2,
+                                    })
+                                    .collect(),
+                            };
+                            for n in nodes {
+                                for &d in &comps {
+                                    bc[n as usize][d] = Some(0.0);
+                                }
+                            }
+                        }
+                        MechanicsBcSpec::Velocity { set, value } => {
+                            let nodes = resolve_nodes(&combined, set)
+                                .map_err(|m| model_err(format!("{key}: {m}")))?;
+                            for n in nodes {
+                                for d in 0..3 {
+                                    if !value[d].is_nan() {
+                                        bc[n as usize][d] = Some(value[d]);
+                                    }
+                                }
+                            }
+                        }
+                        MechanicsBcSpec::Traction { set, value } => {
+                            let faces = resolve_faces(&combined, set)
+                                .map_err(|m| model_err(format!("{key}: {m}")))?;
+                            for f in faces {
+                                let p = f.map(|n| combined.nodes[n as usize]);
+                                let area = crate::geometry::polygon_area(&p);
+                                for &n in &f {
+                                    for d in 0..3 {
+                                        // Not numbered in the seeds: a constant traction t on a linear triangle gives t A/3 per node.
+                                        traction[n as usize][d] += value[d] * area / 3.0;
+                                    }
+                                }
+                            }
+                        }
+                    }
+                }
+                for (e, &m) in elem_material.iter().enumerate() {
+                    if materials[m as usize].elastic.is_none() {
+                        return Err(model_err(format!(
+                            "element {e}: material `{}` has no elastic constants",
+                            materials[m as usize].name
+                        )));
+                    }
+                }
+                Some(MechanicsModel {
+                    dt: ms.dt,
+                    safety: ms.safety,
+                    substeps: ms.substeps,
+                    gravity: ms.gravity,
+                    damping: ms.damping,
+                    bc,
+                    traction,
+                    contact: ms.contact.clone(),
+                })
+            }
+        };
+
         Ok(Model {
             mesh: combined,
             materials,
@@ -321,21 +515,42 @@ impl Model {
             dt,
             steps,
             output_steps,
+            thermal_active: s.has_thermal(),
+            mechanics,
+            elem_material,
         })
     }
 
     /// Material of element `e`.
     pub fn material_of(&self, e: usize) -> &Material {
-        &self.materials[self.bodies[self.mesh.body[e] as usize].material]
+        &self.materials[self.elem_material[e] as usize]
     }
 
     /// Contact resistance between the materials of elements `a` and `b`.
     pub fn contact_resistance(&self, a: usize, b: usize) -> f64 {
-        let ma = self.bodies[self.mesh.body[a] as usize].material;
-        let mb = self.bodies[self.mesh.body[b] as usize].material;
+        let ma = self.elem_material[a] as usize;
+        let mb = self.elem_material[b] as usize;
         self.contact
             .as_ref()
             .map_or(f64::INFINITY, |c| c.resistance[ma][mb])
+    }
+
+    /// Prescribed temperature of node `n` at time `t` (runs without a
+    /// thermal problem): the initial value, ramped by the body's heating.
+    pub fn prescribed_temperature(&self, n: u32, t: f64) -> f64 {
+        let t0 = self.thermal.initial[n as usize];
+        match self.bodies[self.body_of_node(n)].heating {
+            None => t0,
+            Some((to, over)) => {
+                let f = if over > 0.0 { (t / over).min(1.0) } else { 1.0 };
+                t0 + (to - t0) * f
+            }
+        }
+    }
+
+    /// Whether any body has a prescribed heating.
+    pub fn has_heating(&self) -> bool {
+        self.bodies.iter().any(|b| b.heating.is_some())
     }
 
     /// Whether any body moves.

@@ -15,6 +15,7 @@ use crate::contact::{detect_contacts, BoundaryTets, ContactPair, ContactSet, Con
 use crate::error::{Error, Result};
 use crate::io::{HistoryWriter, MeshPart, TimeSeriesWriter};
 use crate::model::Model;
+use crate::parallel::ExplicitDomain;
 use crate::parallel::{agree, Layout};
 use crate::petsc::Petsc;
 use crate::scenario::LoadedScenario;
@@ -45,6 +46,29 @@ pub struct PhaseTimes {
     pub stepping: f64,
     /// HDF5/XDMF/CSV output.
     pub output: f64,
+    /// Explicit mechanics (set-up and substeps, detection included).
+    pub mechanics: f64,
+    /// Of which contact detection and halo rebuilds.
+    pub mechanics_detect: f64,
+}
+
+/// What the explicit mechanics did.
+#[derive(Debug, Clone, Copy)]
+pub struct MechanicsSummary {
+    /// Explicit step (s).
+    pub dt: f64,
+    /// Substeps per thermal step.
+    pub substeps_per_step: u64,
+    /// Substeps taken.
+    pub substeps: u64,
+    /// Contact detections (candidate list rebuilds).
+    pub detections: u64,
+    /// Element updates, all ranks.
+    pub element_updates: u64,
+    /// Contact pair evaluations, all ranks.
+    pub pair_updates: u64,
+    /// Search margin (m).
+    pub margin: f64,
 }
 
 /// What a run did.
@@ -82,6 +106,8 @@ pub struct RunSummary {
     pub detections: u64,
     /// Times the thermal operator was assembled.
     pub assemblies: u64,
+    /// Mechanics, when it ran.
+    pub mechanics: Option<MechanicsSummary>,
 }
 
 impl std::fmt::Display for RunSummary {
@@ -116,6 +142,25 @@ impl std::fmt::Display for RunSummary {
                 f,
                 "  per step    {:.2} us",
                 1e6 * t.stepping / self.steps as f64
+            )?;
+        }
+        if let Some(m) = &self.mechanics {
+            let rate = if t.mechanics > 0.0 {
+                m.element_updates as f64 / t.mechanics / self.ranks as f64
+            } else {
+                0.0
+            };
+            writeln!(
+                f,
+                "  mechanics   dt {:.4e} s, {} substeps ({} per step), {:.3} s ({:.3} s detection, {} detections), {:.2} M tet updates/s/rank, {} pair evaluations",
+                m.dt,
+                m.substeps,
+                m.substeps_per_step,
+                t.mechanics,
+                t.mechanics_detect,
+                m.detections,
+                rate / 1e6,
+                m.pair_updates
             )?;
         }
         writeln!(
@@ -264,20 +309,42 @@ pub fn run(
     let layout = Layout::new(comm, &model.mesh).map_err(Error::Partition)?;
     times.partition = clock.elapsed().as_secs_f64();
 
+    // Mechanics first: its set-up checks the time step before any work.
+    let clock = Instant::now();
+    let mut mech = match model.mechanics {
+        Some(_) => Some(ExplicitDomain::new(comm, &model, &layout, model.dt)?),
+        None => None,
+    };
+    times.mechanics = clock.elapsed().as_secs_f64();
+
     let clock = Instant::now();
     let bt = BoundaryTets::new(&model.mesh);
     // Positions of moving bodies are updated at each detection (a copy of
     // the mesh only when something moves).
-    let mut moved = model.has_motion().then(|| model.mesh.clone());
-    let mut contacts = find_contacts(comm, &model, &model.mesh, &layout, &bt);
-    let mut detections = u64::from(model.contact.is_some());
+    let mut moved = (model.has_motion() || mech.is_some()).then(|| model.mesh.clone());
+    let mut contacts = if model.thermal_active {
+        find_contacts(comm, &model, &model.mesh, &layout, &bt)
+    } else {
+        ContactSet::default()
+    };
+    let mut detections = u64::from(model.contact.is_some() && model.thermal_active);
     times.contact = clock.elapsed().as_secs_f64();
 
     let clock = Instant::now();
     let solver = &sc.scenario.solver;
-    let mut sys = ThermalSystem::new(petsc, &model, &layout, solver, &contacts)?;
+    let mut sys = if model.thermal_active {
+        Some(ThermalSystem::new(
+            petsc, &model, &layout, solver, &contacts,
+        )?)
+    } else {
+        None
+    };
     times.assembly = clock.elapsed().as_secs_f64();
     let detect_every = model.contact.as_ref().map_or(0, |c| c.every);
+    if let (Some((m, _)), Some(s)) = (mech.as_mut(), sys.as_ref()) {
+        let t = s.t.to_local_vec()?;
+        m.set_temperatures(comm, &t, None);
+    }
 
     // Output: only now that the input is known good are files created.
     let clock = Instant::now();
@@ -298,33 +365,67 @@ pub fn run(
     agree(comm, made)?;
     let mut writer = open_writer(comm, &model, &layout, &dir, &stem)?;
     let history_path = dir.join(format!("{stem}_history.csv"));
-    let mut header: Vec<String> = vec![
-        "step".into(),
-        "time".into(),
-        "stored_heat".into(),
-        "boundary_heat_in".into(),
-        "ksp_iterations".into(),
-        "contacts".into(),
-        "contact_area".into(),
-    ];
-    for b in &model.bodies {
-        for s in ["min", "mean", "max"] {
-            header.push(format!("{}_{s}_T", b.name));
+    let mut header: Vec<String> = vec!["step".into(), "time".into()];
+    if sys.is_some() {
+        for h in [
+            "stored_heat",
+            "boundary_heat_in",
+            "ksp_iterations",
+            "contacts",
+            "contact_area",
+        ] {
+            header.push(h.into());
+        }
+    }
+    if mech.is_some() {
+        for h in [
+            "mech_time",
+            "kinetic_energy",
+            "strain_energy",
+            "contact_energy",
+            "dissipated_energy",
+            "momentum_x",
+            "momentum_y",
+            "momentum_z",
+            "mech_contacts",
+            "mech_candidates",
+        ] {
+            header.push(h.into());
+        }
+    }
+    if sys.is_some() {
+        for b in &model.bodies {
+            for s in ["min", "mean", "max"] {
+                header.push(format!("{}_{s}_T", b.name));
+            }
         }
     }
     let header_ref: Vec<&str> = header.iter().map(String::as_str).collect();
     let history = HistoryWriter::create(&history_path, &header_ref);
     let mut history = agree(comm, history.map_err(Error::from))?;
     let stats = BodyStats::new(&model, &layout);
-    let write_output = |sys: &mut ThermalSystem,
+    let write_output = |sys: &mut Option<ThermalSystem>,
+                        mech: &Option<(ExplicitDomain, u64)>,
                         writer: &mut TimeSeriesWriter,
                         history: &mut HistoryWriter,
                         contacts: &ContactSet,
                         step: u64|
      -> Result<()> {
         let time = step as f64 * model.dt;
-        let t = sys.t.to_local_vec()?;
-        if model.has_motion() {
+        let t = match sys.as_ref() {
+            Some(s) => Some(s.t.to_local_vec()?),
+            None => None,
+        };
+        let mut node_fields: Vec<(&str, usize, Vec<f64>)> = Vec::new();
+        let mut cell_fields: Vec<(&str, usize, Vec<f64>)> = Vec::new();
+        if let Some(t) = &t {
+            node_fields.push(("temperature", 1, t.clone()));
+        }
+        if let Some((m, _)) = mech {
+            node_fields.push(("displacement", 3, m.displacement()));
+            node_fields.push(("velocity", 3, m.velocity()));
+            cell_fields.push(("stress", 6, m.stress_tensor6(&layout.owned_elems)));
+        } else if model.has_motion() {
             // Rigid displacement of each owned node (ParaView: Warp By Vector).
             let u: Vec<f64> = layout
                 .owned_nodes
@@ -335,39 +436,65 @@ pub fn run(
                         .map(|v| v * time)
                 })
                 .collect();
-            writer.write_step(
-                time,
-                &[("temperature", 1, &t), ("displacement", 3, &u)],
-                &[],
-            )?;
-        } else {
-            writer.write_step(time, &[("temperature", 1, &t)], &[])?;
+            node_fields.push(("displacement", 3, u));
         }
-        let e = sys.energy()?;
-        let mut row = vec![
-            step as f64,
-            time,
-            e.stored,
-            e.boundary_in(),
-            sys.iterations as f64,
-            contacts.all.len() as f64,
-            contacts.total_area(),
-        ];
-        for s in stats.compute(comm, &t) {
-            row.extend_from_slice(&s);
+        let nf: Vec<(&str, usize, &[f64])> = node_fields
+            .iter()
+            .map(|(n, c, v)| (*n, *c, v.as_slice()))
+            .collect();
+        let cf: Vec<(&str, usize, &[f64])> = cell_fields
+            .iter()
+            .map(|(n, c, v)| (*n, *c, v.as_slice()))
+            .collect();
+        writer.write_step(time, &nf, &cf)?;
+        let mut row = vec![step as f64, time];
+        if let Some(s) = sys.as_mut() {
+            let e = s.energy()?;
+            row.extend_from_slice(&[
+                e.stored,
+                e.boundary_in(),
+                s.iterations as f64,
+                contacts.all.len() as f64,
+                contacts.total_area(),
+            ]);
+        }
+        if let Some((m, n)) = mech {
+            let st = m.state(comm);
+            row.extend_from_slice(&[
+                step as f64 * *n as f64 * m.dt,
+                st.kinetic,
+                st.strain,
+                st.contact,
+                st.dissipated,
+                st.momentum[0],
+                st.momentum[1],
+                st.momentum[2],
+                st.active_pairs as f64,
+                st.candidate_pairs as f64,
+            ]);
+        }
+        if let Some(t) = &t {
+            for s in stats.compute(comm, t) {
+                row.extend_from_slice(&s);
+            }
         }
         history.append(&row)?;
         Ok(())
     };
-    write_output(&mut sys, &mut writer, &mut history, &contacts, 0)?;
+    write_output(&mut sys, &mech, &mut writer, &mut history, &contacts, 0)?;
     times.output += clock.elapsed().as_secs_f64();
 
     let bar = if opts.progress && rank == 0 {
         let b = indicatif::ProgressBar::new(model.steps);
+        let what = match (sys.is_some(), mech.is_some()) {
+            (true, true) => "thermo-mechanics",
+            (false, true) => "mechanics",
+            _ => "thermal",
+        };
         b.set_style(
-            indicatif::ProgressStyle::with_template(
-                "{spinner} thermal [{elapsed_precise}] {wide_bar} {pos}/{len} steps ({eta})",
-            )
+            indicatif::ProgressStyle::with_template(&format!(
+                "{{spinner}} {what} [{{elapsed_precise}}] {{wide_bar}} {{pos}}/{{len}} steps ({{eta}})"
+            ))
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
         );
         Some(b)
@@ -383,6 +510,7 @@ pub fn run(
         .filter(|&s| s > 0)
         .peekable();
     let mut stepping = 0.0;
+    let mut mech_time = 0.0;
     let mut step = 0u64;
     while step < model.steps {
         // Run uninterrupted until the next output, check or progress tick.
@@ -399,20 +527,52 @@ pub fn run(
         .min()
         .unwrap_or(model.steps)
         .min(model.steps);
-        let clock = Instant::now();
         while step < target {
-            sys.step()?;
+            // Seed 000 sec 3.4: contact detection → thermal step → mechanics substeps.
+            let clock = Instant::now();
+            if let Some(s) = sys.as_mut() {
+                s.step()?;
+            }
+            stepping += clock.elapsed().as_secs_f64();
+            if let Some((m, n)) = mech.as_mut() {
+                let clock = Instant::now();
+                let span = *n as f64 * m.dt;
+                if let Some(s) = sys.as_ref() {
+                    let t = s.t.to_local_vec()?;
+                    m.set_temperatures(comm, &t, Some(span));
+                } else if model.has_heating() {
+                    // The ramp's value at the end of this step, reached over the substeps.
+                    let time = (step + 1) as f64 * model.dt;
+                    let t: Vec<f64> = layout
+                        .owned_nodes
+                        .iter()
+                        .map(|&n| model.prescribed_temperature(n, time))
+                        .collect();
+                    m.set_temperatures(comm, &t, Some(span));
+                }
+                m.advance(comm, &model, &layout, *n)?;
+                mech_time += clock.elapsed().as_secs_f64();
+            }
             step += 1;
         }
-        stepping += clock.elapsed().as_secs_f64();
         if let Some(b) = &bar {
             b.set_position(step);
         }
-        if detect_every > 0 && step.is_multiple_of(detect_every) && step < model.steps {
+        if sys.is_some()
+            && detect_every > 0
+            && step.is_multiple_of(detect_every)
+            && step < model.steps
+        {
             // Rebuild the operator only when the contact set or its areas changed.
             let clock = Instant::now();
-            if let Some(m) = moved.as_mut() {
-                model.positions_at(step as f64 * model.dt, &mut m.nodes);
+            if let Some(mesh_now) = moved.as_mut() {
+                match mech.as_mut() {
+                    Some((m, _)) => {
+                        m.gather_positions(comm);
+                        mesh_now.nodes.copy_from_slice(m.positions());
+                    }
+                    None => model.positions_at(step as f64 * model.dt, &mut mesh_now.nodes),
+                }
             }
             let mesh_now = moved.as_ref().unwrap_or(&model.mesh);
             let found = find_contacts(comm, &model, mesh_now, &layout, &bt);
@@ -421,17 +581,21 @@ pub fn run(
             if !found.same_as(&contacts, 1e-12) {
                 let clock = Instant::now();
                 contacts = found;
-                sys.rebuild(petsc, &model, &layout, solver, &contacts)?;
+                if let Some(s) = sys.as_mut() {
+                    s.rebuild(petsc, &model, &layout, solver, &contacts)?;
+                }
                 times.assembly += clock.elapsed().as_secs_f64();
             }
         }
-        if step.is_multiple_of(check_every) || Some(step) == next_out.peek().copied() {
-            check_finite(comm, &sys, &layout, step, model.dt)?;
+        if let Some(s) = sys.as_ref() {
+            if step.is_multiple_of(check_every) || Some(step) == next_out.peek().copied() {
+                check_finite(comm, s, &layout, step, model.dt)?;
+            }
         }
         if Some(step) == next_out.peek().copied() {
             next_out.next();
             let clock = Instant::now();
-            write_output(&mut sys, &mut writer, &mut history, &contacts, step)?;
+            write_output(&mut sys, &mech, &mut writer, &mut history, &contacts, step)?;
             times.output += clock.elapsed().as_secs_f64();
         }
     }
@@ -439,13 +603,27 @@ pub fn run(
         b.finish_and_clear();
     }
     times.stepping = stepping;
-    let energy = sys.energy()?;
+    times.mechanics += mech_time;
+    let energy = match sys.as_mut() {
+        Some(s) => s.energy()?,
+        None => EnergyAccount::default(),
+    };
     let (h5, xdmf) = crate::io::output_paths(&dir, &stem);
     writer.close()?;
 
     let mut peak = 0u64;
     comm.all_reduce_into(&peak_rss(), &mut peak, SystemOperation::max());
-    let mut tmax = [0.0; 6];
+    let mut tmax = [0.0; 8];
+    let (detect_time, mut mech_counts) = match mech.as_ref() {
+        Some((m, _)) => (
+            m.counters.detect_time,
+            [
+                m.counters.element_updates as f64,
+                m.counters.pair_updates as f64,
+            ],
+        ),
+        None => (0.0, [0.0; 2]),
+    };
     let local = [
         times.model,
         times.partition,
@@ -453,8 +631,12 @@ pub fn run(
         times.stepping,
         times.output,
         times.contact,
+        times.mechanics,
+        detect_time,
     ];
     comm.all_reduce_into(&local[..], &mut tmax[..], SystemOperation::max());
+    let mine = mech_counts;
+    comm.all_reduce_into(&mine[..], &mut mech_counts[..], SystemOperation::sum());
     let times = PhaseTimes {
         model: tmax[0],
         partition: tmax[1],
@@ -462,14 +644,29 @@ pub fn run(
         stepping: tmax[3],
         output: tmax[4],
         contact: tmax[5],
+        mechanics: tmax[6],
+        mechanics_detect: tmax[7],
     };
+    let mechanics = mech.as_ref().map(|(m, n)| MechanicsSummary {
+        dt: m.dt,
+        substeps_per_step: *n,
+        substeps: m.counters.substeps,
+        detections: m.counters.detections,
+        element_updates: mech_counts[0] as u64,
+        pair_updates: mech_counts[1] as u64,
+        margin: m.margin(),
+    });
     Ok(RunSummary {
         ranks: layout.size,
         nodes: model.mesh.nodes.len(),
         elements: model.mesh.tets.len(),
-        steps: sys.steps_done(),
-        ksp_iterations: sys.iterations,
-        solver: sys.solver_name.clone(),
+        steps: model.steps,
+        ksp_iterations: sys.as_ref().map_or(0, |s| s.iterations),
+        solver: sys
+            .as_ref()
+            .map_or("none (no thermal problem)".into(), |s| {
+                s.solver_name.clone()
+            }),
         times,
         output_dir: dir,
         h5,
@@ -479,7 +676,8 @@ pub fn run(
         peak_memory: peak,
         contacts: (contacts.all.len(), contacts.total_area()),
         detections,
-        assemblies: sys.assemblies,
+        assemblies: sys.as_ref().map_or(0, |s| s.assemblies),
+        mechanics,
     })
 }
 

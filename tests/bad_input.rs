@@ -252,3 +252,94 @@ fn killed_run_leaves_readable_output() {
         "xdmf lists {listed}, h5 holds {stored}"
     );
 }
+
+const MECH: &str = r#"
+[time]
+dt = 1e-3
+steps = 2
+
+[[materials]]
+name = "m"
+density = 1000.0
+young = 1e8
+poisson = 0.3
+
+[[bodies]]
+name = "a"
+material = "m"
+mesh = { kind = "box", size = [0.1, 0.1, 0.1], element_size = 0.05 }
+
+[mechanics]
+"#;
+
+#[test]
+fn mechanics_step_above_the_critical_one_is_refused() {
+    for ranks in [1, 2] {
+        let d = scenario_dir(&format!("mech-dt-{ranks}"));
+        let s = write(
+            &d,
+            "bad.toml",
+            &MECH.replace("[mechanics]", "[mechanics]\ndt = 1e-3"),
+        );
+        let out = d.join("out");
+        let (_, err) = run_bad(ranks, &s, &out, &[]);
+        assert!(
+            err.contains("mechanics.dt") && err.contains("critical"),
+            "{err}"
+        );
+        assert_no_output(&out);
+    }
+}
+
+#[test]
+fn mechanics_without_elastic_constants_is_named() {
+    let d = scenario_dir("mech-no-young");
+    let s = write(&d, "bad.toml", &MECH.replace("young = 1e8\n", ""));
+    let (_, err) = run_bad(1, &s, &d.join("out"), &[]);
+    assert!(
+        err.contains("bad.toml") && err.contains("young") && err.contains("`m`"),
+        "{err}"
+    );
+    assert_no_output(&d.join("out"));
+}
+
+#[test]
+fn unknown_region_set_is_named() {
+    let d = scenario_dir("mech-region");
+    let s = write(
+        &d,
+        "bad.toml",
+        &MECH.replace(
+            "material = \"m\"\n",
+            "material = \"m\"\nregions = { core = \"m\" }\n",
+        ),
+    );
+    let (_, err) = run_bad(1, &s, &d.join("out"), &[]);
+    assert!(
+        err.contains("bad.toml") && err.contains("core") && err.contains("`a`"),
+        "{err}"
+    );
+    assert_no_output(&d.join("out"));
+}
+
+#[test]
+fn mechanics_blow_up_is_an_error_not_a_corrupt_file() {
+    // A step right at the critical one with a stiff contact: the run must
+    // stop with an error naming an element or node, and leave a readable file.
+    let d = scenario_dir("mech-blowup");
+    let text = format!(
+        "{}{}",
+        MECH.replace("steps = 2", "steps = 200"),
+        "safety = 1.0\ngravity = [0.0, 0.0, -1e9]\n[[mechanics.bc]]\nkind = \"fixed\"\nset = \"a.zmin\"\n"
+    );
+    let s = write(&d, "bad.toml", &text);
+    let out = d.join("out");
+    let (_, err) = run_bad(1, &s, &out, &[]);
+    assert!(
+        err.contains("mechanics") && (err.contains("element") || err.contains("node")),
+        "{err}"
+    );
+    if out.join("bad.h5").exists() {
+        h5dump_ok(&out.join("bad.h5"));
+    }
+}

@@ -6,9 +6,11 @@
 //! owned ones) so that every pair is found by exactly one rank.
 
 mod detect;
+pub mod penalty;
 mod surface;
 
 pub use detect::{detect_contacts, BoundaryTets, FaceList};
+pub use penalty::{pair_stiffness, tet_tet_penalty, PenaltyParams, PenaltyResult};
 pub use surface::{tet_tet_contact_surface, ContactSurface};
 
 /// One contact: a boundary tet of one body overlapping a boundary tet of

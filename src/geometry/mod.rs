@@ -3,8 +3,10 @@
 //! overlap test for two tets. Pure functions over `[f64; 3]`.
 
 mod clip;
+pub mod overlap;
 
 pub use clip::{face_tet_clip, polygon_area, tet_tet_overlap, triangle_in_tet_area, Polygon};
+pub use overlap::{tet_tet_intersection, FacePatch, Intersection, TetPlanes};
 
 /// a − b.
 #[inline]

@@ -226,9 +226,89 @@ pub fn internal_forces(
     forces: &mut [Vector3<f64>],
     mut stress: Option<&mut [Matrix3<f64>]>,
 ) -> Result<f64, MechanicsError> {
+    use super::element::{tet4_forces, KernelMaterial};
     let n = x.len();
     check_len("velocities", v.len(), n)?;
     check_len("forces", forces.len(), n)?;
+    thermal.check(elements.len())?;
+    if let Some(s) = stress.as_deref() {
+        check_len("element stresses", s.len(), elements.len())?;
+    }
+    // Equal lengths, so one `i < n` test below covers all three arrays.
+    let (v, forces) = (&v[..n], &mut forces[..n]);
+    // Lamé constants etc. once per material, not per element.
+    let constants: Vec<KernelMaterial> = materials.iter().map(KernelMaterial::new).collect();
+    let mut energy = 0.0;
+    for (e, el) in elements.iter().enumerate() {
+        let idx = el.nodes.map(|i| i as usize);
+        let material = match constants.get(el.material as usize) {
+            Some(m) if idx.iter().all(|&i| i < n) => m,
+            _ => return Err(index_error(el, materials, n)),
+        };
+        let th = thermal.at(e);
+        let r = match tet4_forces(&el.reference, material, x, v, idx, th) {
+            Some(r) => r,
+            None => declined_response(el, &materials[el.material as usize], x, v, th)
+                .map_err(|err| err.at_element(e))?,
+        };
+        for (f, &i) in r.forces.iter().zip(&idx) {
+            forces[i] += f;
+        }
+        if let Some(s) = stress.as_deref_mut() {
+            s[e] = r.stress;
+        }
+        energy += r.strain_energy;
+    }
+    Ok(energy)
+}
+
+/// The error of an element whose node or material index is out of range
+/// (kept out of the hot loop of [`internal_forces`]).
+#[cold]
+#[inline(never)]
+fn index_error(el: &MechElement, materials: &[ElasticMaterial], n: usize) -> MechanicsError {
+    match checked_material(el, materials, n) {
+        Err(err) => err,
+        Ok(_) => unreachable!("index_error called on an element with valid indices"),
+    }
+}
+
+/// [`element_response`] of an element the fast kernel declined (J or
+/// 1 + α ΔT not positive): its error, or its response should round-off
+/// let the reference path accept the element.
+#[cold]
+#[inline(never)]
+fn declined_response(
+    el: &MechElement,
+    material: &ElasticMaterial,
+    x: &[Vector3<f64>],
+    v: &[Vector3<f64>],
+    thermal: ThermalState,
+) -> Result<super::element::Tet4Forces, MechanicsError> {
+    let (xe, ve) = (
+        el.nodes.map(|i| x[i as usize]),
+        el.nodes.map(|i| v[i as usize]),
+    );
+    element_response(&el.reference, material, &xe, &ve, thermal).map(Into::into)
+}
+
+/// As [`internal_forces`], but writes each element's four nodal forces
+/// into `out[e]` instead of adding them into a nodal array, so that a
+/// caller can sum them in an order of its choosing (the parallel driver
+/// sums in global element order, which makes the result independent of
+/// the partition).
+pub fn element_forces(
+    elements: &[MechElement],
+    materials: &[ElasticMaterial],
+    x: &[Vector3<f64>],
+    v: &[Vector3<f64>],
+    thermal: ThermalLoad<'_>,
+    out: &mut [[Vector3<f64>; 4]],
+    mut stress: Option<&mut [Matrix3<f64>]>,
+) -> Result<f64, MechanicsError> {
+    let n = x.len();
+    check_len("velocities", v.len(), n)?;
+    check_len("element forces", out.len(), elements.len())?;
     thermal.check(elements.len())?;
     if let Some(s) = stress.as_deref() {
         check_len("element stresses", s.len(), elements.len())?;
@@ -241,9 +321,7 @@ pub fn internal_forces(
         let ve = idx.map(|i| v[i]);
         let r = element_response(&el.reference, material, &xe, &ve, thermal.at(e))
             .map_err(|err| err.at_element(e))?;
-        for (k, &i) in idx.iter().enumerate() {
-            forces[i] += r.forces[k];
-        }
+        out[e] = r.forces;
         if let Some(s) = stress.as_deref_mut() {
             s[e] = r.stress;
         }

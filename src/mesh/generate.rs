@@ -1,5 +1,6 @@
-//! Structured mesh generators (no external mesher needed): [`box_mesh`] and
-//! [`cylinder_mesh`].
+//! Structured mesh generators (no external mesher needed): [`box_mesh`],
+//! [`cylinder_mesh`], [`annulus_mesh`] (hollow cylinder) and
+//! [`concentric_cylinder_mesh`] (core bonded inside a ring).
 
 use std::collections::BTreeMap;
 
@@ -271,25 +272,124 @@ fn disc_triangulation(radius: f64, n_b: usize, n_r: usize) -> Disc {
         let b = start[0] + (j + 1) % m1;
         tris.push([0, a as u32, b as u32]);
     }
+    // Ring `r` (1-based) as a `RingNodes`; its angles are exactly those of
+    // `ring_angle` (offset + step * j, the offset being ring_angle at j = 0).
+    let ring = |r: usize| {
+        let m = sizes[r - 1];
+        RingNodes {
+            start: start[r - 1],
+            m,
+            offset: ring_angle(r, n_r, m, 0),
+        }
+    };
     for i in 1..n_r {
-        let (ma, mb) = (sizes[i - 1], sizes[i]);
-        let a = |k: usize| (start[i - 1] + k % ma) as u32;
-        let b = |k: usize| (start[i] + k % mb) as u32;
-        let (mut ia, mut ib) = (0, 0);
-        while ia < ma || ib < mb {
-            let advance_inner = ib == mb
-                || (ia < ma
-                    && ring_angle(i, n_r, ma, ia + 1) <= ring_angle(i + 1, n_r, mb, ib + 1));
-            if advance_inner {
-                tris.push([a(ia), b(ib), a(ia + 1)]);
-                ia += 1;
+        merge_strip(&mut tris, ring(i), ring(i + 1));
+    }
+    Disc { points, tris }
+}
+
+/// A closed ring of `m` nodes of a planar section, numbered consecutively
+/// from `start`, node `j` at angle `offset + (2 pi / m) j` (counter-clockwise).
+#[derive(Debug, Clone, Copy)]
+struct RingNodes {
+    start: usize,
+    m: usize,
+    offset: f64,
+}
+
+impl RingNodes {
+    /// Index of node `k` (taken modulo `m`, so `k = m` is node 0 again).
+    fn node(&self, k: usize) -> u32 {
+        (self.start + k % self.m) as u32
+    }
+
+    /// Angle of node `j`, `0 <= j <= m` (`j = m` is node 0 one turn later).
+    fn angle(&self, j: usize) -> f64 {
+        let step = std::f64::consts::TAU / self.m as f64;
+        self.offset + step * j as f64
+    }
+}
+
+/// Triangulates the strip between two concentric rings (`inner` at the
+/// smaller radius) by a merge walk over the node angles: advance the ring
+/// whose next node has the smaller angle (the inner ring on ties); closes
+/// on the starting edge after `inner.m + outer.m` counter-clockwise
+/// triangles. Both rings must start near angle 0.
+fn merge_strip(tris: &mut Vec<[u32; 3]>, inner: RingNodes, outer: RingNodes) {
+    let (ma, mb) = (inner.m, outer.m);
+    let (mut ia, mut ib) = (0, 0);
+    while ia < ma || ib < mb {
+        let advance_inner = ib == mb || (ia < ma && inner.angle(ia + 1) <= outer.angle(ib + 1));
+        if advance_inner {
+            tris.push([inner.node(ia), outer.node(ib), inner.node(ia + 1)]);
+            ia += 1;
+        } else {
+            tris.push([inner.node(ia), outer.node(ib), outer.node(ib + 1)]);
+            ib += 1;
+        }
+    }
+}
+
+/// z of the `n_z + 1` layers of a slab `[zc - width/2, zc + width/2]`,
+/// uniform, with the end layers exactly at the ends.
+fn layer_zs(zc: f64, width: f64, n_z: usize) -> Vec<f64> {
+    let z_lo = zc - 0.5 * width;
+    let z_hi = zc + 0.5 * width;
+    (0..=n_z)
+        .map(|k| {
+            if k == n_z {
+                z_hi
             } else {
-                tris.push([a(ia), b(ib), b(ib + 1)]);
-                ib += 1;
+                z_lo + width * (k as f64 / n_z as f64)
+            }
+        })
+        .collect()
+}
+
+/// Extrudes a counter-clockwise planar triangulation (`points` relative to
+/// `(center[0], center[1])`) through the layers `zs` (ascending).
+///
+/// Nodes: layer by layer, each numbered like `points`. Each prism
+/// (triangle x layer) is split into 3 tetrahedra by the sorted-vertex rule:
+/// with the triangle's nodes ordered by global index `a < b < c` (primes on
+/// the top layer), `(a,b,c,c')`, `(a,b,b',c')`, `(a,a',b',c')`, i.e. every
+/// quad face is cut along the diagonal from its lowest-index bottom node.
+/// The rule depends only on the nodes of the shared quad, so neighbouring
+/// prisms match and the mesh is conforming. Elements are reoriented (local
+/// nodes 2 and 3 swapped) where needed to be positive; they are ordered by
+/// layer, then triangle, 3 per prism.
+fn extrude(
+    center: [f64; 3],
+    zs: &[f64],
+    points: &[[f64; 2]],
+    tris: &[[u32; 3]],
+) -> (Vec<[f64; 3]>, Vec<[u32; 4]>) {
+    let n2d = points.len();
+    let n_z = zs.len() - 1;
+    let mut nodes = Vec::with_capacity(n2d * zs.len());
+    for &z in zs {
+        for p in points {
+            nodes.push([center[0] + p[0], center[1] + p[1], z]);
+        }
+    }
+    let mut tets = Vec::with_capacity(3 * tris.len() * n_z);
+    for k in 0..n_z {
+        let (bot, top) = ((k * n2d) as u32, ((k + 1) * n2d) as u32);
+        for t in tris {
+            let mut s = *t;
+            s.sort_unstable();
+            let [a, b, c] = s.map(|v| v + bot);
+            let [a1, b1, c1] = s.map(|v| v + top);
+            for mut tet in [[a, b, c, c1], [a, b, b1, c1], [a, a1, b1, c1]] {
+                let x = tet.map(|v| nodes[v as usize]);
+                if tet_signed_volume(&x) < 0.0 {
+                    tet.swap(2, 3);
+                }
+                tets.push(tet);
             }
         }
     }
-    Disc { points, tris }
+    (nodes, tets)
 }
 
 /// Tetrahedral mesh of a solid circular cylinder (a thick disc) with its
@@ -376,40 +476,8 @@ pub fn cylinder_mesh(
 
     let disc = disc_triangulation(radius, n_b, n_r);
     let n2d = disc.points.len();
-    let z_lo = center[2] - 0.5 * width;
-    let z_hi = center[2] + 0.5 * width;
-    let layer_z = |k: usize| {
-        if k == n_z {
-            z_hi
-        } else {
-            z_lo + width * (k as f64 / n_z as f64)
-        }
-    };
-    let mut nodes = Vec::with_capacity(num_nodes as usize);
-    for k in 0..=n_z {
-        let z = layer_z(k);
-        for p in &disc.points {
-            nodes.push([center[0] + p[0], center[1] + p[1], z]);
-        }
-    }
-
-    let mut tets = Vec::with_capacity(num_elems as usize);
-    for k in 0..n_z {
-        let (bot, top) = ((k * n2d) as u32, ((k + 1) * n2d) as u32);
-        for t in &disc.tris {
-            let mut s = *t;
-            s.sort_unstable();
-            let [a, b, c] = s.map(|v| v + bot);
-            let [a1, b1, c1] = s.map(|v| v + top);
-            for mut tet in [[a, b, c, c1], [a, b, b1, c1], [a, a1, b1, c1]] {
-                let x = tet.map(|v| nodes[v as usize]);
-                if tet_signed_volume(&x) < 0.0 {
-                    tet.swap(2, 3);
-                }
-                tets.push(tet);
-            }
-        }
-    }
+    let zs = layer_zs(center[2], width, n_z);
+    let (nodes, tets) = extrude(center, &zs, &disc.points, &disc.tris);
     let ne = tets.len();
     let mut mesh = TetMesh {
         nodes,
@@ -449,6 +517,457 @@ pub fn cylinder_mesh(
     );
     mesh.elem_sets
         .insert("all".to_string(), (0..ne as u32).collect());
+    Ok(mesh)
+}
+
+/// Rings of the section of an annulus `a <= r <= b` (inner ring given): ring
+/// `i` (`0 <= i <= n_r`) at radius `a + (b - a) i / n_r` (exactly `a` and
+/// `b` at the ends) with `m0` nodes on ring 0 and
+/// `max(8, round(2 pi r_i / h))` on ring `i >= 1`, except that a single
+/// strip (`n_r = 1`) keeps `m0` nodes on both rings. All rings start at
+/// angle 0 (no stagger).
+///
+/// Why: with equal counts and aligned nodes every strip cell is a convex
+/// trapezoid, valid however thin the annulus; with `n_r >= 2` the radial
+/// spacing is at least `0.75 h`, enough for the merge walk between rings
+/// of different counts to give positive triangles (checked over a wide
+/// parameter sweep in the tests).
+#[derive(Debug, Clone, Copy)]
+struct AnnulusRings {
+    a: f64,
+    b: f64,
+    n_r: usize,
+    m0: usize,
+    h: f64,
+}
+
+impl AnnulusRings {
+    fn radius(&self, i: usize) -> f64 {
+        if i == 0 {
+            self.a
+        } else if i == self.n_r {
+            self.b
+        } else {
+            self.a + (self.b - self.a) * (i as f64 / self.n_r as f64)
+        }
+    }
+
+    fn size(&self, i: usize) -> usize {
+        if i == 0 || self.n_r == 1 {
+            self.m0
+        } else {
+            (std::f64::consts::TAU * self.radius(i) / self.h)
+                .round()
+                .max(8.0) as usize
+        }
+    }
+
+    /// Nodes on rings `1..=n_r` and triangles of the `n_r` strips, without
+    /// allocating; stops counting once the nodes exceed `u32::MAX`.
+    fn counts(&self) -> (u128, u128) {
+        let (mut nodes, mut tris) = (0u128, 0u128);
+        for i in 1..=self.n_r {
+            let m = self.size(i) as u128;
+            nodes += m;
+            tris += self.size(i - 1) as u128 + m;
+            if nodes > u32::MAX as u128 {
+                break;
+            }
+        }
+        (nodes, tris)
+    }
+
+    /// Appends the points of rings `1..=n_r` (counter-clockwise from angle
+    /// 0) and the strip triangles, ring 0 being `inner` (already in
+    /// `points`, `m0` nodes from angle 0). Returns the outer ring.
+    fn build(
+        &self,
+        points: &mut Vec<[f64; 2]>,
+        tris: &mut Vec<[u32; 3]>,
+        inner: RingNodes,
+    ) -> RingNodes {
+        debug_assert_eq!((inner.m, inner.offset), (self.m0, 0.0));
+        let mut prev = inner;
+        for i in 1..=self.n_r {
+            let ring = push_ring(points, self.radius(i), self.size(i));
+            merge_strip(tris, prev, ring);
+            prev = ring;
+        }
+        prev
+    }
+}
+
+/// Appends `m` points on the circle of radius `rho` about the origin,
+/// counter-clockwise from angle 0, and returns them as a ring.
+fn push_ring(points: &mut Vec<[f64; 2]>, rho: f64, m: usize) -> RingNodes {
+    let ring = RingNodes {
+        start: points.len(),
+        m,
+        offset: 0.0,
+    };
+    for j in 0..m {
+        let (s, c) = ring.angle(j).sin_cos();
+        points.push([rho * c, rho * s]);
+    }
+    ring
+}
+
+/// Checks a ring generator's centre and positive parameters.
+fn check_ring_params(
+    what: &str,
+    center: [f64; 3],
+    params: &[(&str, f64)],
+    inner: (&str, f64),
+    outer: (&str, f64),
+) -> Result<(), MeshError> {
+    if !center.iter().all(|v| v.is_finite()) {
+        return Err(MeshError::InvalidParameter(format!(
+            "{what} center {center:?} must be finite"
+        )));
+    }
+    for &(name, v) in params {
+        if !(v.is_finite() && v > 0.0) {
+            return Err(MeshError::InvalidParameter(format!(
+                "{what} {name} = {v} must be positive and finite"
+            )));
+        }
+    }
+    if inner.1 >= outer.1 {
+        return Err(MeshError::InvalidParameter(format!(
+            "{what} {} = {} must be below {} = {}",
+            inner.0, inner.1, outer.0, outer.1
+        )));
+    }
+    Ok(())
+}
+
+/// Rejects ring meshes that certainly exceed the `u32` index range before
+/// anything is counted or allocated: every layer holds at least
+/// `8 (n_r + 1)` and at least `n_b` nodes.
+fn check_ring_size_bound(
+    what: &str,
+    n_b: f64,
+    n_r: f64,
+    n_z: f64,
+    h: f64,
+) -> Result<(), MeshError> {
+    let layers = n_z + 1.0;
+    if n_z > 1e10 || 8.0 * (n_r + 1.0) * layers > u32::MAX as f64 || n_b * layers > u32::MAX as f64
+    {
+        return Err(MeshError::TooLarge(format!(
+            "{what} mesh with {n_b} outer nodes, {n_r} radial cells and {n_z} layers (h {h}) \
+             exceeds {} nodes; increase h",
+            u32::MAX
+        )));
+    }
+    Ok(())
+}
+
+/// Rejects ring meshes whose exact counts exceed the `u32` index range.
+fn check_ring_counts(what: &str, n2d: u128, n_tri: u128, n_z: usize) -> Result<(), MeshError> {
+    let num_nodes = n2d * (n_z as u128 + 1);
+    let num_elems = 3 * n_tri * n_z as u128;
+    if num_nodes > u32::MAX as u128 || num_elems > u32::MAX as u128 {
+        return Err(MeshError::TooLarge(format!(
+            "{what} mesh with {n2d} nodes per layer and {n_z} layers has {num_nodes} nodes and \
+             {num_elems} elements (limit {} each); increase h",
+            u32::MAX
+        )));
+    }
+    Ok(())
+}
+
+/// Builds the extruded mesh (body 0, element set `all`) and its sets:
+/// `zmin`, `zmax` (end layers), and for each `(name, flags)` of `circles`
+/// the nodes whose section point is flagged and the boundary faces all of
+/// whose nodes are flagged (faces oriented outward).
+fn extruded_mesh_with_sets(
+    center: [f64; 3],
+    height: f64,
+    n_z: usize,
+    points: &[[f64; 2]],
+    tris: &[[u32; 3]],
+    circles: &[(&str, &[bool])],
+) -> Result<TetMesh, MeshError> {
+    let zs = layer_zs(center[2], height, n_z);
+    let (nodes, tets) = extrude(center, &zs, points, tris);
+    let ne = tets.len();
+    let mut mesh = TetMesh {
+        nodes,
+        tets,
+        body: vec![0; ne],
+        node_sets: BTreeMap::new(),
+        face_sets: BTreeMap::new(),
+        elem_sets: BTreeMap::new(),
+    };
+    // No element may be degenerate (only possible for extreme aspect ratios).
+    mesh.validate()?;
+
+    let n2d = points.len();
+    let layer = |v: u32| v as usize / n2d;
+    let (mut zmin, mut zmax) = (Vec::new(), Vec::new());
+    let mut side: Vec<Vec<[u32; 3]>> = vec![Vec::new(); circles.len()];
+    for bf in mesh.boundary_faces() {
+        if bf.nodes.iter().all(|&v| layer(v) == 0) {
+            zmin.push(bf.nodes);
+        } else if bf.nodes.iter().all(|&v| layer(v) == n_z) {
+            zmax.push(bf.nodes);
+        } else {
+            let c = circles
+                .iter()
+                .position(|(_, on)| bf.nodes.iter().all(|&v| on[v as usize % n2d]))
+                .expect("every side face of an extruded ring mesh lies on a named circle");
+            side[c].push(bf.nodes);
+        }
+    }
+    mesh.face_sets.insert("zmin".to_string(), zmin);
+    mesh.face_sets.insert("zmax".to_string(), zmax);
+    for ((name, on), faces) in circles.iter().zip(side) {
+        mesh.face_sets.insert(name.to_string(), faces);
+        let nodes = (0..=n_z)
+            .flat_map(|k| {
+                (0..n2d)
+                    .filter(|&p| on[p])
+                    .map(move |p| (k * n2d + p) as u32)
+            })
+            .collect();
+        mesh.node_sets.insert(name.to_string(), nodes);
+    }
+    mesh.node_sets
+        .insert("zmin".to_string(), (0..n2d as u32).collect());
+    mesh.node_sets.insert(
+        "zmax".to_string(),
+        ((n_z * n2d) as u32..((n_z + 1) * n2d) as u32).collect(),
+    );
+    mesh.elem_sets
+        .insert("all".to_string(), (0..ne as u32).collect());
+    Ok(mesh)
+}
+
+/// Flags of the section points `ring.start .. ring.start + ring.m`.
+fn ring_flags(n2d: usize, ring: RingNodes) -> Vec<bool> {
+    (0..n2d)
+        .map(|p| (ring.start..ring.start + ring.m).contains(&p))
+        .collect()
+}
+
+/// Tetrahedral mesh of a hollow circular cylinder (a thick annulus
+/// `inner_radius <= r <= outer_radius`) with its axis along z through
+/// `(center[0], center[1])`, extending from `z = center[2] - height/2` to
+/// `center[2] + height/2` (the convention of [`cylinder_mesh`]), with target
+/// element size `h`.
+///
+/// * Cross-section: `n_r = max(1, round((b - a) / h))` radial cells; ring
+///   `i` at radius `a + (b - a) i / n_r` (`a`, `b` the radii) carries
+///   `max(8, round(2 pi r_i / h))` nodes evenly spaced from angle 0 (the +x
+///   direction), so the spacing along every ring is about `h`; a single
+///   radial cell (`n_r = 1`) uses the inner ring's count on both rings.
+///   Boundary nodes lie exactly on the circles `r = a` and `r = b` (to
+///   rounding), so the meshed section lies between the inscribed regular
+///   polygons. Consecutive rings are joined by a merge walk over angles
+///   (counter-clockwise triangles, conforming).
+/// * Extrusion: `n_z = max(1, round(height / h))` uniform layers, each
+///   prism split into 3 tetrahedra by the sorted-vertex rule as in
+///   [`cylinder_mesh`] (conforming, all elements positively oriented).
+/// * Volume: `V = height (P(m_b, b) - P(m_a, a))` with
+///   `P(m, r) = (m/2) r^2 sin(2 pi / m)` the inscribed `m`-gon area, so
+///   `|V - pi (b^2 - a^2) height| <= (pi / 6) height max(a^2 t_a^2, b^2 t_b^2)`
+///   with `t = 2 pi / m` (about `pi h^2 height / 6`).
+/// * Node numbering: layer by layer from the bottom, each layer ring by ring
+///   from the inside out, counter-clockwise from angle 0. Elements are
+///   ordered by layer, then triangle, 3 per prism.
+/// * Body id 0 for all elements. Face sets and node sets `inner`, `outer`,
+///   `zmin`, `zmax` (faces oriented outward: `inner` faces point towards
+///   the axis), and an element set `all`.
+///
+/// Errors: non-finite centre, non-positive or non-finite radii, height or
+/// `h`, `inner_radius >= outer_radius` ([`MeshError::InvalidParameter`]);
+/// more than `u32::MAX` nodes or elements ([`MeshError::TooLarge`]);
+/// degenerate elements for extreme aspect ratios (from
+/// [`TetMesh::validate`]).
+pub fn annulus_mesh(
+    center: [f64; 3],
+    inner_radius: f64,
+    outer_radius: f64,
+    height: f64,
+    h: f64,
+) -> Result<TetMesh, MeshError> {
+    const WHAT: &str = "annulus";
+    check_ring_params(
+        WHAT,
+        center,
+        &[
+            ("inner_radius", inner_radius),
+            ("outer_radius", outer_radius),
+            ("height", height),
+            ("element size h", h),
+        ],
+        ("inner_radius", inner_radius),
+        ("outer_radius", outer_radius),
+    )?;
+    let tau = std::f64::consts::TAU;
+    let n_r_f = ((outer_radius - inner_radius) / h).round().max(1.0);
+    let n_z_f = (height / h).round().max(1.0);
+    let n_b_f = (tau * outer_radius / h).round().max(8.0);
+    check_ring_size_bound(WHAT, n_b_f, n_r_f, n_z_f, h)?;
+    // At most n_b_f, as inner_radius < outer_radius.
+    let m0 = (tau * inner_radius / h).round().max(8.0);
+    let rings = AnnulusRings {
+        a: inner_radius,
+        b: outer_radius,
+        n_r: n_r_f as usize,
+        m0: m0 as usize,
+        h,
+    };
+    let n_z = n_z_f as usize;
+    let (n_ring_nodes, n_tri) = rings.counts();
+    check_ring_counts(WHAT, rings.m0 as u128 + n_ring_nodes, n_tri, n_z)?;
+
+    let mut points = Vec::with_capacity(rings.m0 + n_ring_nodes as usize);
+    let mut tris = Vec::with_capacity(n_tri as usize);
+    let inner = push_ring(&mut points, inner_radius, rings.m0);
+    let outer = rings.build(&mut points, &mut tris, inner);
+    let n2d = points.len();
+    extruded_mesh_with_sets(
+        center,
+        height,
+        n_z,
+        &points,
+        &tris,
+        &[
+            ("inner", &ring_flags(n2d, inner)),
+            ("outer", &ring_flags(n2d, outer)),
+        ],
+    )
+}
+
+/// Tetrahedral mesh of a solid circular cylinder of radius `outer_radius`
+/// made of a core (`r <= core_radius`) bonded to a ring
+/// (`core_radius <= r <= outer_radius`): one conforming mesh whose core and
+/// ring share the nodes on `r = core_radius`. Axis along z through
+/// `(center[0], center[1])`, from `z = center[2] - height/2` to
+/// `center[2] + height/2` (as [`cylinder_mesh`]); target element size `h`.
+///
+/// * Core section: exactly the section of
+///   `cylinder_mesh(center, core_radius, height, h)` (centre node, staggered
+///   rings, `n_c = max(8, round(2 pi core_radius / h))` nodes on the
+///   interface circle, one at angle 0).
+/// * Ring section: as [`annulus_mesh`] from `core_radius` to `outer_radius`,
+///   its inner ring being the core's interface ring (same nodes).
+/// * Extrusion, numbering (layer by layer; in each layer the core's points,
+///   interface ring last, then the ring's rings inside out), element order
+///   and orientation as in [`cylinder_mesh`]. The meshed volume is
+///   `height P(m_b, outer_radius)` (inscribed polygon, see
+///   [`annulus_mesh`]); the core's is `height P(n_c, core_radius)`.
+/// * Body id 0 for all elements; element sets `core`, `ring` (a partition)
+///   and `all`. Node sets and face sets `outer`, `zmin`, `zmax` (boundary
+///   faces oriented outward) and `interface`: the nodes on
+///   `r = core_radius` and the interior triangles there, oriented with the
+///   normal pointing out of the core into the ring (each is a face of one
+///   core and one ring element, and is not a boundary face).
+///
+/// Errors: as [`annulus_mesh`] (`core_radius >= outer_radius` is an
+/// [`MeshError::InvalidParameter`]).
+pub fn concentric_cylinder_mesh(
+    center: [f64; 3],
+    core_radius: f64,
+    outer_radius: f64,
+    height: f64,
+    h: f64,
+) -> Result<TetMesh, MeshError> {
+    const WHAT: &str = "concentric cylinder";
+    check_ring_params(
+        WHAT,
+        center,
+        &[
+            ("core_radius", core_radius),
+            ("outer_radius", outer_radius),
+            ("height", height),
+            ("element size h", h),
+        ],
+        ("core_radius", core_radius),
+        ("outer_radius", outer_radius),
+    )?;
+    let tau = std::f64::consts::TAU;
+    // Core parameters exactly as cylinder_mesh(center, core_radius, ..).
+    let n_c_f = (tau * core_radius / h).round().max(8.0);
+    let n_rc_f = (core_radius / h).round().max(1.0);
+    let n_r_f = ((outer_radius - core_radius) / h).round().max(1.0);
+    let n_z_f = (height / h).round().max(1.0);
+    let n_b_f = (tau * outer_radius / h).round().max(8.0);
+    check_ring_size_bound(WHAT, n_b_f, n_r_f, n_z_f, h)?;
+    // As in cylinder_mesh: the core's rings alone then exceed u32::MAX nodes.
+    if n_c_f * n_rc_f > 1e11 {
+        return Err(MeshError::TooLarge(format!(
+            "{WHAT} mesh with {n_c_f} interface nodes and {n_rc_f} core rings (h {h}) \
+             exceeds {} nodes; increase h",
+            u32::MAX
+        )));
+    }
+    let (n_c, n_rc, n_z) = (n_c_f as usize, n_rc_f as usize, n_z_f as usize);
+    let core_sizes = ring_sizes(n_c, n_rc);
+    let core_nodes = 1 + core_sizes.iter().map(|&m| m as u128).sum::<u128>();
+    let core_tris = core_sizes[0] as u128
+        + core_sizes
+            .windows(2)
+            .map(|w| (w[0] + w[1]) as u128)
+            .sum::<u128>();
+    let rings = AnnulusRings {
+        a: core_radius,
+        b: outer_radius,
+        n_r: n_r_f as usize,
+        m0: n_c,
+        h,
+    };
+    let (ring_nodes, ring_tris) = rings.counts();
+    check_ring_counts(WHAT, core_nodes + ring_nodes, core_tris + ring_tris, n_z)?;
+
+    let disc = disc_triangulation(core_radius, n_c, n_rc);
+    let n_core_tris = disc.tris.len();
+    let (mut points, mut tris) = (disc.points, disc.tris);
+    let interface = RingNodes {
+        start: points.len() - n_c,
+        m: n_c,
+        offset: 0.0,
+    };
+    // The disc's boundary ring is unstaggered (angle 0 first), as the
+    // annulus rings expect.
+    debug_assert_eq!(ring_angle(n_rc, n_rc, n_c, 0), 0.0);
+    let outer = rings.build(&mut points, &mut tris, interface);
+    let n2d = points.len();
+    let on_interface = ring_flags(n2d, interface);
+    let mut mesh = extruded_mesh_with_sets(
+        center,
+        height,
+        n_z,
+        &points,
+        &tris,
+        &[("outer", &ring_flags(n2d, outer))],
+    )?;
+
+    // Elements are ordered by layer, then triangle, 3 per prism.
+    let n_tri = tris.len();
+    let (core, ring): (Vec<u32>, Vec<u32>) =
+        (0..mesh.num_elems() as u32).partition(|&e| (e as usize / 3) % n_tri < n_core_tris);
+    // Interface triangles: faces of core elements with all nodes on the
+    // interface circle (a section triangle never has all three vertices on
+    // one ring, so these are exactly the faces on r = core_radius).
+    let mut iface = Vec::new();
+    for &e in &core {
+        for f in 0..4 {
+            let nodes = mesh.local_face_nodes(e as usize, f);
+            if nodes.iter().all(|&v| on_interface[v as usize % n2d]) {
+                iface.push(nodes);
+            }
+        }
+    }
+    mesh.face_sets.insert("interface".to_string(), iface);
+    let iface_nodes = (0..=n_z)
+        .flat_map(|k| (interface.start..interface.start + n_c).map(move |p| (k * n2d + p) as u32))
+        .collect();
+    mesh.node_sets.insert("interface".to_string(), iface_nodes);
+    mesh.elem_sets.insert("core".to_string(), core);
+    mesh.elem_sets.insert("ring".to_string(), ring);
     Ok(mesh)
 }
 
@@ -788,6 +1307,401 @@ mod tests {
         }
         for (r, w, h) in [(1.0, 0.1, 1e-6), (1.0, 1e12, 1.0), (1.0, 0.1, 2e-4)] {
             let e = cylinder_mesh([0.0; 3], r, w, h).unwrap_err();
+            assert!(matches!(e, MeshError::TooLarge(_)), "{e}");
+        }
+    }
+
+    /// Inscribed-polygon deficit bound: pi r^2 - P(m, r) <= (pi / 6) r^2 (2 pi / m)^2.
+    fn polygon_deficit_bound(m: usize, r: f64) -> f64 {
+        let t = std::f64::consts::TAU / m as f64;
+        std::f64::consts::PI / 6.0 * r * r * t * t
+    }
+
+    /// Distance of `p` from the z axis through `center`.
+    fn radial_distance(center: [f64; 3], p: [f64; 3]) -> f64 {
+        (p[0] - center[0]).hypot(p[1] - center[1])
+    }
+
+    /// Checks shared by the ring meshes: conformity, closed outward-oriented
+    /// boundary, z sets, node sets equal to the nodes of their face sets and
+    /// to the nodes geometrically on their surfaces, normals of the circle
+    /// sets `(name, radius, sign)` (`sign` +1: boundary faces pointing away
+    /// from the axis, -1: towards it, 0: interior set, node set only).
+    /// Returns the minimum element quality.
+    fn check_ring_mesh(
+        m: &TetMesh,
+        center: [f64; 3],
+        height: f64,
+        circles: &[(&str, f64, f64)],
+    ) -> f64 {
+        m.validate().unwrap();
+        assert!(m.body.iter().all(|&b| b == 0));
+        assert_eq!(
+            m.elem_sets["all"],
+            (0..m.num_elems() as u32).collect::<Vec<_>>()
+        );
+        let (z_lo, z_hi) = (center[2] - 0.5 * height, center[2] + 0.5 * height);
+
+        // Conforming: no face in more than two tets.
+        let mut faces: HashMap<[u32; 3], usize> = HashMap::new();
+        for e in 0..m.num_elems() {
+            for f in 0..4 {
+                let mut k = m.local_face_nodes(e, f);
+                k.sort_unstable();
+                *faces.entry(k).or_default() += 1;
+            }
+        }
+        assert!(faces.values().all(|&c| c <= 2));
+
+        // Closed, consistently oriented boundary: every directed boundary
+        // edge appears once and its reverse once, so every boundary edge is
+        // shared by exactly two boundary faces.
+        let bf = m.boundary_faces();
+        let mut directed: HashMap<(u32, u32), usize> = HashMap::new();
+        for f in &bf {
+            for k in 0..3 {
+                *directed
+                    .entry((f.nodes[k], f.nodes[(k + 1) % 3]))
+                    .or_default() += 1;
+            }
+        }
+        for (&(u, v), &c) in &directed {
+            assert_eq!(c, 1, "edge {u}-{v} used {c} times in one direction");
+            assert_eq!(directed.get(&(v, u)), Some(&1), "open edge {u}-{v}");
+        }
+
+        // Boundary faces are exactly the named boundary sets.
+        let mut names: Vec<&str> = vec!["zmin", "zmax"];
+        names.extend(circles.iter().filter(|c| c.2 != 0.0).map(|c| c.0));
+        let total: usize = names.iter().map(|n| m.face_sets[*n].len()).sum();
+        assert_eq!(total, bf.len());
+        let mut named: Vec<[u32; 3]> = names
+            .iter()
+            .flat_map(|n| m.face_sets[*n].iter().copied())
+            .collect();
+        let mut all: Vec<[u32; 3]> = bf.iter().map(|f| f.nodes).collect();
+        named.sort_unstable();
+        all.sort_unstable();
+        assert_eq!(named, all);
+
+        for (name, nz, z) in [("zmin", -1.0, z_lo), ("zmax", 1.0, z_hi)] {
+            for f in &m.face_sets[name] {
+                let n = m.face_area_normal(*f).1;
+                assert!((n[2] - nz).abs() < 1e-12, "{name}: {n:?}");
+            }
+            let expect: Vec<u32> = (0..m.num_nodes() as u32)
+                .filter(|&v| m.nodes[v as usize][2] == z)
+                .collect();
+            assert_eq!(m.node_sets[name], expect, "{name}");
+            assert_eq!(m.node_sets[name], m.nodes_of_face_set(name).unwrap());
+        }
+        let (lo, hi) = m.bounding_box().unwrap();
+        assert_eq!((lo[2], hi[2]), (z_lo, z_hi));
+
+        for &(name, r, sign) in circles {
+            let tol = 1e-12 * (r + center[0].abs() + center[1].abs());
+            let expect: Vec<u32> = (0..m.num_nodes() as u32)
+                .filter(|&v| (radial_distance(center, m.nodes[v as usize]) - r).abs() < tol)
+                .collect();
+            assert_eq!(m.node_sets[name], expect, "{name}");
+            assert!(!expect.is_empty());
+            if sign == 0.0 {
+                continue;
+            }
+            assert_eq!(m.node_sets[name], m.nodes_of_face_set(name).unwrap());
+            for f in &m.face_sets[name] {
+                let (_, n) = m.face_area_normal(*f);
+                let c: Vec<f64> = (0..2)
+                    .map(|d| {
+                        f.iter().map(|&v| m.nodes[v as usize][d]).sum::<f64>() / 3.0 - center[d]
+                    })
+                    .collect();
+                let radial = (n[0] * c[0] + n[1] * c[1]) / c[0].hypot(c[1]);
+                assert!(
+                    n[2].abs() < 1e-12 && radial * sign > 0.9,
+                    "{name} normal {n:?}"
+                );
+            }
+        }
+        m.min_quality().unwrap().0
+    }
+
+    /// Nodes of the ring of radius r on the bottom layer.
+    fn count_on_circle(m: &TetMesh, center: [f64; 3], r: f64, z: f64) -> usize {
+        m.nodes
+            .iter()
+            .filter(|p| p[2] == z && (radial_distance(center, **p) - r).abs() < 1e-12 * r.max(1.0))
+            .count()
+    }
+
+    /// Checks an annulus mesh; returns (nodes, tets, min quality).
+    fn check_annulus(c: [f64; 3], a: f64, b: f64, w: f64, h: f64) -> (usize, usize, f64) {
+        let m = annulus_mesh(c, a, b, w, h).unwrap();
+        let q = check_ring_mesh(&m, c, w, &[("inner", a, -1.0), ("outer", b, 1.0)]);
+        let n_z = ((w / h).round() as usize).max(1);
+        let z_lo = c[2] - 0.5 * w;
+        let (m_a, m_b) = (
+            count_on_circle(&m, c, a, z_lo),
+            count_on_circle(&m, c, b, z_lo),
+        );
+        assert_eq!(m.node_sets["inner"].len(), m_a * (n_z + 1));
+        assert_eq!(m.node_sets["outer"].len(), m_b * (n_z + 1));
+        assert_eq!(m.face_sets["inner"].len(), 2 * m_a * n_z);
+        assert_eq!(m.face_sets["outer"].len(), 2 * m_b * n_z);
+        let n_tri = m.face_sets["zmin"].len();
+        assert_eq!(m.num_elems(), 3 * n_tri * n_z);
+
+        // Volume: exactly the difference of the inscribed polygons, and
+        // within the stated bound of the exact annulus.
+        let v = m.total_volume();
+        assert!(rel(v, w * (polygon_area(m_b, b) - polygon_area(m_a, a))) < 1e-12);
+        let exact = std::f64::consts::PI * (b * b - a * a) * w;
+        let bound = w * polygon_deficit_bound(m_a, a).max(polygon_deficit_bound(m_b, b));
+        assert!(
+            (v - exact).abs() <= bound * (1.0 + 1e-9),
+            "{v} vs {exact} (bound {bound})"
+        );
+        assert_eq!(m, annulus_mesh(c, a, b, w, h).unwrap(), "not deterministic");
+        (m.num_nodes(), m.num_elems(), q)
+    }
+
+    #[test]
+    fn annulus_seed_004_hollow_cylinder() {
+        // Seed 004 sec 3.3, Table 2: a = 0.03 m, b = 0.15 m, height 0.01 m.
+        for h in [0.01, 0.005] {
+            let (nn, ne, q) = check_annulus([0.0; 3], 0.03, 0.15, 0.01, h);
+            let m = annulus_mesh([0.0; 3], 0.03, 0.15, 0.01, h).unwrap();
+            let v = m.total_volume();
+            let exact = std::f64::consts::PI * (0.15f64.powi(2) - 0.03f64.powi(2)) * 0.01;
+            println!(
+                "annulus a=0.03 b=0.15 height=0.01 h={h}: {nn} nodes, {ne} tets, \
+                 min quality {q:.3}, volume rel. error {:.2e}",
+                (v - exact) / exact
+            );
+            assert!(q > 0.2, "h = {h}: min quality {q}");
+        }
+    }
+
+    #[test]
+    fn annulus_various_sizes_and_offsets() {
+        for (c, a, b, w, h) in [
+            ([0.0; 3], 0.03, 0.15, 0.01, 0.02),
+            ([0.0; 3], 1.0, 2.0, 0.1, 0.08),
+            ([2.0, -1.0, 0.5], 0.5, 1.0, 0.1, 0.5),
+            ([0.0; 3], 0.01, 1.0, 0.3, 0.1),
+            // Thin annuli: one radial cell, equal counts on both rings.
+            ([0.0; 3], 1.0, 1.001, 0.1, 0.1),
+            ([0.1, 0.2, 0.3], 1.0, 1.14, 0.1, 0.1),
+            ([0.0; 3], 0.05, 0.06, 0.02, 0.2),
+            ([0.0; 3], 1.0, 1.3, 0.05, 0.2),
+        ] {
+            let (_, _, q) = check_annulus(c, a, b, w, h);
+            assert!(q > 0.0, "a {a} b {b} w {w} h {h}: min quality {q}");
+        }
+    }
+
+    /// The ring sections are valid (positive, conforming, closed) over a
+    /// wide sweep of radius ratios and element sizes, including inner
+    /// radii far below h and annuli far thinner than h.
+    #[test]
+    fn ring_sections_valid_over_sweep() {
+        let mut worst = f64::INFINITY;
+        for ia in 0..16 {
+            let a = 0.01 * 1.6f64.powi(ia);
+            for ib in 0..20 {
+                let b = a * (1.0 + 0.001 * 2f64.powi(ib));
+                let h = 0.1;
+                for core in [false, true] {
+                    let rings = AnnulusRings {
+                        a,
+                        b,
+                        n_r: ((b - a) / h).round().max(1.0) as usize,
+                        m0: (std::f64::consts::TAU * a / h).round().max(8.0) as usize,
+                        h,
+                    };
+                    if rings.counts().0 > 20_000 {
+                        continue;
+                    }
+                    let (mut points, mut tris) = if core {
+                        let d = disc_triangulation(a, rings.m0, (a / h).round().max(1.0) as usize);
+                        (d.points, d.tris)
+                    } else {
+                        (Vec::new(), Vec::new())
+                    };
+                    let inner = if core {
+                        RingNodes {
+                            start: points.len() - rings.m0,
+                            m: rings.m0,
+                            offset: 0.0,
+                        }
+                    } else {
+                        push_ring(&mut points, a, rings.m0)
+                    };
+                    let (n_points0, n_tri0) = (points.len(), tris.len());
+                    let outer = rings.build(&mut points, &mut tris, inner);
+                    assert_eq!(outer.start + outer.m, points.len());
+                    let (n_nodes, n_tri) = rings.counts();
+                    assert_eq!(n_nodes as usize, points.len() - n_points0);
+                    assert_eq!(n_tri as usize, tris.len() - n_tri0);
+                    let mut area = 0.0;
+                    let mut edges: HashMap<(u32, u32), usize> = HashMap::new();
+                    for &t in &tris {
+                        let ar = tri_area(&points, t);
+                        let [p, q, r] = t.map(|v| points[v as usize]);
+                        let l2 = |a: [f64; 2], b: [f64; 2]| {
+                            (a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)
+                        };
+                        assert!(ar > 0.0, "a {a} b {b} core {core}: {t:?} area {ar}");
+                        worst =
+                            worst.min(ar * 4.0 * 3f64.sqrt() / (l2(p, q) + l2(q, r) + l2(r, p)));
+                        area += ar;
+                        for k in 0..3 {
+                            let (u, v) = (t[k], t[(k + 1) % 3]);
+                            *edges.entry((u.min(v), u.max(v))).or_default() += 1;
+                        }
+                    }
+                    let expect = polygon_area(outer.m, b)
+                        - if core { 0.0 } else { polygon_area(inner.m, a) };
+                    assert!(rel(area, expect) < 1e-10, "a {a} b {b} core {core}");
+                    assert!(edges.values().all(|&c| c <= 2));
+                    let n_open = edges.values().filter(|&&c| c == 1).count();
+                    assert_eq!(n_open, outer.m + if core { 0 } else { inner.m });
+                }
+            }
+        }
+        println!("worst section triangle quality over the sweep: {worst:.3}");
+    }
+
+    #[test]
+    fn concentric_seed_004_steel_in_concrete() {
+        // Seed 004 sec 4, Table 3: steel core a = 0.03 m in a concrete ring
+        // b = 0.15 m, height 0.01 m.
+        for (c, a, b, w, h) in [
+            ([0.0; 3], 0.03, 0.15, 0.01, 0.01),
+            ([0.0; 3], 0.03, 0.15, 0.01, 0.005),
+            ([1.0, -2.0, 0.3], 0.5, 1.0, 0.2, 0.1),
+            ([0.0; 3], 1.0, 1.001, 0.1, 0.1),
+            ([0.0; 3], 0.01, 1.0, 0.1, 0.1),
+        ] {
+            let m = concentric_cylinder_mesh(c, a, b, w, h).unwrap();
+            let q = check_ring_mesh(&m, c, w, &[("outer", b, 1.0), ("interface", a, 0.0)]);
+            let n_z = ((w / h).round() as usize).max(1);
+            let z_lo = c[2] - 0.5 * w;
+            let (n_c, m_b) = (
+                count_on_circle(&m, c, a, z_lo),
+                count_on_circle(&m, c, b, z_lo),
+            );
+
+            // The core is exactly cylinder_mesh's.
+            let cyl = cylinder_mesh(c, a, w, h).unwrap();
+            let core = &m.elem_sets["core"];
+            let ring = &m.elem_sets["ring"];
+            assert_eq!(core.len(), cyl.num_elems());
+            assert_eq!(core.len() + ring.len(), m.num_elems());
+            let mut both: Vec<u32> = core.iter().chain(ring).copied().collect();
+            both.sort_unstable();
+            assert_eq!(both, m.elem_sets["all"]);
+            let vol = |set: &[u32]| {
+                set.iter()
+                    .map(|&e| m.element_volume(e as usize))
+                    .sum::<f64>()
+            };
+            assert!(rel(vol(core), cyl.total_volume()) < 1e-12);
+            assert!(rel(vol(core), w * polygon_area(n_c, a)) < 1e-12);
+            assert!(rel(vol(ring), w * (polygon_area(m_b, b) - polygon_area(n_c, a))) < 1e-12);
+            let exact = std::f64::consts::PI * b * b * w;
+            let bound = w * polygon_deficit_bound(m_b, b);
+            assert!((m.total_volume() - exact).abs() <= bound && m.total_volume() < exact);
+            for &e in core {
+                let x = m.element_coords(e as usize);
+                assert!(x.iter().all(|p| radial_distance(c, *p) < a * (1.0 + 1e-12)));
+            }
+            for &e in ring {
+                let x = m.element_coords(e as usize);
+                assert!(x.iter().all(|p| radial_distance(c, *p) > a * (1.0 - 1e-12)));
+            }
+
+            // Interface: shared nodes, interior faces of one core and one
+            // ring element, normals out of the core, area = polygon side.
+            assert_eq!(m.node_sets["interface"].len(), n_c * (n_z + 1));
+            assert_eq!(
+                m.nodes_of_face_set("interface").unwrap(),
+                m.node_sets["interface"]
+            );
+            let iface = &m.face_sets["interface"];
+            assert_eq!(iface.len(), 2 * n_c * n_z);
+            let is_core: Vec<bool> = {
+                let mut v = vec![false; m.num_elems()];
+                core.iter().for_each(|&e| v[e as usize] = true);
+                v
+            };
+            let mut owners: HashMap<[u32; 3], Vec<bool>> = HashMap::new();
+            for (e, &in_core) in is_core.iter().enumerate() {
+                for f in 0..4 {
+                    let mut k = m.local_face_nodes(e, f);
+                    k.sort_unstable();
+                    owners.entry(k).or_default().push(in_core);
+                }
+            }
+            let mut area = 0.0;
+            for f in iface {
+                let mut k = *f;
+                k.sort_unstable();
+                let mut o = owners[&k].clone();
+                o.sort_unstable();
+                assert_eq!(o, vec![false, true]);
+                let (fa, n) = m.face_area_normal(*f);
+                area += fa;
+                let p = m.nodes[f[0] as usize];
+                let radial = (n[0] * (p[0] - c[0]) + n[1] * (p[1] - c[1])) / a;
+                assert!(radial > 0.9, "interface normal {n:?}");
+            }
+            let perimeter = n_c as f64 * 2.0 * a * (std::f64::consts::PI / n_c as f64).sin();
+            assert!(rel(area, perimeter * w) < 1e-12);
+            assert_eq!(m, concentric_cylinder_mesh(c, a, b, w, h).unwrap());
+            println!(
+                "concentric a={a} b={b} height={w} h={h}: {} nodes, {} tets ({} core, {} ring), \
+                 min quality {q:.3}",
+                m.num_nodes(),
+                m.num_elems(),
+                core.len(),
+                ring.len()
+            );
+            assert!(q > 0.0);
+            if (a, b, w) == (0.03, 0.15, 0.01) {
+                assert!(q > 0.2, "h {h}: min quality {q}");
+            }
+        }
+    }
+
+    #[test]
+    fn ring_meshes_reject_bad_parameters() {
+        for (c, a, b, w, h) in [
+            ([0.0; 3], 0.0, 1.0, 0.1, 0.1),
+            ([0.0; 3], -0.5, 1.0, 0.1, 0.1),
+            ([0.0; 3], 1.0, 1.0, 0.1, 0.1),
+            ([0.0; 3], 1.0, 0.5, 0.1, 0.1),
+            ([0.0; 3], 0.5, f64::NAN, 0.1, 0.1),
+            ([0.0; 3], 0.5, f64::INFINITY, 0.1, 0.1),
+            ([0.0; 3], 0.5, 1.0, 0.0, 0.1),
+            ([0.0; 3], 0.5, 1.0, 0.1, 0.0),
+            ([0.0; 3], 0.5, 1.0, 0.1, -0.1),
+            ([f64::NAN, 0.0, 0.0], 0.5, 1.0, 0.1, 0.1),
+        ] {
+            let e = annulus_mesh(c, a, b, w, h).unwrap_err();
+            assert!(matches!(e, MeshError::InvalidParameter(_)), "{e}");
+            let e = concentric_cylinder_mesh(c, a, b, w, h).unwrap_err();
+            assert!(matches!(e, MeshError::InvalidParameter(_)), "{e}");
+        }
+        for (a, b, w, h) in [
+            (0.5, 1.0, 0.1, 1e-6),
+            (0.5, 1.0, 1e12, 1.0),
+            (0.5, 1.0, 0.1, 2e-4),
+            (1e-3, 1e6, 0.1, 1.0),
+        ] {
+            let e = annulus_mesh([0.0; 3], a, b, w, h).unwrap_err();
+            assert!(matches!(e, MeshError::TooLarge(_)), "{e}");
+            let e = concentric_cylinder_mesh([0.0; 3], a, b, w, h).unwrap_err();
             assert!(matches!(e, MeshError::TooLarge(_)), "{e}");
         }
     }

@@ -18,9 +18,14 @@ pub struct Scenario {
     pub materials: Vec<MaterialSpec>,
     /// Bodies: each a Tet4 mesh with a material and an initial state.
     pub bodies: Vec<BodySpec>,
-    /// Thermal problem: integrator and boundary conditions.
+    /// Thermal problem: integrator and boundary conditions. Absent: the
+    /// default thermal problem, unless `[mechanics]` is given (then the run
+    /// is purely mechanical and temperatures stay at their initial values).
     #[serde(default)]
-    pub thermal: ThermalSpec,
+    pub thermal: Option<ThermalSpec>,
+    /// Explicit finite-strain mechanics (absent: bodies do not deform).
+    #[serde(default)]
+    pub mechanics: Option<MechanicsSpec>,
     /// Linear solver settings (PETSc).
     #[serde(default)]
     pub solver: SolverSpec,
@@ -101,18 +106,33 @@ pub struct TimeSpec {
     pub end_time: Option<f64>,
 }
 
-/// A material's thermal properties.
+/// A material's thermal and mechanical properties. Thermal constants are
+/// needed when the thermal problem runs, elastic ones when mechanics does.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MaterialSpec {
     /// Name bodies refer to.
     pub name: String,
     /// Thermal conductivity k (W/m/K).
-    pub conductivity: f64,
+    #[serde(default)]
+    pub conductivity: Option<f64>,
     /// Specific heat c (J/kg/K).
-    pub specific_heat: f64,
+    #[serde(default)]
+    pub specific_heat: Option<f64>,
     /// Density ρ (kg/m³).
     pub density: f64,
+    /// Young's modulus E (Pa).
+    #[serde(default)]
+    pub young: Option<f64>,
+    /// Poisson's ratio ν.
+    #[serde(default)]
+    pub poisson: Option<f64>,
+    /// Linear thermal expansion coefficient α (1/K), default 0.
+    #[serde(default)]
+    pub expansion: f64,
+    /// Viscous damping η of the stress 2 η D (Pa s, seed 004 eq 35), default 0.
+    #[serde(default)]
+    pub viscosity: f64,
 }
 
 /// One body.
@@ -143,6 +163,34 @@ pub struct BodySpec {
     /// Replicate this body on a regular grid: bodies `<name>_i_j_k`.
     #[serde(default)]
     pub lattice: Option<LatticeSpec>,
+    /// Mechanics: hold every node of the body in place (a container, a floor).
+    #[serde(default)]
+    pub fixed: bool,
+    /// Mechanics: initial velocity of a free body (m/s).
+    #[serde(default)]
+    pub initial_velocity: Option<[f64; 3]>,
+    /// Mechanics: stress-free temperature (default: the initial temperature).
+    #[serde(default)]
+    pub reference_temperature: Option<f64>,
+    /// Mechanics without a thermal problem: the body's temperature rises
+    /// uniformly from `initial_temperature` to `to` over `over` seconds.
+    #[serde(default)]
+    pub heating: Option<HeatingSpec>,
+    /// Materials of element sets that differ from `material`, as
+    /// `{ <element set> = "<material>" }` (a bonded multi-material body).
+    #[serde(default)]
+    pub regions: BTreeMap<String, String>,
+}
+
+/// A prescribed uniform temperature ramp.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HeatingSpec {
+    /// Final temperature.
+    pub to: f64,
+    /// Duration of the linear rise (s); 0 for a jump.
+    #[serde(default)]
+    pub over: f64,
 }
 
 /// A regular grid of copies of one body.
@@ -175,6 +223,35 @@ pub enum MeshSpec {
         #[serde(default)]
         center: [f64; 3],
         /// Radius (m).
+        radius: f64,
+        /// Width along z (m).
+        width: f64,
+        /// Target element size h (m).
+        element_size: f64,
+    },
+    /// A hollow cylinder, axis along z (named sets inner, outer, zmin, zmax).
+    Annulus {
+        /// Centre of the bottom face (m).
+        #[serde(default)]
+        center: [f64; 3],
+        /// Inner radius (m).
+        inner_radius: f64,
+        /// Outer radius (m).
+        radius: f64,
+        /// Width along z (m).
+        width: f64,
+        /// Target element size h (m).
+        element_size: f64,
+    },
+    /// A solid core bonded inside a ring, one conforming mesh, axis along z
+    /// (element sets core, ring; node/face sets outer, interface, zmin, zmax).
+    Concentric {
+        /// Centre of the bottom face (m).
+        #[serde(default)]
+        center: [f64; 3],
+        /// Core radius (m).
+        core_radius: f64,
+        /// Outer radius (m).
         radius: f64,
         /// Width along z (m).
         width: f64,
@@ -321,7 +398,108 @@ pub struct OutputSpec {
     pub times: Vec<f64>,
 }
 
+/// Explicit finite-strain mechanics (seed 004 sec 2; seed 000 sec 3.4 for
+/// where it sits in the step).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MechanicsSpec {
+    /// Explicit time step (s). Default: `safety` × the critical step of
+    /// the mesh, materials and contact penalty. A larger value is an error.
+    #[serde(default)]
+    pub dt: Option<f64>,
+    /// Fraction of the critical step used by default (0 < safety ≤ 1).
+    #[serde(default = "default_safety")]
+    pub safety: f64,
+    /// Explicit substeps per `time.dt`. Absent: as many as `time.dt` needs
+    /// (the mechanical and thermal clocks agree). Given: the mechanics
+    /// advances `substeps` × dt per thermal step — a quasi-static coupling
+    /// in which the mechanical time is decoupled from the thermal time.
+    #[serde(default)]
+    pub substeps: Option<u64>,
+    /// Gravitational acceleration (m/s²).
+    #[serde(default)]
+    pub gravity: [f64; 3],
+    /// Mass-proportional damping coefficient c (1/s): force −c m v.
+    #[serde(default)]
+    pub damping: f64,
+    /// Boundary conditions on named sets.
+    #[serde(default)]
+    pub bc: Vec<MechanicsBcSpec>,
+    /// Penalty contact between bodies (absent: bodies pass through each other).
+    #[serde(default)]
+    pub contact: Option<PenaltySpec>,
+}
+
+fn default_safety() -> f64 {
+    crate::mechanics::explicit::DEFAULT_SAFETY
+}
+
+/// Mechanical boundary conditions.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum MechanicsBcSpec {
+    /// Hold the nodes of a set (all components, or those listed: "x", "y", "z").
+    Fixed {
+        /// Node or face set.
+        set: String,
+        /// Components to hold (default all).
+        #[serde(default)]
+        components: Option<Vec<String>>,
+    },
+    /// Prescribed velocity (m/s) on the nodes of a set; a component given
+    /// as NaN is left free.
+    Velocity {
+        /// Node or face set.
+        set: String,
+        /// Velocity.
+        value: [f64; 3],
+    },
+    /// Traction (Pa) on a face set: a dead load on the reference area.
+    Traction {
+        /// Face set.
+        set: String,
+        /// Traction vector.
+        value: [f64; 3],
+    },
+}
+
+/// Penalty contact (Munjiza's FDEM contact is potential-based; fdem uses a
+/// volume-overlap potential, see `contact::penalty`).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PenaltySpec {
+    /// Penalty number p_n (Pa), typically 10–100 × Young's modulus.
+    pub penalty: f64,
+    /// Coulomb friction coefficient μ.
+    #[serde(default)]
+    pub friction: f64,
+    /// Normal contact damping as a fraction of critical.
+    #[serde(default)]
+    pub damping_ratio: f64,
+    /// Sliding speed below which friction is regularised (m/s).
+    #[serde(default = "default_slip")]
+    pub slip_velocity: f64,
+    /// Search margin (m) of the contact candidate lists; default half the
+    /// smallest element length.
+    #[serde(default)]
+    pub margin: Option<f64>,
+}
+
+fn default_slip() -> f64 {
+    1e-6
+}
+
 impl Scenario {
+    /// Whether the thermal problem is solved.
+    pub fn has_thermal(&self) -> bool {
+        self.thermal.is_some() || self.mechanics.is_none()
+    }
+
+    /// The thermal settings (defaults when absent).
+    pub fn thermal_spec(&self) -> ThermalSpec {
+        self.thermal.clone().unwrap_or_default()
+    }
+
     /// Number of steps implied by `time`.
     pub fn num_steps(&self) -> u64 {
         match (self.time.steps, self.time.end_time) {
@@ -351,7 +529,8 @@ impl Scenario {
             }
             _ => {}
         }
-        let th = self.thermal.theta;
+        let thermal = self.thermal_spec();
+        let th = thermal.theta;
         if !(0.0..=1.0).contains(&th) {
             return bad("thermal.theta", format!("must be in [0, 1], got {th}"));
         }
@@ -359,11 +538,21 @@ impl Scenario {
             return bad("materials", "at least one material is needed".into());
         }
         for (i, m) in self.materials.iter().enumerate() {
-            for (field, v) in [
-                ("conductivity", m.conductivity),
-                ("specific_heat", m.specific_heat),
-                ("density", m.density),
-            ] {
+            let mut fields = vec![("density", Some(m.density))];
+            if self.has_thermal() {
+                fields.push(("conductivity", m.conductivity));
+                fields.push(("specific_heat", m.specific_heat));
+            }
+            for (field, v) in fields {
+                let Some(v) = v else {
+                    return bad(
+                        &format!("materials[{i}].{field}"),
+                        format!(
+                            "missing (material `{}`): the thermal problem needs it",
+                            m.name
+                        ),
+                    );
+                };
                 if !(v.is_finite() && v > 0.0) {
                     return bad(
                         &format!("materials[{i}].{field}"),
@@ -400,6 +589,44 @@ impl Scenario {
             }
             if !b.initial_temperature.is_finite() {
                 return bad(&key("initial_temperature"), "must be finite".into());
+            }
+            for (set, mat) in &b.regions {
+                if !self.materials.iter().any(|m| &m.name == mat) {
+                    return bad(
+                        &key(&format!("regions.{set}")),
+                        format!("no material named `{mat}`"),
+                    );
+                }
+            }
+            if let Some(h) = &b.heating {
+                if self.has_thermal() {
+                    return bad(
+                        &key("heating"),
+                        "a prescribed heating needs a run without a thermal problem \
+                         (no [thermal] table, with [mechanics])"
+                            .into(),
+                    );
+                }
+                if !(h.to.is_finite() && h.over.is_finite() && h.over >= 0.0) {
+                    return bad(&key("heating"), "`to` must be finite, `over` >= 0".into());
+                }
+            }
+            if b.fixed && (b.velocity.is_some() || b.initial_velocity.is_some()) {
+                return bad(
+                    &key("fixed"),
+                    "a fixed body cannot also have a velocity".into(),
+                );
+            }
+            for (f, v) in [
+                ("initial_velocity", b.initial_velocity),
+                (
+                    "reference_temperature",
+                    b.reference_temperature.map(|t| [t; 3]),
+                ),
+            ] {
+                if v.is_some_and(|v| v.iter().any(|x| !x.is_finite())) {
+                    return bad(&key(f), "must be finite".into());
+                }
             }
             if let MeshSpec::Box {
                 size,
@@ -491,7 +718,7 @@ impl Scenario {
                 }
             }
         }
-        for (i, bc) in self.thermal.bc.iter().enumerate() {
+        for (i, bc) in thermal.bc.iter().enumerate() {
             let key = |f: &str| format!("thermal.bc[{i}].{f}");
             match bc {
                 ThermalBcSpec::Temperature { value, .. } | ThermalBcSpec::Flux { value, .. } => {
@@ -517,6 +744,9 @@ impl Scenario {
                 }
             }
         }
+        if let Some(m) = &self.mechanics {
+            self.validate_mechanics(m)?;
+        }
         if let Some(r) = self.solver.rtol {
             if !(r > 0.0 && r < 1.0) {
                 return bad("solver.rtol", format!("must be in (0, 1), got {r}"));
@@ -528,6 +758,126 @@ impl Scenario {
                     &format!("output.times[{i}]"),
                     format!("must be non-negative, got {t}"),
                 );
+            }
+        }
+        Ok(())
+    }
+
+    fn validate_mechanics(&self, m: &MechanicsSpec) -> Result<(), (String, String)> {
+        let bad = |k: &str, msg: String| Err((k.to_string(), msg));
+        let used: Vec<&str> = self
+            .bodies
+            .iter()
+            .flat_map(|b| {
+                std::iter::once(b.material.as_str()).chain(b.regions.values().map(String::as_str))
+            })
+            .collect();
+        for (i, mat) in self.materials.iter().enumerate() {
+            if !used.contains(&mat.name.as_str()) {
+                continue;
+            }
+            let key = |f: &str| format!("materials[{i}].{f}");
+            match (mat.young, mat.poisson) {
+                (Some(e), Some(nu)) => {
+                    if !(e.is_finite() && e > 0.0) {
+                        return bad(&key("young"), format!("must be positive, got {e}"));
+                    }
+                    if !(nu.is_finite() && nu > -1.0 && nu < 0.5) {
+                        return bad(&key("poisson"), format!("must be in (-1, 0.5), got {nu}"));
+                    }
+                }
+                _ => {
+                    return bad(
+                        &key("young"),
+                        format!(
+                            "material `{}` needs `young` and `poisson` for the mechanics",
+                            mat.name
+                        ),
+                    )
+                }
+            }
+            if !mat.expansion.is_finite() {
+                return bad(&key("expansion"), "must be finite".into());
+            }
+            if !(mat.viscosity.is_finite() && mat.viscosity >= 0.0) {
+                return bad(&key("viscosity"), "must be non-negative".into());
+            }
+        }
+        if let Some(dt) = m.dt {
+            if !(dt.is_finite() && dt > 0.0) {
+                return bad("mechanics.dt", format!("must be positive, got {dt}"));
+            }
+        }
+        if !(m.safety > 0.0 && m.safety <= 1.0) {
+            return bad(
+                "mechanics.safety",
+                format!("must be in (0, 1], got {}", m.safety),
+            );
+        }
+        if m.substeps == Some(0) {
+            return bad("mechanics.substeps", "must be at least 1".into());
+        }
+        if m.gravity.iter().any(|g| !g.is_finite()) {
+            return bad("mechanics.gravity", "must be finite".into());
+        }
+        if !(m.damping.is_finite() && m.damping >= 0.0) {
+            return bad("mechanics.damping", "must be non-negative".into());
+        }
+        for (i, bc) in m.bc.iter().enumerate() {
+            let key = format!("mechanics.bc[{i}]");
+            match bc {
+                MechanicsBcSpec::Fixed {
+                    components: Some(c),
+                    ..
+                } => {
+                    if c.is_empty() || c.iter().any(|x| !["x", "y", "z"].contains(&x.as_str())) {
+                        return bad(
+                            &format!("{key}.components"),
+                            format!("must list some of \"x\", \"y\", \"z\", got {c:?}"),
+                        );
+                    }
+                }
+                MechanicsBcSpec::Fixed { .. } => {}
+                MechanicsBcSpec::Velocity { value, .. } => {
+                    if value.iter().any(|x| x.is_infinite()) {
+                        return bad(&format!("{key}.value"), "must be finite (NaN: free)".into());
+                    }
+                }
+                MechanicsBcSpec::Traction { value, .. } => {
+                    if value.iter().any(|x| !x.is_finite()) {
+                        return bad(&format!("{key}.value"), "must be finite".into());
+                    }
+                }
+            }
+        }
+        if let Some(c) = &m.contact {
+            for (f, v, min) in [
+                ("penalty", c.penalty, f64::MIN_POSITIVE),
+                ("friction", c.friction, 0.0),
+                ("damping_ratio", c.damping_ratio, 0.0),
+                ("slip_velocity", c.slip_velocity, f64::MIN_POSITIVE),
+            ] {
+                if !(v.is_finite() && v >= min) {
+                    return bad(
+                        &format!("mechanics.contact.{f}"),
+                        format!(
+                            "must be {}, got {v}",
+                            if min > 0.0 {
+                                "positive"
+                            } else {
+                                "non-negative"
+                            }
+                        ),
+                    );
+                }
+            }
+            if let Some(g) = c.margin {
+                if !(g.is_finite() && g > 0.0) {
+                    return bad(
+                        "mechanics.contact.margin",
+                        format!("must be positive, got {g}"),
+                    );
+                }
             }
         }
         Ok(())

@@ -32,7 +32,7 @@ fn p() -> &'static Path {
 fn parses_good_scenario() {
     let s = parse_str(GOOD, p(), &[]).unwrap();
     assert_eq!(s.scenario.num_steps(), 4);
-    assert_eq!(s.scenario.thermal.theta, 1.0);
+    assert_eq!(s.scenario.thermal_spec().theta, 1.0);
     assert_eq!(s.output_stem(), "test");
 }
 
@@ -77,8 +77,8 @@ fn set_overrides_by_path_index_and_name() {
         _ => panic!("box expected"),
     }
     assert_eq!(s.time.dt, 0.25);
-    assert_eq!(s.thermal.theta, 0.5);
-    match &s.thermal.bc[0] {
+    assert_eq!(s.thermal_spec().theta, 0.5);
+    match &s.thermal_spec().bc[0] {
         ThermalBcSpec::Temperature { value, .. } => assert_eq!(*value, 2.0),
         _ => panic!(),
     }

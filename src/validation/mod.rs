@@ -3,6 +3,7 @@
 pub mod pipe_network;
 pub mod semidiscrete;
 pub mod slab;
+pub mod thermoelastic;
 
 pub use pipe_network::{
     circle_overlap_half_angle, circle_overlap_surface, contact_half_angle, particle_resistance,

@@ -1,0 +1,1039 @@
+//! Per-rank explicit mechanics: the subdomain of one rank (its METIS
+//! elements, owned nodes and ghost nodes), halo exchange each substep, and
+//! penalty-contact candidate lists (seed 004 sec 2 for the element
+//! kinematics and stress; seed 000 sec 3.4 for the place of the mechanics
+//! in the step; the contact potential in `contact::penalty`).
+//!
+//! One substep (collective over neighbours, one small all-reduce):
+//! 1. contact forces of this rank's candidate pairs (they may touch ghost
+//!    nodes), internal forces of the elements next to the halo;
+//! 2. ghost forces sent to their owners (non-blocking) while the interior
+//!    elements' forces are computed; owners add what they receive;
+//! 3. owners advance their nodes (central differences);
+//! 4. new positions and velocities copied to the ghosts;
+//! 5. one all-reduce agrees on errors and on whether any node moved far
+//!    enough (half the search margin) to redo contact detection.
+//!
+//! Local numbering: owned nodes first, in the layout's (PETSc) order, then
+//! the ghosts of the owned elements, then the ghosts that only contacts
+//! need. A contact pair is handled by the rank owning its boundary tet
+//! `a`, found as in `contact::detect_contacts` (the lower id of two
+//! boundary tets), so every pair is counted once over the ranks.
+
+use mpi::collective::SystemOperation;
+use mpi::topology::SimpleCommunicator;
+use mpi::traits::*;
+use nalgebra::{Matrix3, Vector3};
+use parry3d_f64::bounding_volume::Aabb;
+use parry3d_f64::math::Point;
+use parry3d_f64::partitioning::{Bvh, BvhBuildStrategy};
+
+use super::{Halo, Layout};
+use crate::contact::penalty::{pair_stiffness, tet_tet_penalty, PenaltyParams};
+use crate::contact::BoundaryTets;
+use crate::error::{Error, Result};
+use crate::mechanics::element::{characteristic_length, element_critical_dt, to_vectors};
+use crate::mechanics::explicit::{element_forces, update_nodes, NodeUpdate, ThermalLoad};
+use crate::mechanics::{ElasticMaterial, MechElement, Tet4Reference, VelocityBc};
+use crate::model::Model;
+
+const NONE: u32 = u32::MAX;
+
+/// A candidate contact pair: tets `a` (owned boundary tet) and `b` (any
+/// tet of another body) whose boxes, grown by the margin, overlap.
+#[derive(Debug, Clone, Copy)]
+struct Candidate {
+    a: u32,
+    b: u32,
+    la: [u32; 4],
+    lb: [u32; 4],
+    stiffness: f64,
+    reduced_mass: f64,
+}
+
+/// Energies and momentum summed over the ranks.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct MechanicsState {
+    /// Kinetic energy (J), at the half step.
+    pub kinetic: f64,
+    /// Stored elastic energy (J).
+    pub strain: f64,
+    /// Penalty contact energy (J).
+    pub contact: f64,
+    /// Energy dissipated by contact friction and damping so far (J).
+    pub dissipated: f64,
+    /// Linear momentum (kg m/s).
+    pub momentum: [f64; 3],
+    /// Contact pairs with overlap in the last substep.
+    pub active_pairs: u64,
+    /// Candidate pairs.
+    pub candidate_pairs: u64,
+}
+
+/// Counters for the run summary.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct MechanicsCounters {
+    /// Substeps taken.
+    pub substeps: u64,
+    /// Element updates (sum over ranks is the caller's business).
+    pub element_updates: u64,
+    /// Pair evaluations.
+    pub pair_updates: u64,
+    /// Contact detections.
+    pub detections: u64,
+    /// Seconds in contact detection and halo rebuilds.
+    pub detect_time: f64,
+}
+
+/// One rank's part of the explicit mechanics.
+pub struct ExplicitDomain {
+    rank: u32,
+    n_owned: usize,
+    /// Original node id of every local node.
+    node_of_local: Vec<u32>,
+    n_elem_ghosts: usize,
+    /// Local index of every original node (NONE if not local).
+    local_of: Vec<u32>,
+    halo: Halo,
+    elements: Vec<MechElement>,
+    elem_ids: Vec<u32>,
+    elem_tref: Vec<f64>,
+    n_boundary: usize,
+    materials: Vec<ElasticMaterial>,
+    global_mass: Vec<f64>,
+    global_bc: Vec<VelocityBc>,
+    mass: Vec<f64>,
+    x: Vec<Vector3<f64>>,
+    v: Vec<Vector3<f64>>,
+    x0: Vec<Vector3<f64>>,
+    bc: Vec<VelocityBc>,
+    ext: Vec<Vector3<f64>>,
+    f: Vec<Vector3<f64>>,
+    stress: Vec<Matrix3<f64>>,
+    node_t: Vec<f64>,
+    elem_dt: Vec<f64>,
+    elem_rate: Vec<f64>,
+    /// Positions of every node, refreshed at each detection.
+    x_all: Vec<[f64; 3]>,
+    orig_of_global: Vec<u32>,
+    /// Whole bodies held (fixed or kinematic).
+    body_held: Vec<bool>,
+    boundary: BoundaryTets,
+    penalty: Option<(PenaltyParams, f64)>,
+    margin: f64,
+    candidates: Vec<Candidate>,
+    x_detect: Vec<Vector3<f64>>,
+    /// Force contributions: 4 per element, 8 per candidate pair, then those
+    /// received from neighbours for shared nodes.
+    contrib: Vec<Vector3<f64>>,
+    /// Per owned node, its contribution slots in (global) key order.
+    gather_off: Vec<u32>,
+    gather_slot: Vec<u32>,
+    /// Per halo neighbour: slots sent to it, and where its slots land.
+    send_slots: Vec<Vec<u32>>,
+    recv_at: Vec<(usize, usize)>,
+    /// Owned velocities before the last substep (v^{n−½}), for energies at t_n.
+    v_prev: Vec<Vector3<f64>>,
+    /// Time step (s).
+    pub dt: f64,
+    gravity: Vector3<f64>,
+    damping: f64,
+    strain_energy: f64,
+    contact_energy: f64,
+    dissipated: f64,
+    active_pairs: u64,
+    redetect: bool,
+    /// Counters.
+    pub counters: MechanicsCounters,
+}
+
+impl ExplicitDomain {
+    /// Collective. Set up this rank's subdomain at rest (free bodies at
+    /// their initial velocity) in the reference configuration, choose the
+    /// time step (the scenario's, checked against the critical one, or
+    /// safety × critical), and detect the first contact candidates.
+    /// `coupling_dt` is the thermal step the substeps must fill when the
+    /// clocks are coupled.
+    pub fn new(
+        comm: &SimpleCommunicator,
+        model: &Model,
+        layout: &Layout,
+        coupling_dt: f64,
+    ) -> Result<(ExplicitDomain, u64)> {
+        let mm = model.mechanics.as_ref().expect("mechanics model");
+        let mesh = &model.mesh;
+        let nn = mesh.nodes.len();
+        let materials: Vec<ElasticMaterial> = model
+            .materials
+            .iter()
+            .map(|m| {
+                m.elastic.unwrap_or(ElasticMaterial {
+                    young: 1.0,
+                    poisson: 0.0,
+                    density: m.density,
+                    expansion: 0.0,
+                    viscosity: 0.0,
+                })
+            })
+            .collect();
+        for (i, m) in materials.iter().enumerate() {
+            m.validate().map_err(|e| {
+                Error::Mechanics(format!("material `{}`: {e}", model.materials[i].name))
+            })?;
+        }
+        let body_held: Vec<bool> = model
+            .bodies
+            .iter()
+            .map(|b| b.fixed || b.velocity != [0.0; 3])
+            .collect();
+        // Lumped masses of every node from the replicated mesh (no messages).
+        let mut global_mass = vec![0.0; nn];
+        let mut refs: Vec<Option<Tet4Reference>> = vec![None; mesh.tets.len()];
+        let mut local_error = None;
+        for &e in &layout.owned_elems {
+            let e = e as usize;
+            match Tet4Reference::from_coords(&mesh.element_coords(e)) {
+                Ok(r) => refs[e] = Some(r),
+                Err(err) => {
+                    local_error.get_or_insert(Error::Mechanics(format!("element {e}: {err}")));
+                }
+            }
+        }
+        super::agree(comm, local_error.map_or(Ok(()), Err))?;
+        for (e, t) in mesh.tets.iter().enumerate() {
+            // Not numbered in the seeds: row-sum lumped mass ρ V0/4 per node of a Tet4.
+            let share = model.material_of(e).density * mesh.element_volume(e) / 4.0;
+            for &n in t {
+                global_mass[n as usize] += share;
+            }
+        }
+        let rank = layout.rank as u32;
+        let mut elem_ids = Vec::new();
+        for &e in &layout.owned_elems {
+            if !body_held[mesh.body[e as usize] as usize] {
+                elem_ids.push(e);
+            }
+        }
+        let mut orig_of_global = vec![0u32; nn];
+        for (n, &g) in layout.global_of.iter().enumerate() {
+            orig_of_global[g as usize] = n as u32;
+        }
+        let x_all = mesh.nodes.clone();
+        let penalty = mm.contact.as_ref().map(|c| {
+            (
+                PenaltyParams {
+                    stiffness: 0.0,
+                    damping_ratio: c.damping_ratio,
+                    reduced_mass: 0.0,
+                    friction: c.friction,
+                    slip_velocity: c.slip_velocity,
+                },
+                c.penalty,
+            )
+        });
+        // Time step: elements, and the contact penalty as a stiffer modulus.
+        let mut dt_local = f64::INFINITY;
+        let mut min_len = f64::INFINITY;
+        for &e in &elem_ids {
+            let e = e as usize;
+            let xe = to_vectors(&mesh.element_coords(e));
+            let mat = &materials[model.elem_material[e] as usize];
+            dt_local = dt_local.min(element_critical_dt(&xe, mat));
+            let len = characteristic_length(&xe);
+            min_len = min_len.min(len);
+            if let Some((_, pn)) = &penalty {
+                // Not numbered in the seeds: a penalty p_n acts like a modulus, Δt ≤ L sqrt(ρ/p_n).
+                dt_local = dt_local.min(len * (mat.density / pn).sqrt());
+            }
+        }
+        let mut crit: f64 = 0.0;
+        comm.all_reduce_into(&dt_local, &mut crit, SystemOperation::min());
+        let mut min_len_all: f64 = 0.0;
+        comm.all_reduce_into(&min_len, &mut min_len_all, SystemOperation::min());
+        if !crit.is_finite() {
+            // Nothing deforms (all bodies held): any step works.
+            crit = coupling_dt;
+        }
+        let allowed = mm.safety * crit;
+        let (dt, substeps) = match (mm.dt, mm.substeps) {
+            (Some(dt), _) if dt > crit * (1.0 + 1e-12) => {
+                return Err(Error::Mechanics(format!(
+                    "mechanics.dt = {dt:e} s exceeds the critical explicit step {crit:e} s of this \
+                     mesh, materials and contact penalty (safety × critical = {allowed:e} s)"
+                )))
+            }
+            (Some(dt), Some(n)) => (dt, n),
+            (None, Some(n)) => (allowed, n),
+            (given, None) => {
+                let limit = given.unwrap_or(allowed);
+                let n = (coupling_dt / limit).ceil().max(1.0) as u64;
+                (coupling_dt / n as f64, n)
+            }
+        };
+        let margin = mm
+            .contact
+            .as_ref()
+            .and_then(|c| c.margin)
+            .unwrap_or(0.5 * min_len_all);
+        let global_bc = mm.bc.clone();
+        let mut dom = ExplicitDomain {
+            rank,
+            n_owned: layout.owned_nodes.len(),
+            node_of_local: Vec::new(),
+            n_elem_ghosts: 0,
+            local_of: vec![NONE; nn],
+            halo: Halo::default(),
+            elements: Vec::new(),
+            elem_ids,
+            elem_tref: Vec::new(),
+            n_boundary: 0,
+            materials,
+            global_mass,
+            global_bc,
+            mass: Vec::new(),
+            x: Vec::new(),
+            v: Vec::new(),
+            x0: Vec::new(),
+            bc: Vec::new(),
+            ext: Vec::new(),
+            f: Vec::new(),
+            stress: Vec::new(),
+            node_t: Vec::new(),
+            elem_dt: Vec::new(),
+            elem_rate: Vec::new(),
+            x_all,
+            orig_of_global,
+            body_held,
+            boundary: BoundaryTets::new(mesh),
+            penalty,
+            margin,
+            candidates: Vec::new(),
+            x_detect: Vec::new(),
+            v_prev: Vec::new(),
+            contrib: Vec::new(),
+            gather_off: Vec::new(),
+            gather_slot: Vec::new(),
+            send_slots: Vec::new(),
+            recv_at: Vec::new(),
+            dt,
+            gravity: Vector3::from(mm.gravity),
+            damping: mm.damping,
+            strain_energy: 0.0,
+            contact_energy: 0.0,
+            dissipated: 0.0,
+            active_pairs: 0,
+            redetect: false,
+            counters: MechanicsCounters::default(),
+        };
+        // Owned nodes, then the ghosts of the owned elements.
+        dom.node_of_local = layout.owned_nodes.clone();
+        for (i, &n) in layout.owned_nodes.iter().enumerate() {
+            dom.local_of[n as usize] = i as u32;
+        }
+        let mut ghosts: Vec<u32> = dom
+            .elem_ids
+            .iter()
+            .flat_map(|&e| mesh.tets[e as usize])
+            .filter(|&n| layout.node_owner[n as usize] != rank)
+            .collect();
+        ghosts.sort_unstable();
+        ghosts.dedup();
+        for &n in &ghosts {
+            dom.local_of[n as usize] = dom.node_of_local.len() as u32;
+            dom.node_of_local.push(n);
+        }
+        dom.n_elem_ghosts = ghosts.len();
+        let nl = dom.node_of_local.len();
+        dom.x = dom
+            .node_of_local
+            .iter()
+            .map(|&n| Vector3::from(mesh.nodes[n as usize]))
+            .collect();
+        dom.x0 = dom.x.clone();
+        dom.v = dom
+            .node_of_local
+            .iter()
+            .map(|&n| {
+                let b = &model.bodies[model.body_of_node(n)];
+                if b.velocity != [0.0; 3] {
+                    Vector3::from(b.velocity)
+                } else {
+                    Vector3::from(b.initial_velocity)
+                }
+            })
+            .collect();
+        dom.ext = (0..nl)
+            .map(|i| {
+                if i < dom.n_owned {
+                    Vector3::from(mm.traction[dom.node_of_local[i] as usize])
+                } else {
+                    Vector3::zeros()
+                }
+            })
+            .collect();
+        dom.node_t = dom
+            .node_of_local
+            .iter()
+            .map(|&n| model.thermal.initial[n as usize])
+            .collect();
+        dom.elem_tref = dom
+            .elem_ids
+            .iter()
+            .map(|&e| model.bodies[mesh.body[e as usize] as usize].reference_temperature)
+            .collect();
+        dom.elements = dom
+            .elem_ids
+            .iter()
+            .map(|&e| MechElement {
+                nodes: mesh.tets[e as usize].map(|n| dom.local_of[n as usize]),
+                reference: refs[e as usize].expect("owned element"),
+                material: model.elem_material[e as usize],
+            })
+            .collect();
+        dom.refresh_local_arrays();
+        dom.detect(comm, model, layout)?;
+        dom.update_element_temperatures(None);
+        Ok((dom, substeps))
+    }
+
+    /// Arrays sized by the local node count, after the numbering changed.
+    fn refresh_local_arrays(&mut self) {
+        let nl = self.node_of_local.len();
+        self.mass = self
+            .node_of_local
+            .iter()
+            .map(|&n| self.global_mass[n as usize])
+            .collect();
+        self.bc = self
+            .node_of_local
+            .iter()
+            .map(|&n| self.global_bc[n as usize])
+            .collect();
+        self.f.resize(nl, Vector3::zeros());
+        self.ext.resize(nl, Vector3::zeros());
+        let old = self.x.len();
+        for i in old..nl {
+            let p = self.x_all[self.node_of_local[i] as usize];
+            self.x.push(Vector3::from(p));
+            self.v.push(Vector3::zeros());
+            self.x0.push(Vector3::zeros());
+            self.node_t.push(0.0);
+        }
+        self.x.truncate(nl);
+        self.v.truncate(nl);
+        self.x0.truncate(nl);
+        self.node_t.truncate(nl);
+    }
+
+    /// Collective. Refresh every node's position, rebuild the contact
+    /// candidates, the ghost list and the halo; reorder elements so those
+    /// touching the halo come first.
+    fn detect(&mut self, comm: &SimpleCommunicator, model: &Model, layout: &Layout) -> Result<()> {
+        let clock = std::time::Instant::now();
+        let mesh = &model.mesh;
+        // Every node's current position, gathered in PETSc order.
+        let owned: Vec<f64> = self.x[..self.n_owned]
+            .iter()
+            .flat_map(|p| [p.x, p.y, p.z])
+            .collect();
+        let all = super::all_gather_f64(comm, &owned);
+        for (g, c) in all.chunks_exact(3).enumerate() {
+            self.x_all[self.orig_of_global[g] as usize] = [c[0], c[1], c[2]];
+        }
+        // Candidate pairs.
+        let mut contact_nodes: Vec<u32> = Vec::new();
+        self.candidates.clear();
+        if let Some((_, penalty)) = self.penalty {
+            let ne = mesh.tets.len();
+            let grow = 0.5 * self.margin;
+            let boxes: Vec<Aabb> = (0..ne)
+                .map(|e| {
+                    let t = mesh.tets[e];
+                    let mut lo = self.x_all[t[0] as usize];
+                    let mut hi = lo;
+                    for &n in &t[1..] {
+                        let p = self.x_all[n as usize];
+                        for d in 0..3 {
+                            lo[d] = lo[d].min(p[d]);
+                            hi[d] = hi[d].max(p[d]);
+                        }
+                    }
+                    Aabb::new(
+                        Point::new(lo[0] - grow, lo[1] - grow, lo[2] - grow),
+                        Point::new(hi[0] + grow, hi[1] + grow, hi[2] + grow),
+                    )
+                })
+                .collect();
+            let bvh = Bvh::from_leaves(BvhBuildStrategy::Binned, &boxes);
+            let mut is_boundary = vec![false; ne];
+            for &e in &self.boundary.elems {
+                is_boundary[e as usize] = true;
+            }
+            for &a in &self.boundary.elems {
+                if layout.elem_part[a as usize] != self.rank {
+                    continue;
+                }
+                let ba = mesh.body[a as usize] as usize;
+                for b in bvh.intersect_aabb(&boxes[a as usize]) {
+                    let bb = mesh.body[b as usize] as usize;
+                    if bb == ba || (is_boundary[b as usize] && b < a) {
+                        continue;
+                    }
+                    if self.body_held[ba] && self.body_held[bb] {
+                        continue;
+                    }
+                    let (va, vb) = (
+                        mesh.element_volume(a as usize),
+                        mesh.element_volume(b as usize),
+                    );
+                    let (ma, mb) = (
+                        model.material_of(a as usize).density * va,
+                        model.material_of(b as usize).density * vb,
+                    );
+                    let reduced_mass = match (self.body_held[ba], self.body_held[bb]) {
+                        (true, _) => mb,
+                        (_, true) => ma,
+                        _ => ma * mb / (ma + mb),
+                    };
+                    contact_nodes.extend_from_slice(&mesh.tets[a as usize]);
+                    contact_nodes.extend_from_slice(&mesh.tets[b as usize]);
+                    self.candidates.push(Candidate {
+                        a,
+                        b,
+                        la: [NONE; 4],
+                        lb: [NONE; 4],
+                        stiffness: pair_stiffness(penalty, va, vb),
+                        reduced_mass,
+                    });
+                }
+            }
+        }
+        // Ghosts: those of the elements, then those of the contacts.
+        for &n in &self.node_of_local[self.n_owned + self.n_elem_ghosts..] {
+            self.local_of[n as usize] = NONE;
+        }
+        self.node_of_local
+            .truncate(self.n_owned + self.n_elem_ghosts);
+        contact_nodes.sort_unstable();
+        contact_nodes.dedup();
+        for n in contact_nodes {
+            if self.local_of[n as usize] == NONE {
+                self.local_of[n as usize] = self.node_of_local.len() as u32;
+                self.node_of_local.push(n);
+            }
+        }
+        self.refresh_local_arrays();
+        for c in self.candidates.iter_mut() {
+            c.la = mesh.tets[c.a as usize].map(|n| self.local_of[n as usize]);
+            c.lb = mesh.tets[c.b as usize].map(|n| self.local_of[n as usize]);
+        }
+        let ghosts: Vec<(u32, u32, u32)> = (self.n_owned..self.node_of_local.len())
+            .map(|l| {
+                let n = self.node_of_local[l];
+                (n, layout.node_owner[n as usize], l as u32)
+            })
+            .collect();
+        let n_owned = self.n_owned as u32;
+        let local_of = &self.local_of;
+        let halo = Halo::new(comm, &ghosts, |g| {
+            let l = local_of[g as usize];
+            (l < n_owned).then_some(l)
+        });
+        self.halo = super::agree(comm, halo.map_err(Error::Partition))?;
+        // Ghost positions and velocities from their owners.
+        self.forward_state(comm);
+        // Elements touching a ghost or a shared node first.
+        let mut near = vec![false; self.node_of_local.len()];
+        for l in self.n_owned..self.node_of_local.len() {
+            near[l] = true;
+        }
+        let mut order: Vec<usize> = (0..self.elements.len()).collect();
+        order.sort_by_key(|&i| {
+            let touches = self.elements[i].nodes.iter().any(|&l| near[l as usize]);
+            (!touches, self.elem_ids[i])
+        });
+        self.n_boundary = order
+            .iter()
+            .take_while(|&&i| self.elements[i].nodes.iter().any(|&l| near[l as usize]))
+            .count();
+        self.elements = order.iter().map(|&i| self.elements[i]).collect();
+        self.elem_ids = order.iter().map(|&i| self.elem_ids[i]).collect();
+        self.elem_tref = order.iter().map(|&i| self.elem_tref[i]).collect();
+        if self.elem_dt.len() == order.len() {
+            self.elem_dt = order.iter().map(|&i| self.elem_dt[i]).collect();
+            self.elem_rate = order.iter().map(|&i| self.elem_rate[i]).collect();
+        }
+        self.stress = vec![Matrix3::zeros(); self.elements.len()];
+        self.build_assembly(comm, layout);
+        self.x_detect = self.x[..self.n_owned].to_vec();
+        self.counters.detections += 1;
+        self.counters.detect_time += clock.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    /// Collective over the neighbours. The order in which each owned
+    /// node's force is summed: its contributions sorted by a global key
+    /// (the element id; pairs after all elements, by (a, b)), whichever
+    /// rank computed them. Ghost contributions travel one by one, not
+    /// pre-summed, so the sums, and hence the trajectories, are bitwise
+    /// the same on any number of ranks.
+    fn build_assembly(&mut self, comm: &SimpleCommunicator, layout: &Layout) {
+        const PAIR: u64 = 1 << 63;
+        let ne = self.elements.len();
+        let pair_base = 4 * ne;
+        let nbrs: Vec<i32> = self.halo.neighbours().to_vec();
+        let mut owned: Vec<(u32, u64, u32)> = Vec::with_capacity(4 * ne);
+        let mut ghost: Vec<Vec<(u32, u64, u32)>> = vec![Vec::new(); nbrs.len()];
+        let n_owned = self.n_owned as u32;
+        let mut push = |l: u32, key: u64, slot: usize| {
+            if l < n_owned {
+                owned.push((l, key, slot as u32));
+            } else {
+                let g = self.node_of_local[l as usize];
+                let r = layout.node_owner[g as usize] as i32;
+                let i = nbrs
+                    .binary_search(&r)
+                    .expect("owner of a ghost is a neighbour");
+                ghost[i].push((g, key, slot as u32));
+            }
+        };
+        for (i, el) in self.elements.iter().enumerate() {
+            for k in 0..4 {
+                push(el.nodes[k], u64::from(self.elem_ids[i]), 4 * i + k);
+            }
+        }
+        for (j, c) in self.candidates.iter().enumerate() {
+            let key = PAIR | (u64::from(c.a) << 31) | u64::from(c.b);
+            for k in 0..4 {
+                push(c.la[k], key, pair_base + 8 * j + k);
+                push(c.lb[k], key, pair_base + 8 * j + 4 + k);
+            }
+        }
+        // Tell each owner which contributions (node, key) it will receive.
+        let mut counts_out = Vec::with_capacity(nbrs.len());
+        let mut keys_out = Vec::with_capacity(nbrs.len());
+        self.send_slots = ghost
+            .iter_mut()
+            .map(|list| {
+                list.sort_unstable();
+                counts_out.push(vec![f64::from_bits(list.len() as u64)]);
+                keys_out.push(
+                    list.iter()
+                        .flat_map(|&(g, key, _)| {
+                            [f64::from_bits(u64::from(g)), f64::from_bits(key)]
+                        })
+                        .collect::<Vec<f64>>(),
+                );
+                list.iter().map(|&(_, _, s)| s).collect()
+            })
+            .collect();
+        let mut counts_in = vec![vec![0.0]; nbrs.len()];
+        self.halo.exchange(comm, &counts_out, &mut counts_in, || {});
+        let mut keys_in: Vec<Vec<f64>> = counts_in
+            .iter()
+            .map(|c| vec![0.0; 2 * c[0].to_bits() as usize])
+            .collect();
+        self.halo.exchange(comm, &keys_out, &mut keys_in, || {});
+        let mut next = pair_base + 8 * self.candidates.len();
+        self.recv_at = keys_in
+            .iter()
+            .map(|keys| {
+                let start = next;
+                for (i, pair) in keys.chunks_exact(2).enumerate() {
+                    let g = pair[0].to_bits() as usize;
+                    let l = self.local_of[g];
+                    debug_assert!(l < n_owned);
+                    owned.push((l, pair[1].to_bits(), (start + i) as u32));
+                }
+                next += keys.len() / 2;
+                (start, keys.len() / 2)
+            })
+            .collect();
+        owned.sort_unstable();
+        self.gather_off = vec![0; self.n_owned + 1];
+        for &(l, _, _) in &owned {
+            self.gather_off[l as usize + 1] += 1;
+        }
+        for i in 0..self.n_owned {
+            self.gather_off[i + 1] += self.gather_off[i];
+        }
+        self.gather_slot = owned.iter().map(|&(_, _, s)| s).collect();
+        self.contrib = vec![Vector3::zeros(); next];
+    }
+
+    fn forward_state(&mut self, comm: &SimpleCommunicator) {
+        let (x, v) = (flat_mut(&mut self.x), flat_mut(&mut self.v));
+        self.halo.forward(comm, &mut [x, v], 3);
+    }
+
+    /// Collective. New nodal temperatures of the owned nodes (layout
+    /// order), reached over `dt` seconds (for the temperature rate in the
+    /// viscous stress; `None`: no rate).
+    pub fn set_temperatures(&mut self, comm: &SimpleCommunicator, owned: &[f64], dt: Option<f64>) {
+        self.node_t[..self.n_owned].copy_from_slice(owned);
+        let t = &mut self.node_t[..];
+        self.halo.forward(comm, &mut [t], 1);
+        self.update_element_temperatures(dt);
+    }
+
+    fn update_element_temperatures(&mut self, dt: Option<f64>) {
+        let new: Vec<f64> = self
+            .elements
+            .iter()
+            .zip(&self.elem_tref)
+            .map(|(el, &tref)| {
+                // Not numbered in the seeds: element ΔT = mean of its four nodal temperatures − the stress-free temperature.
+                el.nodes
+                    .iter()
+                    .map(|&l| self.node_t[l as usize])
+                    .sum::<f64>()
+                    / 4.0
+                    - tref
+            })
+            .collect();
+        self.elem_rate = match (dt, self.elem_dt.len() == new.len()) {
+            (Some(dt), true) => new
+                .iter()
+                .zip(&self.elem_dt)
+                .map(|(a, b)| (a - b) / dt)
+                .collect(),
+            _ => vec![0.0; new.len()],
+        };
+        self.elem_dt = new;
+    }
+
+    /// Collective. Advance by `n` substeps.
+    pub fn advance(
+        &mut self,
+        comm: &SimpleCommunicator,
+        model: &Model,
+        layout: &Layout,
+        n: u64,
+    ) -> Result<()> {
+        for i in 0..n {
+            if i + 1 == n {
+                self.v_prev.clear();
+                self.v_prev.extend_from_slice(&self.v[..self.n_owned]);
+            }
+            if self.redetect {
+                self.detect(comm, model, layout)?;
+                self.redetect = false;
+            }
+            let local = self.substep(comm);
+            // Agree on errors and on the need to re-detect contacts.
+            let moved = if self.penalty.is_some() {
+                self.x[..self.n_owned]
+                    .iter()
+                    .zip(&self.x_detect)
+                    .map(|(a, b)| (a - b).norm_squared())
+                    .fold(0.0, f64::max)
+            } else {
+                0.0
+            };
+            let mine = [f64::from(u8::from(local.is_err())), moved];
+            let mut any = [0.0; 2];
+            comm.all_reduce_into(&mine[..], &mut any[..], SystemOperation::max());
+            if any[0] > 0.0 {
+                return match local {
+                    Err(e) => Err(e),
+                    Ok(()) => Err(Error::OtherRank),
+                };
+            }
+            let half = 0.5 * self.margin;
+            self.redetect = any[1] >= half * half;
+            self.counters.substeps += 1;
+        }
+        Ok(())
+    }
+
+    /// One substep (collective over neighbours only). Errors are returned
+    /// after the messages are exchanged, so no neighbour waits.
+    fn substep(&mut self, comm: &SimpleCommunicator) -> Result<()> {
+        let mut error: Option<Error> = None;
+        let ne = self.elements.len();
+        let pair_base = 4 * ne;
+        // Contact forces, 8 slots per candidate pair.
+        self.contact_energy = 0.0;
+        self.active_pairs = 0;
+        if let Some((params, _)) = &self.penalty {
+            let mut power = 0.0;
+            for (j, c) in self.candidates.iter().enumerate() {
+                let xa = c.la.map(|l| self.x[l as usize].into());
+                let xb = c.lb.map(|l| self.x[l as usize].into());
+                let va = c.la.map(|l| self.v[l as usize].into());
+                let vb = c.lb.map(|l| self.v[l as usize].into());
+                let p = PenaltyParams {
+                    stiffness: c.stiffness,
+                    reduced_mass: c.reduced_mass,
+                    ..*params
+                };
+                let out = &mut self.contrib[pair_base + 8 * j..pair_base + 8 * j + 8];
+                match tet_tet_penalty(&xa, &xb, &va, &vb, &p) {
+                    Some(r) => {
+                        for k in 0..4 {
+                            out[k] = Vector3::from(r.forces_a[k]);
+                            out[4 + k] = Vector3::from(r.forces_b[k]);
+                        }
+                        self.contact_energy += r.energy;
+                        power += r.dissipation;
+                        self.active_pairs += 1;
+                    }
+                    None => out.iter_mut().for_each(|f| *f = Vector3::zeros()),
+                }
+            }
+            self.dissipated += power * self.dt;
+            self.counters.pair_updates += self.candidates.len() as u64;
+        }
+        // Elements next to the halo, then the interior while messages fly.
+        let nb = self.n_boundary;
+        let (dt_b, dt_i) = self.elem_dt.split_at(nb);
+        let (rate_b, rate_i) = self.elem_rate.split_at(nb);
+        let (s_b, s_i) = self.stress.split_at_mut(nb);
+        let (elem_part, rest) = self.contrib.split_at_mut(pair_base);
+        let (f_b, f_i) = elem_part.as_chunks_mut::<4>().0.split_at_mut(nb);
+        let mut strain = 0.0;
+        let mut elem_error = None;
+        match element_forces(
+            &self.elements[..nb],
+            &self.materials,
+            &self.x,
+            &self.v,
+            ThermalLoad::transient(dt_b, rate_b),
+            f_b,
+            Some(s_b),
+        ) {
+            Ok(w) => strain += w,
+            Err(e) => elem_error = Some((e, 0)),
+        }
+        // Ghost contributions, one by one, to their owners.
+        let send: Vec<Vec<f64>> = self
+            .send_slots
+            .iter()
+            .map(|slots| {
+                let mut buf = Vec::with_capacity(3 * slots.len());
+                for &s in slots {
+                    let s = s as usize;
+                    let f = if s < pair_base {
+                        f_b[s / 4][s % 4]
+                    } else {
+                        rest[s - pair_base]
+                    };
+                    buf.extend_from_slice(&[f.x, f.y, f.z]);
+                }
+                buf
+            })
+            .collect();
+        let mut recv: Vec<Vec<f64>> = self
+            .recv_at
+            .iter()
+            .map(|&(_, n)| vec![0.0; 3 * n])
+            .collect();
+        let interior = &self.elements[nb..];
+        let (materials, x, v) = (&self.materials, &self.x, &self.v);
+        let mut inner: std::result::Result<f64, crate::mechanics::MechanicsError> = Ok(0.0);
+        self.halo.exchange(comm, &send, &mut recv, || {
+            inner = element_forces(
+                interior,
+                materials,
+                x,
+                v,
+                ThermalLoad::transient(dt_i, rate_i),
+                f_i,
+                Some(s_i),
+            );
+        });
+        match inner {
+            Ok(w) => strain += w,
+            Err(e) => {
+                elem_error.get_or_insert((e, nb));
+            }
+        }
+        for (&(start, n), buf) in self.recv_at.iter().zip(&recv) {
+            for i in 0..n {
+                self.contrib[start + i] = Vector3::new(buf[3 * i], buf[3 * i + 1], buf[3 * i + 2]);
+            }
+        }
+        if let Some((e, offset)) = elem_error {
+            error.get_or_insert(self.element_error(e, offset));
+        }
+        self.strain_energy = strain;
+        self.counters.element_updates += ne as u64;
+        // Owned node forces, summed in key order; then the owners advance.
+        let no = self.n_owned;
+        for i in 0..no {
+            let mut f = Vector3::zeros();
+            for &s in
+                &self.gather_slot[self.gather_off[i] as usize..self.gather_off[i + 1] as usize]
+            {
+                f += self.contrib[s as usize];
+            }
+            self.f[i] = f + self.ext[i];
+        }
+        let p = NodeUpdate {
+            dt: self.dt,
+            gravity: self.gravity,
+            mass_damping: self.damping,
+        };
+        if let Err(e) = update_nodes(
+            &p,
+            &self.mass[..no],
+            &self.f[..no],
+            &self.bc[..no],
+            &mut self.x[..no],
+            &mut self.v[..no],
+        ) {
+            let msg = match e {
+                crate::mechanics::MechanicsError::NonFinite { node } => format!(
+                    "node {} became non-finite (NaN or infinite): the explicit step \
+                     is unstable or a contact exploded; reduce mechanics.dt or mechanics.safety",
+                    self.node_of_local[node]
+                ),
+                other => other.to_string(),
+            };
+            error.get_or_insert(Error::Mechanics(msg));
+        }
+        self.forward_state(comm);
+        match error {
+            Some(e) => Err(e),
+            None => Ok(()),
+        }
+    }
+
+    fn element_error(&self, e: crate::mechanics::MechanicsError, offset: usize) -> Error {
+        use crate::mechanics::MechanicsError as M;
+        match e {
+            M::Inverted {
+                elem: Some(i),
+                what,
+                value,
+            } => Error::Mechanics(format!(
+                "element {} turned inside out ({what} = {value:.6e}): the run diverged; \
+                 reduce mechanics.dt or mechanics.safety, or raise the contact penalty",
+                self.elem_ids[offset + i]
+            )),
+            other => Error::Mechanics(other.to_string()),
+        }
+    }
+
+    /// Collective. Energies and momentum over all ranks, at the time
+    /// level of the last substep's force evaluation (t_n: potentials at
+    /// x^n, velocity (v^{n−½} + v^{n+½})/2).
+    pub fn state(&self, comm: &SimpleCommunicator) -> MechanicsState {
+        let no = self.n_owned;
+        let mut kin = 0.0;
+        let mut mom = [0.0; 3];
+        for i in 0..no {
+            let m = self.mass[i];
+            let v = match self.v_prev.get(i) {
+                Some(vp) => 0.5 * (vp + self.v[i]),
+                None => self.v[i],
+            };
+            kin += 0.5 * m * v.norm_squared();
+            for d in 0..3 {
+                mom[d] += m * v[d];
+            }
+        }
+        let local = [
+            kin,
+            self.strain_energy,
+            self.contact_energy,
+            self.dissipated,
+            mom[0],
+            mom[1],
+            mom[2],
+            self.active_pairs as f64,
+            self.candidates.len() as f64,
+        ];
+        let mut sum = [0.0; 9];
+        comm.all_reduce_into(&local[..], &mut sum[..], SystemOperation::sum());
+        MechanicsState {
+            kinetic: sum[0],
+            strain: sum[1],
+            contact: sum[2],
+            dissipated: sum[3],
+            momentum: [sum[4], sum[5], sum[6]],
+            active_pairs: sum[7] as u64,
+            candidate_pairs: sum[8] as u64,
+        }
+    }
+
+    /// Displacement x − X of the owned nodes (layout order), flat.
+    pub fn displacement(&self) -> Vec<f64> {
+        self.x[..self.n_owned]
+            .iter()
+            .zip(&self.x0)
+            .flat_map(|(x, x0)| {
+                let u = x - x0;
+                [u.x, u.y, u.z]
+            })
+            .collect()
+    }
+
+    /// Velocity of the owned nodes (layout order), flat.
+    pub fn velocity(&self) -> Vec<f64> {
+        self.v[..self.n_owned]
+            .iter()
+            .flat_map(|v| [v.x, v.y, v.z])
+            .collect()
+    }
+
+    /// Cauchy stress of the owned elements in `owned_elems` order, as
+    /// (xx, yy, zz, xy, yz, xz); zero in held bodies.
+    pub fn stress_tensor6(&self, owned_elems: &[u32]) -> Vec<f64> {
+        let mut pos = std::collections::HashMap::with_capacity(self.elem_ids.len());
+        for (i, &e) in self.elem_ids.iter().enumerate() {
+            pos.insert(e, i);
+        }
+        owned_elems
+            .iter()
+            .flat_map(|e| {
+                let s = pos.get(e).map_or(Matrix3::zeros(), |&i| self.stress[i]);
+                [
+                    s[(0, 0)],
+                    s[(1, 1)],
+                    s[(2, 2)],
+                    s[(0, 1)],
+                    s[(1, 2)],
+                    s[(0, 2)],
+                ]
+            })
+            .collect()
+    }
+
+    /// Current positions of every node, as of the last detection or
+    /// [`Self::gather_positions`].
+    pub fn positions(&self) -> &[[f64; 3]] {
+        &self.x_all
+    }
+
+    /// Collective. Refresh [`Self::positions`] from the owners.
+    pub fn gather_positions(&mut self, comm: &SimpleCommunicator) {
+        let owned: Vec<f64> = self.x[..self.n_owned]
+            .iter()
+            .flat_map(|p| [p.x, p.y, p.z])
+            .collect();
+        let all = super::all_gather_f64(comm, &owned);
+        for (g, c) in all.chunks_exact(3).enumerate() {
+            self.x_all[self.orig_of_global[g] as usize] = [c[0], c[1], c[2]];
+        }
+    }
+
+    /// Search margin of the contact candidates (m).
+    pub fn margin(&self) -> f64 {
+        self.margin
+    }
+
+    /// Number of elements this rank integrates.
+    pub fn num_elements(&self) -> usize {
+        self.elements.len()
+    }
+}
+
+/// The coordinates of a slice of 3-vectors as one flat slice.
+fn flat_mut(v: &mut [Vector3<f64>]) -> &mut [f64] {
+    const _: () = assert!(std::mem::size_of::<Vector3<f64>>() == 3 * std::mem::size_of::<f64>());
+    // SAFETY: Vector3<f64> is a #[repr(C)] matrix over an array storage of
+    // exactly three f64 (size asserted above, alignment that of f64), so a
+    // slice of them is 3 × len contiguous f64 with no padding.
+    unsafe { std::slice::from_raw_parts_mut(v.as_mut_ptr() as *mut f64, v.len() * 3) }
+}

@@ -1,0 +1,423 @@
+//! Explicit finite-strain mechanics with thermal expansion and penalty
+//! contact (seed 004 secs 3–4; issue 4): the heated fixed element (eq 38),
+//! free cube expansion, the hollow cylinder and steel-in-concrete stresses
+//! against plane-stress solutions, a head-on collision (momentum, energy),
+//! a block sliding on an incline with friction, and an eight-body drop on
+//! one and two ranks.
+
+mod common;
+
+use std::path::Path;
+
+use common::*;
+
+/// Mechanical output of a run, nodes by original id.
+struct Mech {
+    times: Vec<f64>,
+    coords: Vec<[f64; 3]>,
+    /// Cells as original node ids, in file order.
+    cells: Vec<[usize; 4]>,
+    /// Displacement per output step, by node id.
+    disp: Vec<Vec<[f64; 3]>>,
+    /// Stress (xx, yy, zz, xy, yz, xz) per output step, in file cell order.
+    stress: Vec<Vec<[f64; 6]>>,
+    /// Temperature per output step when the thermal problem ran.
+    temperature: Vec<Vec<f64>>,
+}
+
+fn read_mech(dir: &Path, stem: &str) -> Mech {
+    let h5 = dir.join(format!("{stem}.h5"));
+    let times = fdem::io::read_times(&h5).unwrap();
+    let mesh = fdem::io::read_mesh(&h5).unwrap();
+    let ids = fdem::io::read_static_node_field_i32(&h5, "node_id").unwrap();
+    let n = ids.len();
+    let mut coords = vec![[0.0; 3]; n];
+    for (row, &id) in ids.iter().enumerate() {
+        coords[id as usize] = mesh.coords[row];
+    }
+    let cells = mesh
+        .cells
+        .iter()
+        .map(|c| c.map(|row| ids[row as usize] as usize))
+        .collect();
+    let by_id3 = |v: Vec<f64>| {
+        let mut out = vec![[0.0; 3]; n];
+        for (row, &id) in ids.iter().enumerate() {
+            out[id as usize] = [v[3 * row], v[3 * row + 1], v[3 * row + 2]];
+        }
+        out
+    };
+    let disp = (0..times.len())
+        .map(|k| by_id3(fdem::io::read_node_field_step(&h5, "displacement", k).unwrap()))
+        .collect();
+    let stress = (0..times.len())
+        .map(|k| {
+            fdem::io::read_cell_field_step(&h5, "stress", k)
+                .unwrap()
+                .chunks_exact(6)
+                .map(|c| [c[0], c[1], c[2], c[3], c[4], c[5]])
+                .collect()
+        })
+        .collect();
+    let temperature = (0..times.len())
+        .filter_map(|k| {
+            let t = fdem::io::read_node_field_step(&h5, "temperature", k).ok()?;
+            let mut out = vec![0.0; n];
+            for (row, &id) in ids.iter().enumerate() {
+                out[id as usize] = t[row];
+            }
+            Some(out)
+        })
+        .collect();
+    Mech {
+        times,
+        coords,
+        cells,
+        disp,
+        stress,
+        temperature,
+    }
+}
+
+fn tet_volume(p: [[f64; 3]; 4]) -> f64 {
+    let a = [0, 1, 2].map(|d| p[1][d] - p[0][d]);
+    let b = [0, 1, 2].map(|d| p[2][d] - p[0][d]);
+    let c = [0, 1, 2].map(|d| p[3][d] - p[0][d]);
+    (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
+        + a[2] * (b[0] * c[1] - b[1] * c[0]))
+        / 6.0
+}
+
+impl Mech {
+    fn deformed(&self, k: usize, n: usize) -> [f64; 3] {
+        [0, 1, 2].map(|d| self.coords[n][d] + self.disp[k][n][d])
+    }
+
+    fn volume(&self, k: usize) -> f64 {
+        self.cells
+            .iter()
+            .map(|c| tet_volume(c.map(|n| self.deformed(k, n))))
+            .sum()
+    }
+
+    fn centroid(&self, c: usize) -> [f64; 3] {
+        let mut x = [0.0; 3];
+        for &n in &self.cells[c] {
+            for d in 0..3 {
+                x[d] += 0.25 * self.coords[n][d];
+            }
+        }
+        x
+    }
+
+    /// (r, σ_rr, σ_θθ) of every cell about the z axis through (cx, cy).
+    fn polar_stress(&self, k: usize, cx: f64, cy: f64) -> Vec<(f64, f64, f64)> {
+        (0..self.cells.len())
+            .map(|c| {
+                let p = self.centroid(c);
+                let (x, y) = (p[0] - cx, p[1] - cy);
+                let r = x.hypot(y);
+                let (nx, ny) = (x / r, y / r);
+                let s = self.stress[k][c];
+                let srr = s[0] * nx * nx + 2.0 * s[3] * nx * ny + s[1] * ny * ny;
+                let stt = s[0] * ny * ny - 2.0 * s[3] * nx * ny + s[1] * nx * nx;
+                (r, srr, stt)
+            })
+            .collect()
+    }
+}
+
+/// Mean of (σ_rr, σ_θθ) over the cells whose radius falls in each of `bins`
+/// equal bins of [r0, r1], with the bin centres.
+fn binned(p: &[(f64, f64, f64)], r0: f64, r1: f64, bins: usize) -> Vec<(f64, f64, f64)> {
+    let mut acc = vec![(0.0, 0.0, 0.0, 0usize); bins];
+    for &(r, a, b) in p {
+        if r < r0 || r >= r1 {
+            continue;
+        }
+        let i = (((r - r0) / (r1 - r0)) * bins as f64) as usize;
+        let e = &mut acc[i.min(bins - 1)];
+        e.0 += r;
+        e.1 += a;
+        e.2 += b;
+        e.3 += 1;
+    }
+    acc.into_iter()
+        .filter(|e| e.3 > 0)
+        .map(|e| {
+            let n = e.3 as f64;
+            (e.0 / n, e.1 / n, e.2 / n)
+        })
+        .collect()
+}
+
+/// Seed 004 sec 3.1, Table 1: every element of a fixed cube heated by
+/// 100 °C carries σ = −3.332 MPa in x, y and z (eq 38).
+#[test]
+fn heated_fixed_element_matches_eq_38() {
+    let (young, nu, alpha, dt): (f64, f64, f64, f64) = (20e9, 0.2, 1e-6, 100.0);
+    let mu = young / (2.0 * (1.0 + nu));
+    let lambda = young * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
+    // Seed 004 eq 38 with F = I: F_e = I/s, s = 1 + αΔT, J_e = s⁻³, B_e = I/s².
+    let s = 1.0 + alpha * dt;
+    let je = s.powi(-3);
+    let exact = mu / je * (1.0 / (s * s) - 1.0) + lambda / je * je.ln();
+    assert!(
+        (exact.abs() / 3.332e6 - 1.0).abs() < 1e-3,
+        "closed form {exact} vs the paper's 3.332 MPa"
+    );
+    for ranks in [1, 2] {
+        let out = out_dir(&format!("element-{ranks}"));
+        run_ok(
+            ranks,
+            &root().join("scenarios/thermal-stress-element.toml"),
+            &out,
+            &[],
+        );
+        let m = read_mech(&out, "thermal-stress-element");
+        let k = m.times.len() - 1;
+        assert_eq!(m.stress[k].len(), 6);
+        for s in &m.stress[k] {
+            for d in 0..3 {
+                assert!(
+                    (s[d] / exact - 1.0).abs() < 1e-3,
+                    "{ranks} rank(s): sigma = {s:?}, eq 38: {exact}"
+                );
+                assert!(s[3 + d].abs() < 1e-6 * exact.abs(), "shear {s:?}");
+            }
+        }
+    }
+}
+
+/// Seed 004 sec 3.2: a free 1 m cube heated by 100 °C (α = 1e-5) grows to
+/// (1 + αΔT)³ = 1.003003 m³ without significant stress, at h = 1 and 0.1 m.
+#[test]
+fn free_cube_expands_without_stress() {
+    let (alpha, dt, young, nu): (f64, f64, f64, f64) = (1e-5, 100.0, 20e9, 0.2);
+    let expected = (1.0 + alpha * dt).powi(3);
+    let constrained = young * alpha * dt / (1.0 - 2.0 * nu);
+    for (h, ranks) in [(1.0, 1), (0.1, 2)] {
+        let out = out_dir(&format!("cube-expansion-{h}"));
+        let set = format!("bodies.cube.mesh.element_size={h}");
+        run_ok(
+            ranks,
+            &root().join("scenarios/cube-expansion.toml"),
+            &out,
+            &["--set", &set],
+        );
+        let m = read_mech(&out, "cube-expansion");
+        let k = m.times.len() - 1;
+        let v = m.volume(k);
+        assert!(
+            (v / expected - 1.0).abs() < 1e-4,
+            "h = {h}: volume {v:.7} m^3, expected {expected:.7}"
+        );
+        let smax = m.stress[k]
+            .iter()
+            .flat_map(|s| s.iter())
+            .fold(0.0f64, |a, x| a.max(x.abs()));
+        assert!(
+            smax < 0.01 * constrained,
+            "h = {h}: max |stress| {smax:.3e} Pa vs constrained {constrained:.3e} Pa"
+        );
+        eprintln!("cube h = {h}: V = {v:.8} (exact {expected:.8}), max |sigma| = {smax:.3e} Pa");
+    }
+}
+
+/// Seed 004 sec 3.3: the steady temperature of the hollow cylinder and its
+/// plane-stress thermal stresses (radial and hoop), one and two ranks.
+#[test]
+fn hollow_cylinder_matches_plane_stress_solution() {
+    use fdem::validation::thermoelastic::HollowCylinder;
+    let hc = HollowCylinder::seed_004();
+    let (a, b) = (hc.inner_radius, hc.outer_radius);
+    let peak = (0..=200)
+        .map(|i| hc.stress(a + (b - a) * i as f64 / 200.0).1.abs())
+        .fold(0.0, f64::max);
+    let mut finals = Vec::new();
+    for ranks in [1, 2] {
+        let out = out_dir(&format!("hollow-cylinder-{ranks}"));
+        run_ok(
+            ranks,
+            &root().join("scenarios/hollow-cylinder.toml"),
+            &out,
+            &[],
+        );
+        let m = read_mech(&out, "hollow-cylinder");
+        let k = m.times.len() - 1;
+        // Steady temperature: the FE solution of the log profile, 0.5 % of T_b.
+        let terr = m
+            .coords
+            .iter()
+            .zip(&m.temperature[k])
+            .map(|(x, t)| (t - hc.temperature(x[0].hypot(x[1]))).abs())
+            .fold(0.0, f64::max);
+        assert!(terr < 0.5, "{ranks} rank(s): max |T - T_exact| = {terr}");
+        // Stresses, averaged in radial bins, away from the edges.
+        let margin = 0.1 * (b - a);
+        let bins = binned(&m.polar_stress(k, 0.0, 0.0), a + margin, b - margin, 12);
+        assert!(bins.len() == 12);
+        for &(r, srr, stt) in &bins {
+            let (er, et) = hc.stress(r);
+            eprintln!("r = {r:.4}: s_rr {srr:.4e} ({er:.4e}), s_tt {stt:.4e} ({et:.4e})");
+            assert!(
+                (srr - er).abs() < 0.05 * peak && (stt - et).abs() < 0.05 * peak,
+                "{ranks} rank(s), r = {r}: sigma_rr {srr:.4e} vs {er:.4e}, \
+                 sigma_tt {stt:.4e} vs {et:.4e} (5 % of {peak:.4e})"
+            );
+        }
+        finals.push(m.disp[k].concat());
+    }
+    let d = rel_diff(&finals[0], &finals[1]);
+    assert!(d < 1e-8, "1 vs 2 ranks: displacements differ by {d:e}");
+}
+
+/// Seed 004 sec 4, eq 40: the hoop stress in the concrete around a heated
+/// steel core, against the bonded plane-stress solution.
+#[test]
+fn steel_in_concrete_hoop_stress_matches_eq_40() {
+    use fdem::validation::thermoelastic::BondedDisc;
+    let bd = BondedDisc::seed_004_sec4();
+    let (a, b) = (bd.core_radius, bd.outer_radius);
+    let out = out_dir("steel-in-concrete");
+    run_ok(
+        2,
+        &root().join("scenarios/steel-in-concrete.toml"),
+        &out,
+        &[],
+    );
+    let m = read_mech(&out, "steel-in-concrete");
+    let k = m.times.len() - 1;
+    let polar = m.polar_stress(k, 0.0, 0.0);
+    // Concrete ring, one element length clear of the interface and the edge.
+    let bins = binned(&polar, a + 0.005, b - 0.005, 10);
+    assert_eq!(bins.len(), 10);
+    for &(r, _, stt) in &bins {
+        let (_, et) = bd.stress(r);
+        eprintln!("r = {r:.4}: s_tt {stt:.4e} (eq 40: {et:.4e})");
+        assert!(
+            (stt / et - 1.0).abs() < 0.05,
+            "r = {r}: hoop stress {stt:.4e} vs eq 40 {et:.4e}"
+        );
+    }
+}
+
+/// Two elastic cubes colliding head-on, no friction or damping: momentum is
+/// conserved to round-off and energy within 1 %, on one and two ranks.
+#[test]
+fn head_on_collision_conserves_momentum_and_energy() {
+    for ranks in [1, 2] {
+        let out = out_dir(&format!("collision-{ranks}"));
+        run_ok(ranks, &root().join("scenarios/collision.toml"), &out, &[]);
+        let (h, rows) = history(&out, "collision");
+        let (px, ke, se, ce) = (
+            col(&h, "momentum_x"),
+            col(&h, "kinetic_energy"),
+            col(&h, "strain_energy"),
+            col(&h, "contact_energy"),
+        );
+        let (p0, e0) = (rows[0][px], rows[0][ke]);
+        // m = 1000 kg/m^3 × 0.001 m^3 per cube: p0 = 1·1 − 0.5·1, E0 = ½(1 + 0.25).
+        assert!(
+            (p0 - 0.5).abs() < 1e-12 && (e0 - 0.625).abs() < 1e-12,
+            "{:?}",
+            rows[0]
+        );
+        let mut touched = false;
+        for r in &rows {
+            assert!(
+                (r[px] - p0).abs() < 1e-12 * p0,
+                "{ranks} rank(s): momentum {} vs {p0}",
+                r[px]
+            );
+            assert!(
+                r[col(&h, "momentum_y")].abs() < 1e-12 && r[col(&h, "momentum_z")].abs() < 1e-12
+            );
+            let e = r[ke] + r[se] + r[ce];
+            assert!(
+                (e / e0 - 1.0).abs() < 0.01,
+                "{ranks} rank(s), t = {}: energy {e} vs {e0}",
+                r[1]
+            );
+            touched |= r[ce] > 1e-3 * e0;
+        }
+        assert!(touched, "the cubes never touched");
+        // After the impact they move apart: the left cube's kinetic share fell.
+        let last = rows.last().unwrap();
+        assert!(
+            last[col(&h, "mech_contacts")] == 0.0,
+            "still in contact at the end"
+        );
+    }
+}
+
+/// A block sliding down a fixed 30° incline with μ = 0.3 accelerates at
+/// g (sin θ − μ cos θ).
+#[test]
+fn block_slides_down_incline_at_coulomb_rate() {
+    let out = out_dir("incline");
+    run_ok(1, &root().join("scenarios/incline.toml"), &out, &[]);
+    let (h, rows) = history(&out, "incline");
+    let (th, mu, g) = (30f64.to_radians(), 0.3, 9.81);
+    let exact = g * (th.sin() - mu * th.cos());
+    // The block: 0.1 m cube of density 2000 → m = 2 kg; its speed along the slope.
+    let mass = 2.0;
+    let speed = |r: &Vec<f64>| {
+        let p = [
+            r[col(&h, "momentum_x")],
+            r[col(&h, "momentum_y")],
+            r[col(&h, "momentum_z")],
+        ];
+        (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt() / mass
+    };
+    // Least-squares slope of speed against time after the first 0.05 s.
+    let pts: Vec<(f64, f64)> = rows
+        .iter()
+        .filter(|r| r[1] >= 0.05)
+        .map(|r| (r[1], speed(r)))
+        .collect();
+    let n = pts.len() as f64;
+    let (st, sv) = pts.iter().fold((0.0, 0.0), |a, p| (a.0 + p.0, a.1 + p.1));
+    let (mt, mv) = (st / n, sv / n);
+    let num: f64 = pts.iter().map(|p| (p.0 - mt) * (p.1 - mv)).sum();
+    let den: f64 = pts.iter().map(|p| (p.0 - mt).powi(2)).sum();
+    let acc = num / den;
+    eprintln!("incline: acceleration {acc:.4} m/s^2, exact {exact:.4}");
+    assert!(
+        (acc / exact - 1.0).abs() < 0.02,
+        "acceleration {acc} vs g(sin - mu cos) = {exact}"
+    );
+}
+
+/// Eight blocks dropped onto a fixed floor: one and two ranks follow the
+/// same trajectories.
+#[test]
+fn eight_body_drop_same_on_one_and_two_ranks() {
+    let mut runs = Vec::new();
+    for ranks in [1, 2] {
+        let out = out_dir(&format!("drop8-{ranks}"));
+        let stdout = run_ok(ranks, &root().join("scenarios/drop8.toml"), &out, &[]);
+        assert!(stdout.contains("mechanics"), "{stdout}");
+        runs.push(read_mech(&out, "drop8"));
+        let (h, rows) = history(&out, "drop8");
+        let contacts = rows
+            .iter()
+            .map(|r| r[col(&h, "mech_contacts")])
+            .fold(0.0, f64::max);
+        assert!(contacts > 0.0, "the blocks never touched anything");
+    }
+    let (a, b) = (&runs[0], &runs[1]);
+    assert_eq!(a.times, b.times);
+    for k in 0..a.times.len() {
+        let d = rel_diff(&a.disp[k].concat(), &b.disp[k].concat());
+        assert!(
+            d < 1e-10,
+            "t = {}: 1 vs 2 ranks differ by {d:e}",
+            a.times[k]
+        );
+    }
+    // The blocks fell: the lowest block moved down by about the initial gap.
+    let k = a.times.len() - 1;
+    let dz = a.disp[k].iter().map(|u| u[2]).fold(0.0, f64::min);
+    assert!(dz < -0.04, "largest drop {dz}");
+}

@@ -1,13 +1,13 @@
 //! Throughput of the explicit internal-force kernel (issue 4 benchmark):
 //! tet updates per second on one core, on a 1M-tet box slightly deformed
 //! and moving, with a temperature field (thermal split active).
-//! Run: cargo run --release --example mech_kernel_bench [cells_per_side]
+//! Run: cargo run --release --example mech_kernel_bench [cells_per_side] [repetitions]
 
 use std::time::Instant;
 
 use fdem::mechanics::explicit::{internal_forces, mesh_elements, ThermalLoad};
 use fdem::mechanics::ElasticMaterial;
-use nalgebra::Vector3;
+use nalgebra::{Matrix3, Vector3};
 
 fn main() {
     let n: f64 = std::env::args()
@@ -36,23 +36,86 @@ fn main() {
         .collect();
     let dt: Vec<f64> = (0..elems.len()).map(|e| 50.0 + (e % 100) as f64).collect();
     let mut f = vec![Vector3::zeros(); x.len()];
-    let reps = 10;
-    let mut best = f64::MAX;
-    for _ in 0..reps {
+    let reps: usize = std::env::args()
+        .nth(2)
+        .and_then(|a| a.parse().ok())
+        .unwrap_or(10);
+    let thermal = ThermalLoad {
+        delta_t: Some(&dt),
+        rate: None,
+    };
+    // Headline figure: viscous material, no stress output.
+    let (best, cpu) = time_best(reps, || {
         f.iter_mut().for_each(|x| *x = Vector3::zeros());
-        let t0 = Instant::now();
-        let thermal = ThermalLoad {
-            delta_t: Some(&dt),
-            rate: None,
-        };
         internal_forces(&elems, &[mat], &x, &v, thermal, &mut f, None).expect("forces");
+    });
+    report("internal forces", elems.len(), reps, best, cpu);
+    // Variants: inviscid material (no velocity gradient), and with the stresses recorded.
+    let elastic = ElasticMaterial {
+        viscosity: 0.0,
+        ..mat
+    };
+    let (best, cpu) = time_best(reps, || {
+        f.iter_mut().for_each(|x| *x = Vector3::zeros());
+        internal_forces(&elems, &[elastic], &x, &v, thermal, &mut f, None).expect("forces");
+    });
+    report("  viscosity 0", elems.len(), reps, best, cpu);
+    let mut stress = vec![Matrix3::zeros(); elems.len()];
+    let (best, cpu) = time_best(reps, || {
+        f.iter_mut().for_each(|x| *x = Vector3::zeros());
+        internal_forces(&elems, &[mat], &x, &v, thermal, &mut f, Some(&mut stress))
+            .expect("forces");
+    });
+    report("  with stresses", elems.len(), reps, best, cpu);
+}
+
+/// Best wall-clock time and best on-CPU time (s) of `reps` calls of `run`.
+fn time_best(reps: usize, mut run: impl FnMut()) -> (f64, Option<f64>) {
+    let (mut best, mut cpu) = (f64::MAX, None::<f64>);
+    for _ in 0..reps {
+        let (t0, c0) = (Instant::now(), thread_cpu_time());
+        run();
         best = best.min(t0.elapsed().as_secs_f64());
+        if let (Some(c0), Some(c1)) = (c0, thread_cpu_time()) {
+            cpu = Some(cpu.map_or(c1 - c0, |c| c.min(c1 - c0)));
+        }
     }
-    let rate = elems.len() as f64 / best;
-    println!(
-        "internal forces: {} tets, best of {reps}: {:.4} s per evaluation, {:.2} million tet updates/s on one core",
-        elems.len(),
-        best,
+    (best, cpu)
+}
+
+fn report(what: &str, tets: usize, reps: usize, best: f64, cpu: Option<f64>) {
+    let rate = tets as f64 / best;
+    print!(
+        "{what}: {tets} tets, best of {reps}: {best:.4} s per evaluation, {:.2} million tet updates/s on one core",
         rate / 1e6
     );
+    match cpu {
+        // On a loaded machine the on-CPU time excludes time the thread was descheduled.
+        Some(c) => println!(" (on-CPU: {:.2} M/s)", tets as f64 / c / 1e6),
+        None => println!(),
+    }
+}
+
+/// Time this thread has spent on a CPU (s), from
+/// `clock_gettime(CLOCK_THREAD_CPUTIME_ID)` (ns resolution); `None` off 64-bit Linux.
+#[cfg(all(target_os = "linux", target_pointer_width = "64"))]
+fn thread_cpu_time() -> Option<f64> {
+    #[repr(C)]
+    struct Timespec {
+        sec: i64,
+        nsec: i64,
+    }
+    extern "C" {
+        fn clock_gettime(clock: i32, ts: *mut Timespec) -> i32;
+    }
+    const CLOCK_THREAD_CPUTIME_ID: i32 = 3;
+    let mut ts = Timespec { sec: 0, nsec: 0 };
+    // SAFETY: `ts` is a valid, writable timespec (two 64-bit fields on 64-bit Linux).
+    let rc = unsafe { clock_gettime(CLOCK_THREAD_CPUTIME_ID, &mut ts) };
+    (rc == 0).then_some(ts.sec as f64 + ts.nsec as f64 * 1e-9)
+}
+
+#[cfg(not(all(target_os = "linux", target_pointer_width = "64")))]
+fn thread_cpu_time() -> Option<f64> {
+    None
 }

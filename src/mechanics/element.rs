@@ -26,6 +26,11 @@
 //!   in compression of the same magnitude to first order in αΔT
 //!   (−3.334 MPa vs 3.332 MPa from eq 38 for Table 1, 0.05 % apart).
 //!
+//! The explicit loop ([`internal_forces`](super::explicit::internal_forces))
+//! evaluates the same equations through `tet4_forces`, a form of
+//! [`element_response`] without F⁻¹, the full velocity gradient or per-element
+//! `Result`s (see its docs); a unit test holds the two to round-off.
+//!
 //! Sign conventions: tension positive; nodal forces are the internal forces
 //! acting on the nodes (they enter M a = f_int + f_ext), f_i = −v σ ∇N_i,
 //! which equals −∂W/∂x_i with W the stored energy ([`ElementResponse::strain_energy`]).
@@ -342,6 +347,226 @@ pub fn element_response(
     })
 }
 
+/// Material constants of the hot-path kernel [`tet4_forces`], computed
+/// once per material rather than once per element.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct KernelMaterial {
+    /// Lamé constant μ (Pa).
+    pub mu: f64,
+    /// Lamé constant λ (Pa).
+    pub lambda: f64,
+    /// 2 η (Pa·s); 0 skips the rate of deformation entirely.
+    pub two_eta: f64,
+    /// Linear expansion coefficient α (1/K).
+    pub alpha: f64,
+}
+
+impl KernelMaterial {
+    /// The kernel constants of `m`.
+    pub(crate) fn new(m: &ElasticMaterial) -> Self {
+        let (mu, lambda) = m.lame();
+        Self {
+            mu,
+            lambda,
+            two_eta: 2.0 * m.viscosity,
+            alpha: m.expansion,
+        }
+    }
+}
+
+/// What the explicit loop needs of one element: [`ElementResponse`]
+/// without the volume ratios.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Tet4Forces {
+    /// Cauchy stress σ (Pa, tension positive).
+    pub stress: Matrix3<f64>,
+    /// Internal nodal forces f_i = −v σ ∇N_i (N).
+    pub forces: [Vector3<f64>; 4],
+    /// Stored elastic energy W = J_T V0 ψ (J).
+    pub strain_energy: f64,
+}
+
+impl From<ElementResponse> for Tet4Forces {
+    fn from(r: ElementResponse) -> Self {
+        Self {
+            stress: r.stress,
+            forces: r.forces,
+            strain_energy: r.strain_energy,
+        }
+    }
+}
+
+/// Hot path of [`element_response`] for the explicit loop, on the element
+/// with nodes `nodes` of the node arrays `x` (positions) and `v`
+/// (velocities): the same stress, forces and energy (equal to round-off),
+/// or `None` where [`element_response`] may fail, i.e. unless det E (the
+/// sign of J = det F), 1 + α ΔT and J_e are all positive and finite. On
+/// `None` the caller asks [`element_response`], which gives the error (or,
+/// should round-off decide the other way, the response). Panics if a node
+/// index is out of range of `x` or `v`.
+///
+/// It differs in how, not what, it computes (with E = [x1−x0, x2−x0, x3−x0]
+/// the current edge matrix and c_k the columns of its cofactor matrix, the
+/// area vectors c_0 = e_1 × e_2, c_1 = e_2 × e_0, c_2 = e_0 × e_1):
+/// - current gradients ∇N_k = c_{k−1}/det E (k = 1..3) and volume
+///   v = det E/6, so f_k = −v σ ∇N_k = −σ c_{k−1}/6 needs neither F⁻¹ nor
+///   a division (this uses V0 = 1/(6 det inv_dx), as [`Tet4Reference::new`]
+///   builds it);
+/// - L = Ḟ F⁻¹ = W E⁻¹ with W = [v1−v0, v2−v0, v3−v0], of which only the
+///   symmetric part D is formed, and only when η ≠ 0 (with η = 0 the
+///   velocities are not read);
+/// - B_e − I and σ are formed as symmetric 6-component tensors.
+#[inline(always)]
+pub(crate) fn tet4_forces(
+    reference: &Tet4Reference,
+    mat: &KernelMaterial,
+    x: &[Vector3<f64>],
+    v: &[Vector3<f64>],
+    nodes: [usize; 4],
+    thermal: ThermalState,
+) -> Option<Tet4Forces> {
+    let [n0, n1, n2, n3] = nodes;
+    let x0 = x[n0];
+    let (e0, e1, e2) = (x[n1] - x0, x[n2] - x0, x[n3] - x0);
+    let m = &reference.inv_dx;
+    // Seed 004 eq 5: F = x_cn ∂N/∂X = E inv_dx, F_ij = Σ_k (e_k)_i (inv_dx)_kj.
+    let fij = |i: usize, j: usize| e0[i] * m[(0, j)] + e1[i] * m[(1, j)] + e2[i] * m[(2, j)];
+    let f = [
+        [fij(0, 0), fij(0, 1), fij(0, 2)],
+        [fij(1, 0), fij(1, 1), fij(1, 2)],
+        [fij(2, 0), fij(2, 1), fij(2, 2)],
+    ];
+    // Area vectors: columns of cof(E), rows of E⁻¹ times det E.
+    let (c0, c1, c2) = (e1.cross(&e2), e2.cross(&e0), e0.cross(&e1));
+    // Seed 004 eq 6 as a sign test: J = det F = det E det(inv_dx) = det E/(6 V0) has the sign of det E = 6 v.
+    let det_e = e0.dot(&c0);
+    // Seed 004 eq 25: Υ = 1 + α ΔT.
+    let stretch = 1.0 + mat.alpha * thermal.delta_t;
+    if !(det_e > 0.0 && det_e.is_finite() && stretch > 0.0 && stretch.is_finite()) {
+        return None;
+    }
+    // Seed 004 eqs 16, 26: F_e = F/Υ; H = F_e − I.
+    let inv_stretch = 1.0 / stretch;
+    let hij = |i: usize, j: usize| f[i][j] * inv_stretch - if i == j { 1.0 } else { 0.0 };
+    let hh = [
+        [hij(0, 0), hij(0, 1), hij(0, 2)],
+        [hij(1, 0), hij(1, 1), hij(1, 2)],
+        [hij(2, 0), hij(2, 1), hij(2, 2)],
+    ];
+    // Seed 004 eqs 27–28: J_e − 1 = det(I + H) − 1 = I1 + I2 + I3 of H.
+    let tr = hh[0][0] + hh[1][1] + hh[2][2];
+    // (Summed in the order of element_response: with a rotation, H is O(1) and J_e − 1 is a small
+    // difference of O(1) terms, so a different order would change it by round-off × 1/(J_e − 1).)
+    let hh_ii = |i: usize| hh[i][0] * hh[0][i] + hh[i][1] * hh[1][i] + hh[i][2] * hh[2][i];
+    let tr_hh = hh_ii(0) + hh_ii(1) + hh_ii(2);
+    let det_h = hh[0][0] * (hh[1][1] * hh[2][2] - hh[2][1] * hh[1][2])
+        - hh[0][1] * (hh[1][0] * hh[2][2] - hh[2][0] * hh[1][2])
+        + hh[0][2] * (hh[1][0] * hh[2][1] - hh[2][0] * hh[1][1]);
+    let j_e_minus_1 = tr + 0.5 * (tr * tr - tr_hh) + det_h;
+    let j_e = 1.0 + j_e_minus_1;
+    if !(j_e > 0.0 && j_e.is_finite()) {
+        // Round-off has the volume change disagree with det E (or F overflowed): leave it to element_response.
+        return None;
+    }
+    let ln_j_e = ln_1p_small(j_e_minus_1);
+    let inv_j_e = 1.0 / j_e;
+    // Seed 004 eqs 31–32: B_e − I = H + Hᵀ + H Hᵀ (symmetric).
+    let bm = |a: usize, b: usize| {
+        hh[a][b] + hh[b][a] + (hh[a][0] * hh[b][0] + hh[a][1] * hh[b][1] + hh[a][2] * hh[b][2])
+    };
+    let (b00, b11, b22, b01, b02, b12) =
+        (bm(0, 0), bm(1, 1), bm(2, 2), bm(0, 1), bm(0, 2), bm(1, 2));
+    // Seed 004 eq 34 on the elastic part: σ = μ/J_e (B_e − I) + λ/J_e ln(J_e) I.
+    let pressure = mat.lambda * ln_j_e;
+    let (mu, r) = (mat.mu, inv_j_e);
+    let mut s00 = (b00 * mu + pressure) * r;
+    let mut s11 = (b11 * mu + pressure) * r;
+    let mut s22 = (b22 * mu + pressure) * r;
+    let mut s01 = b01 * mu * r;
+    let mut s02 = b02 * mu * r;
+    let mut s12 = b12 * mu * r;
+    if mat.two_eta != 0.0 {
+        let v0 = v[n0];
+        let (w0, w1, w2) = (v[n1] - v0, v[n2] - v0, v[n3] - v0);
+        // Seed 004 eqs 11, 14: L = Ḟ F⁻¹ = W E⁻¹ = Σ_k w_k ⊗ c_k / det E.
+        let l = |a: usize, b: usize| w0[a] * c0[b] + w1[a] * c1[b] + w2[a] * c2[b];
+        // Seed 004 eq 15: D = (L + Lᵀ)/2, times 2η.
+        let k = mat.two_eta * 0.5 / det_e;
+        // Seed 004 eqs 18, 25: D_T = L_T = α Ṫ/Υ I.
+        let d_t = mat.alpha * thermal.rate * inv_stretch;
+        // Seed 004 eqs 30, 33, 35: C_D = 2 η D_e with D_e = D − D_T (see the module header).
+        s00 += (2.0 * l(0, 0) * k) - mat.two_eta * d_t;
+        s11 += (2.0 * l(1, 1) * k) - mat.two_eta * d_t;
+        s22 += (2.0 * l(2, 2) * k) - mat.two_eta * d_t;
+        s01 += (l(0, 1) + l(1, 0)) * k;
+        s02 += (l(0, 2) + l(2, 0)) * k;
+        s12 += (l(1, 2) + l(2, 1)) * k;
+    }
+    let stress = Matrix3::new(s00, s01, s02, s01, s11, s12, s02, s12, s22);
+    // Not numbered in the seeds (virtual work, sec 2.5): f_k = −v σ ∇N_k = −σ c_{k−1}/6 (v = det E/6, ∇N_k = c_{k−1}/det E).
+    let sixth = -1.0 / 6.0;
+    let (q00, q11, q22, q01, q02, q12) = (
+        s00 * sixth,
+        s11 * sixth,
+        s22 * sixth,
+        s01 * sixth,
+        s02 * sixth,
+        s12 * sixth,
+    );
+    let force = |c: Vector3<f64>| {
+        Vector3::new(
+            q00 * c[0] + q01 * c[1] + q02 * c[2],
+            q01 * c[0] + q11 * c[1] + q12 * c[2],
+            q02 * c[0] + q12 * c[1] + q22 * c[2],
+        )
+    };
+    let (f1, f2, f3) = (force(c0), force(c1), force(c2));
+    let f0 = -(f1 + f2 + f3);
+    // Not numbered in the seeds: ψ = μ/2 (tr B_e − 3) − μ ln J_e + λ/2 (ln J_e)², the potential of eq 34.
+    let psi = 0.5 * mu * (b00 + b11 + b22) - mu * ln_j_e + 0.5 * mat.lambda * ln_j_e * ln_j_e;
+    // Seed 004 eq 37: W = J_T V0 ψ with J_T = Υ³.
+    let strain_energy = stretch * stretch * stretch * reference.volume0 * psi;
+    Some(Tet4Forces {
+        stress,
+        forces: [f0, f1, f2, f3],
+        strain_energy,
+    })
+}
+
+/// ln(1 + x), inline for |x| <= 1/32 (volume changes of up to ~3 %, the
+/// usual case), [`f64::ln_1p`] otherwise (a library call, which also makes
+/// the compiler spill every live register around it).
+///
+/// For |x| <= 1/32 the Taylor series x − x²/2 + … − x¹⁰/10 + x¹¹/11 leaves
+/// out terms of relative size below |x|¹¹/12 < 3e-18; it is evaluated as
+/// x + x² P(x), P by Estrin's scheme (short dependency chains), so its
+/// round-off enters scaled by |x|/2 and the result is within 1 ulp.
+#[inline(always)]
+fn ln_1p_small(x: f64) -> f64 {
+    if x.abs() <= 1.0 / 32.0 {
+        // Not numbered in the seeds: ln(1 + x) = Σ_{k>=1} (−1)^(k+1) x^k/k.
+        let x2 = x * x;
+        let x4 = x2 * x2;
+        let x8 = x4 * x4;
+        let a0 = (1.0 / 3.0) * x - 0.5;
+        let a1 = 0.2 * x - 0.25;
+        let a2 = (1.0 / 7.0) * x - 1.0 / 6.0;
+        let a3 = (1.0 / 9.0) * x - 0.125;
+        let a4 = (1.0 / 11.0) * x - 0.1;
+        let p = (a0 + a1 * x2) + (a2 + a3 * x2) * x4 + a4 * x8;
+        x + x2 * p
+    } else {
+        ln_1p_call(x)
+    }
+}
+
+/// [`f64::ln_1p`] out of line, so its call does not clutter the hot path.
+#[cold]
+#[inline(never)]
+fn ln_1p_call(x: f64) -> f64 {
+    x.ln_1p()
+}
+
 /// Smallest height of a tetrahedron, 3 V / (largest face area) (m); 0 for
 /// a degenerate one.
 pub fn min_height(x: &[Vector3<f64>; 4]) -> f64 {
@@ -402,6 +627,7 @@ pub fn element_critical_dt(x: &[Vector3<f64>; 4], material: &ElasticMaterial) ->
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::mechanics::explicit::MechElement;
     use crate::mesh::generate::box_mesh;
     use nalgebra::{Rotation3, SymmetricEigen};
 
@@ -467,6 +693,246 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// A random state of `x0`: deformation I + δ R (R random in [−1, 1]),
+    /// a rigid rotation and translation, velocities of size ~1 m/s.
+    fn random_state(
+        rng: &mut Rng,
+        x0: &[Vector3<f64>; 4],
+        delta: f64,
+    ) -> ([Vector3<f64>; 4], [Vector3<f64>; 4]) {
+        let a =
+            Matrix3::identity() + Matrix3::from_columns(&[rng.vec(), rng.vec(), rng.vec()]) * delta;
+        let q = *Rotation3::from_scaled_axis(rng.vec() * 3.0).matrix();
+        let shift = rng.vec() * 5.0;
+        let x = x0.map(|p| q * a * p + shift);
+        let v = [rng.vec(), rng.vec(), rng.vec(), rng.vec()];
+        (x, v)
+    }
+
+    /// The hot path of the explicit loop ([`tet4_forces`]) agrees with
+    /// [`element_response`] on random reference shapes, deformations from
+    /// 1e-7 to 0.3, rigid motions, velocities, temperatures and rates, with
+    /// and without viscosity: stress and forces to 1e-12 of their largest
+    /// entry, the energy to 1e-12 of the terms of ψ (ψ itself is a
+    /// cancellation of O(ε) terms at small strain ε).
+    #[test]
+    fn fast_kernel_matches_element_response() {
+        let mut rng = Rng(0x5eed_1234_abcd_0042);
+        let mut shapes = vec![skew_tet()];
+        while shapes.len() < 12 {
+            let t = [rng.vec(), rng.vec(), rng.vec(), rng.vec()];
+            let q = crate::mesh::tet_quality(&t.map(|p| p.into()));
+            if q > 0.1 && Tet4Reference::new(&t).is_ok() {
+                shapes.push(t);
+            }
+        }
+        let mut n_large = 0;
+        let mut checked = 0;
+        for (k, x0) in shapes.iter().enumerate() {
+            let r = Tet4Reference::new(x0).unwrap();
+            for (viscosity, alpha) in [(0.0, 1e-5), (5e5, 1e-5), (1e3, 3e-4), (0.0, 3e-4)] {
+                let mut m = table1();
+                m.viscosity = viscosity;
+                m.expansion = alpha;
+                m.poisson = [0.2, 0.0, 0.45, -0.3][k % 4];
+                let (mu, lambda) = m.lame();
+                let km = KernelMaterial::new(&m);
+                for delta in [1e-7, 1e-4, 1e-2, 0.1, 0.3] {
+                    let (x, v) = random_state(&mut rng, x0, delta);
+                    let th = ThermalState {
+                        delta_t: 150.0 * rng.next(),
+                        rate: [0.0, 1e3 * rng.next()][k % 2],
+                    };
+                    let want = element_response(&r, &m, &x, &v, th).unwrap();
+                    let got = tet4_forces(&r, &km, &x, &v, [0, 1, 2, 3], th).unwrap();
+                    let smax = max_abs(&want.stress);
+                    assert!(
+                        max_abs(&(got.stress - want.stress)) <= 1e-12 * smax,
+                        "shape {k} eta {viscosity} delta {delta}: {} vs {}",
+                        got.stress,
+                        want.stress
+                    );
+                    let fmax = want.forces.iter().map(|f| f.norm()).fold(0.0, f64::max);
+                    for i in 0..4 {
+                        assert!((got.forces[i] - want.forces[i]).norm() <= 1e-12 * fmax);
+                    }
+                    let e = thermal_split(&r.kinematics(&x, &v).unwrap(), alpha, th).unwrap();
+                    let terms = 0.5 * mu * e.b_e_minus_i.trace().abs()
+                        + mu * e.ln_j_e.abs()
+                        + 0.5 * lambda * e.ln_j_e * e.ln_j_e;
+                    let w_scale = e.stretch.powi(3) * r.volume0 * terms;
+                    assert!((got.strain_energy - want.strain_energy).abs() <= 1e-12 * w_scale);
+                    n_large += usize::from((e.j_e - 1.0).abs() > 1.0 / 32.0);
+                    checked += 1;
+                }
+            }
+        }
+        assert_eq!(checked, 12 * 4 * 5);
+        // Both branches of ln_1p_small are exercised.
+        assert!(
+            n_large > 10 && n_large < checked - 10,
+            "{n_large} of {checked}"
+        );
+    }
+
+    /// [`ln_1p_small`] agrees with [`f64::ln_1p`] to 2 ulp (relative 2 ε; 1 ulp
+    /// seen) over its inline range and beyond, down to subnormal arguments.
+    #[test]
+    fn inline_ln_1p_matches_the_library() {
+        let mut rng = Rng(99);
+        let mut xs = vec![
+            0.0,
+            1.0 / 32.0,
+            -1.0 / 32.0,
+            1e-300,
+            -1e-300,
+            5e-324,
+            0.5,
+            -0.5,
+        ];
+        for _ in 0..20000 {
+            let t = rng.next();
+            xs.push(t / 32.0);
+            xs.push(t * 10f64.powf(-20.0 * rng.next().abs()));
+            xs.push(t * 0.9);
+        }
+        for x in xs {
+            let (got, want) = (ln_1p_small(x), x.ln_1p());
+            assert!(
+                (got - want).abs() <= 2.0 * f64::EPSILON * want.abs(),
+                "x {x}: {got} vs {want}"
+            );
+        }
+    }
+
+    /// [`internal_forces`](crate::mechanics::explicit::internal_forces)
+    /// accumulates per element exactly what [`element_response`] gives (to
+    /// round-off), records the stresses, and reports the same errors as
+    /// before the hot path existed: node and material indices out of range,
+    /// an inverted element and 1 + α ΔT <= 0, with the element's position.
+    #[test]
+    fn internal_forces_match_element_responses_and_errors() {
+        use crate::mechanics::explicit::{internal_forces, mesh_elements, ThermalLoad};
+        let mesh = box_mesh([0.0; 3], [1.0; 3], 0.5).unwrap();
+        let mut elements = mesh_elements(&mesh, 2).unwrap();
+        for (e, el) in elements.iter_mut().enumerate() {
+            el.material = (e % 2) as u32;
+        }
+        let mut mats = [table1(), table1()];
+        mats[1].viscosity = 2e5;
+        mats[1].expansion = 1e-5;
+        let mut rng = Rng(7);
+        let x: Vec<Vector3<f64>> = mesh
+            .nodes
+            .iter()
+            .map(|p| Vector3::from(*p) + rng.vec() * 0.02)
+            .collect();
+        let v: Vec<Vector3<f64>> = x.iter().map(|_| rng.vec()).collect();
+        let dt: Vec<f64> = (0..elements.len()).map(|_| 100.0 * rng.next()).collect();
+        let rate: Vec<f64> = (0..elements.len()).map(|_| 1e3 * rng.next()).collect();
+        let load = ThermalLoad::transient(&dt, &rate);
+        let n = x.len();
+        let mut got = vec![Vector3::zeros(); n];
+        let mut stress = vec![Matrix3::zeros(); elements.len()];
+        let w =
+            internal_forces(&elements, &mats, &x, &v, load, &mut got, Some(&mut stress)).unwrap();
+        let mut want = vec![Vector3::zeros(); n];
+        let mut w_want = 0.0;
+        for (e, el) in elements.iter().enumerate() {
+            let idx = el.nodes.map(|i| i as usize);
+            let th = ThermalState {
+                delta_t: dt[e],
+                rate: rate[e],
+            };
+            let m = &mats[el.material as usize];
+            let r = element_response(&el.reference, m, &idx.map(|i| x[i]), &idx.map(|i| v[i]), th)
+                .unwrap();
+            for k in 0..4 {
+                want[idx[k]] += r.forces[k];
+            }
+            assert!(max_abs(&(stress[e] - r.stress)) <= 1e-12 * max_abs(&r.stress));
+            w_want += r.strain_energy;
+        }
+        let fmax = want.iter().map(|f| f.norm()).fold(0.0, f64::max);
+        for i in 0..n {
+            assert!((got[i] - want[i]).norm() <= 1e-12 * fmax);
+        }
+        // Relative 1e-10: the strains (~2 %) keep ψ's cancellation mild.
+        assert!((w - w_want).abs() <= 1e-10 * w_want.abs());
+
+        let run = |els: &[MechElement], mats: &[ElasticMaterial], x: &[Vector3<f64>]| {
+            let mut f = vec![Vector3::zeros(); n];
+            internal_forces(els, mats, x, &v, load, &mut f, None)
+        };
+        // Node index out of range.
+        let mut bad = elements.clone();
+        bad[5].nodes[2] = n as u32;
+        assert_eq!(
+            run(&bad, &mats, &x),
+            Err(MechanicsError::SizeMismatch {
+                what: "node index of an element",
+                got: n,
+                expected: n,
+            })
+        );
+        // Material index out of range.
+        let mut bad = elements.clone();
+        bad[3].material = 2;
+        assert_eq!(
+            run(&bad, &mats, &x),
+            Err(MechanicsError::SizeMismatch {
+                what: "materials",
+                got: 2,
+                expected: 3,
+            })
+        );
+        // Element 4 turned inside out by moving one node through the opposite face.
+        let mut xi = x.clone();
+        let nodes = elements[4].nodes.map(|i| i as usize);
+        let centroid = (xi[nodes[1]] + xi[nodes[2]] + xi[nodes[3]]) / 3.0;
+        xi[nodes[0]] = centroid * 2.0 - xi[nodes[0]];
+        let first_bad = elements
+            .iter()
+            .position(|el| {
+                let xe = el.nodes.map(|i| xi[i as usize]);
+                el.reference.deformation_gradient(&xe).determinant() <= 0.0
+            })
+            .unwrap();
+        assert!(first_bad <= 4);
+        match run(&elements, &mats, &xi) {
+            Err(MechanicsError::Inverted {
+                elem: Some(e),
+                what: "J = det F",
+                value,
+            }) => {
+                assert_eq!(e, first_bad);
+                assert!(value <= 0.0);
+            }
+            other => panic!("expected Inverted, got {other:?}"),
+        }
+        // 1 + α ΔT <= 0 in element 6 (material 0, α = 1e-6).
+        let mut cold = dt.clone();
+        cold[6] = -2e6;
+        let mut f = vec![Vector3::zeros(); n];
+        let err = internal_forces(
+            &elements,
+            &mats,
+            &x,
+            &v,
+            ThermalLoad::transient(&cold, &rate),
+            &mut f,
+            None,
+        );
+        assert!(matches!(
+            err,
+            Err(MechanicsError::Inverted {
+                elem: Some(6),
+                what: "1 + alpha dT",
+                ..
+            })
+        ));
     }
 
     #[test]

@@ -224,18 +224,41 @@ pub fn internal_forces(
     v: &[Vector3<f64>],
     thermal: ThermalLoad<'_>,
     forces: &mut [Vector3<f64>],
+    stress: Option<&mut [Matrix3<f64>]>,
+) -> Result<f64, MechanicsError> {
+    check_len("forces", forces.len(), x.len())?;
+    let forces = &mut forces[..x.len()];
+    for_each_element(elements, materials, x, v, thermal, stress, |_, idx, f| {
+        for (f, &i) in f.iter().zip(&idx) {
+            forces[i] += f;
+        }
+    })
+}
+
+/// The loop shared by [`internal_forces`] and [`element_forces`]: the
+/// fast kernel per element (the reference [`element_response`] for the
+/// rare element it declines), stresses recorded, and `sink(e, nodes,
+/// forces)` given each element's four nodal forces. Returns the strain
+/// energy.
+#[inline(always)]
+fn for_each_element(
+    elements: &[MechElement],
+    materials: &[ElasticMaterial],
+    x: &[Vector3<f64>],
+    v: &[Vector3<f64>],
+    thermal: ThermalLoad<'_>,
     mut stress: Option<&mut [Matrix3<f64>]>,
+    mut sink: impl FnMut(usize, [usize; 4], &[Vector3<f64>; 4]),
 ) -> Result<f64, MechanicsError> {
     use super::element::{tet4_forces, KernelMaterial};
     let n = x.len();
     check_len("velocities", v.len(), n)?;
-    check_len("forces", forces.len(), n)?;
     thermal.check(elements.len())?;
     if let Some(s) = stress.as_deref() {
         check_len("element stresses", s.len(), elements.len())?;
     }
-    // Equal lengths, so one `i < n` test below covers all three arrays.
-    let (v, forces) = (&v[..n], &mut forces[..n]);
+    // Equal lengths, so one `i < n` test below covers both arrays.
+    let v = &v[..n];
     // Lamé constants etc. once per material, not per element.
     let constants: Vec<KernelMaterial> = materials.iter().map(KernelMaterial::new).collect();
     let mut energy = 0.0;
@@ -251,9 +274,7 @@ pub fn internal_forces(
             None => declined_response(el, &materials[el.material as usize], x, v, th)
                 .map_err(|err| err.at_element(e))?,
         };
-        for (f, &i) in r.forces.iter().zip(&idx) {
-            forces[i] += f;
-        }
+        sink(e, idx, &r.forces);
         if let Some(s) = stress.as_deref_mut() {
             s[e] = r.stress;
         }
@@ -304,30 +325,12 @@ pub fn element_forces(
     v: &[Vector3<f64>],
     thermal: ThermalLoad<'_>,
     out: &mut [[Vector3<f64>; 4]],
-    mut stress: Option<&mut [Matrix3<f64>]>,
+    stress: Option<&mut [Matrix3<f64>]>,
 ) -> Result<f64, MechanicsError> {
-    let n = x.len();
-    check_len("velocities", v.len(), n)?;
     check_len("element forces", out.len(), elements.len())?;
-    thermal.check(elements.len())?;
-    if let Some(s) = stress.as_deref() {
-        check_len("element stresses", s.len(), elements.len())?;
-    }
-    let mut energy = 0.0;
-    for (e, el) in elements.iter().enumerate() {
-        let material = checked_material(el, materials, n)?;
-        let idx = el.nodes.map(|i| i as usize);
-        let xe = idx.map(|i| x[i]);
-        let ve = idx.map(|i| v[i]);
-        let r = element_response(&el.reference, material, &xe, &ve, thermal.at(e))
-            .map_err(|err| err.at_element(e))?;
-        out[e] = r.forces;
-        if let Some(s) = stress.as_deref_mut() {
-            s[e] = r.stress;
-        }
-        energy += r.strain_energy;
-    }
-    Ok(energy)
+    for_each_element(elements, materials, x, v, thermal, stress, |e, _, f| {
+        out[e] = *f;
+    })
 }
 
 /// Lumped nodal masses: ρ V0 / 4 of every element on each of its nodes.

@@ -101,13 +101,8 @@ impl Mech {
     }
 
     fn centroid(&self, c: usize) -> [f64; 3] {
-        let mut x = [0.0; 3];
-        for &n in &self.cells[c] {
-            for d in 0..3 {
-                x[d] += 0.25 * self.coords[n][d];
-            }
-        }
-        x
+        let c = self.cells[c].map(|n| self.coords[n]);
+        [0, 1, 2].map(|d| 0.25 * (c[0][d] + c[1][d] + c[2][d] + c[3][d]))
     }
 
     /// (r, σ_rr, σ_θθ) of every cell about the z axis through (cx, cy).

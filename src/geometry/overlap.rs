@@ -18,10 +18,14 @@
 //! Coplanar faces: a face of a lying in a face plane of b with the *same*
 //! outward normal (the two bodies' surfaces flush) bounds a ∩ b once, so each
 //! of the two copies is counted with weight ½ (symmetric in a ↔ b, and the
-//! gradient is the mean of the two one-sided derivatives). Faces with
-//! *opposite* normals (touching) need no rule: a ∩ b is then flat and the
-//! terms cancel; touching tets are in any case rejected by the separating
-//! axis test, giving V = 0 exactly.
+//! gradient is the mean of the two one-sided derivatives). "Flush" means all
+//! six vertices within 1e-8 × the longer tet edge of the other face's plane;
+//! two faces merged that way close the surface only to ~ gap × perimeter, so
+//! Σ area × normal (and the penalty's net force) is then zero to ~1e-8
+//! relative instead of round-off. Faces with *opposite* normals (touching)
+//! need no rule (unlike [`super::face_tet_clip`], which counts them as
+//! contact area): a ∩ b is then flat and the terms cancel; touching tets are
+//! in any case rejected by the separating-axis test, giving V = 0 exactly.
 
 use super::{cross, dot, sub};
 
@@ -163,7 +167,8 @@ impl Intersection {
     }
 
     /// Σ over the patches of both tets of area × outward normal: zero up to
-    /// round-off, since they close the surface of a ∩ b.
+    /// round-off, since they close the surface of a ∩ b (up to gap ×
+    /// perimeter for faces merged as flush, see the module notes).
     pub fn closure_defect(&self) -> [f64; 3] {
         let mut s = [0.0; 3];
         for (faces, planes) in [

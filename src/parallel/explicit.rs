@@ -227,6 +227,7 @@ impl ExplicitDomain {
                     reduced_mass: 0.0,
                     friction: c.friction,
                     slip_velocity: c.slip_velocity,
+                    time_step: 0.0,
                 },
                 c.penalty,
             )
@@ -542,19 +543,17 @@ impl ExplicitDomain {
         self.halo = super::agree(comm, halo.map_err(Error::Partition))?;
         // Ghost positions and velocities from their owners.
         self.forward_state(comm);
-        // Elements touching a ghost or a shared node first.
-        let mut near = vec![false; self.node_of_local.len()];
-        for l in self.n_owned..self.node_of_local.len() {
-            near[l] = true;
-        }
+        // Elements touching a ghost node first (their contributions are sent).
+        let n_owned = self.n_owned;
+        let near = |l: u32| l as usize >= n_owned;
         let mut order: Vec<usize> = (0..self.elements.len()).collect();
         order.sort_by_key(|&i| {
-            let touches = self.elements[i].nodes.iter().any(|&l| near[l as usize]);
+            let touches = self.elements[i].nodes.iter().any(|&l| near(l));
             (!touches, self.elem_ids[i])
         });
         self.n_boundary = order
             .iter()
-            .take_while(|&&i| self.elements[i].nodes.iter().any(|&l| near[l as usize]))
+            .take_while(|&&i| self.elements[i].nodes.iter().any(|&l| near(l)))
             .count();
         self.elements = order.iter().map(|&i| self.elements[i]).collect();
         self.elem_ids = order.iter().map(|&i| self.elem_ids[i]).collect();
@@ -765,6 +764,7 @@ impl ExplicitDomain {
                 let p = PenaltyParams {
                     stiffness: c.stiffness,
                     reduced_mass: c.reduced_mass,
+                    time_step: self.dt,
                     ..*params
                 };
                 let out = &mut self.contrib[pair_base + 8 * j..pair_base + 8 * j + 8];

@@ -416,3 +416,74 @@ fn eight_body_drop_same_on_one_and_two_ranks() {
     let dz = a.disp[k].iter().map(|u| u[2]).fold(0.0, f64::min);
     assert!(dz < -0.04, "largest drop {dz}");
 }
+
+/// A bar on rollers pulled by a traction on its end settles to the uniaxial
+/// state: σ_xx = t everywhere, end displacement t L / E (small strain).
+#[test]
+fn traction_on_a_bar_gives_uniaxial_stress() {
+    let (t, young, len) = (1e6, 1e9, 1.0);
+    let text = format!(
+        r#"
+[time]
+dt = 0.02
+steps = 5
+
+[[materials]]
+name = "m"
+density = 1000.0
+young = {young}
+poisson = 0.25
+
+[[bodies]]
+name = "bar"
+material = "m"
+mesh = {{ kind = "box", size = [{len}, 0.2, 0.2], element_size = 0.1 }}
+
+[mechanics]
+damping = 600.0
+
+[[mechanics.bc]]
+kind = "fixed"
+set = "xmin"
+components = ["x"]
+[[mechanics.bc]]
+kind = "fixed"
+set = "ymin"
+components = ["y"]
+[[mechanics.bc]]
+kind = "fixed"
+set = "zmin"
+components = ["z"]
+[[mechanics.bc]]
+kind = "traction"
+set = "xmax"
+value = [{t}, 0.0, 0.0]
+"#
+    );
+    for ranks in [1, 2] {
+        let out = out_dir(&format!("traction-{ranks}"));
+        let scen = out.join("bar.toml");
+        std::fs::write(&scen, &text).unwrap();
+        run_ok(ranks, &scen, &out, &[]);
+        let m = read_mech(&out, "bar");
+        let k = m.times.len() - 1;
+        for s in &m.stress[k] {
+            assert!(
+                (s[0] / t - 1.0).abs() < 0.01 && s[1].abs() < 0.01 * t && s[2].abs() < 0.01 * t,
+                "{ranks} rank(s): stress {s:?}, traction {t}"
+            );
+        }
+        let tip = m
+            .coords
+            .iter()
+            .zip(&m.disp[k])
+            .filter(|(x, _)| (x[0] - len).abs() < 1e-12)
+            .map(|(_, u)| u[0])
+            .fold(0.0, f64::max);
+        let exact = t * len / young;
+        assert!(
+            (tip / exact - 1.0).abs() < 0.01,
+            "{ranks} rank(s): end displacement {tip:e}, t L / E = {exact:e}"
+        );
+    }
+}

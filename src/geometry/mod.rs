@@ -6,7 +6,7 @@ mod clip;
 pub mod overlap;
 
 pub use clip::{face_tet_clip, polygon_area, tet_tet_overlap, triangle_in_tet_area, Polygon};
-pub use overlap::{tet_tet_intersection, FacePatch, Intersection, TetPlanes};
+pub use overlap::{tet_tet_intersection, tets_within, FacePatch, Intersection, TetPlanes};
 
 /// a − b.
 #[inline]

@@ -843,3 +843,54 @@ pub(crate) mod tests {
         assert!(m.iter().all(|x| close(*x, 0.5, 1e-13)));
     }
 }
+
+/// Whether two tets may come within `gap` of each other: false when the
+/// projections on one of the eight face normals are more than `gap` apart
+/// (then the distance between the tets exceeds `gap`). Conservative: the
+/// edge–edge axes are not tried, so a few farther pairs pass. Used to prune
+/// contact candidates found by bounding boxes.
+pub fn tets_within(a: &[[f64; 3]; 4], b: &[[f64; 3]; 4], gap: f64) -> bool {
+    for (p, q) in [(a, b), (b, a)] {
+        for (f, face) in TET_FACES.iter().enumerate() {
+            let (o, u, w) = (p[face[0]], p[face[1]], p[face[2]]);
+            let mut n = cross(sub(u, o), sub(w, o));
+            // Orient away from the opposite node.
+            if dot(n, sub(p[f], o)) > 0.0 {
+                n = [-n[0], -n[1], -n[2]];
+            }
+            let len = dot(n, n).sqrt();
+            if len == 0.0 {
+                continue;
+            }
+            let top = dot(n, o);
+            let nearest = q.iter().map(|x| dot(n, *x)).fold(f64::INFINITY, f64::min);
+            if nearest - top > gap * len {
+                return false;
+            }
+        }
+    }
+    true
+}
+
+#[cfg(test)]
+mod within_tests {
+    use super::*;
+
+    #[test]
+    fn separated_beyond_the_gap_are_pruned() {
+        let a = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+        ];
+        // b is a copy of a shifted along -z by 1 + s: a gap of s below a's base.
+        let shifted = |s: f64| a.map(|p| [p[0], p[1], p[2] - 1.0 - s]);
+        assert!(!tets_within(&a, &shifted(0.2), 0.1));
+        assert!(tets_within(&a, &shifted(0.05), 0.1));
+        assert!(tets_within(&a, &a, 0.0));
+        // Overlapping tets are always within any gap.
+        let b = a.map(|p| [p[0] + 0.1, p[1] + 0.1, p[2] + 0.1]);
+        assert!(tets_within(&a, &b, 0.0));
+    }
+}

@@ -32,6 +32,7 @@ use super::{Halo, Layout};
 use crate::contact::penalty::{pair_stiffness, tet_tet_penalty, PenaltyParams};
 use crate::contact::BoundaryTets;
 use crate::error::{Error, Result};
+use crate::geometry::tets_within;
 use crate::mechanics::element::{characteristic_length, element_critical_dt, to_vectors};
 use crate::mechanics::explicit::{element_forces, update_nodes, NodeUpdate, ThermalLoad};
 use crate::mechanics::{ElasticMaterial, MechElement, Tet4Reference, VelocityBc};
@@ -481,6 +482,10 @@ impl ExplicitDomain {
                         continue;
                     }
                     if self.body_held[ba] && self.body_held[bb] {
+                        continue;
+                    }
+                    let corners = |e: u32| mesh.tets[e as usize].map(|n| self.x_all[n as usize]);
+                    if !tets_within(&corners(a), &corners(b), self.margin) {
                         continue;
                     }
                     let (va, vb) = (

@@ -487,3 +487,50 @@ value = [{t}, 0.0, 0.0]
         );
     }
 }
+
+/// Thermo-mechanics with contact heat: a hot block resting on a cold
+/// floor exchanges heat through the contact its weight makes; heat is
+/// conserved, and one and two ranks agree.
+#[test]
+fn hot_block_on_floor_conducts_through_its_contact() {
+    let mut runs = Vec::new();
+    for ranks in [1, 2] {
+        let out = out_dir(&format!("hot-block-{ranks}"));
+        let stdout = run_ok(
+            ranks,
+            &root().join("scenarios/hot-block-on-floor.toml"),
+            &out,
+            &[],
+        );
+        let (h, rows) = history(&out, "hot-block-on-floor");
+        let last = rows.last().unwrap();
+        let area = last[col(&h, "contact_area")];
+        // The block still rocks a little on its penalty springs: 10 %.
+        assert!(
+            (area / 0.01 - 1.0).abs() < 0.1,
+            "{ranks} rank(s): contact area {area} vs the block's base 0.01 m^2\n{stdout}"
+        );
+        assert!(last[col(&h, "mech_contacts")] > 0.0);
+        let (b0, b1) = (
+            rows[0][col(&h, "block_mean_T")],
+            last[col(&h, "block_mean_T")],
+        );
+        let f1 = last[col(&h, "floor_mean_T")];
+        assert!(b1 < b0 - 5.0 && f1 > 1.0, "block {b0} -> {b1}, floor {f1}");
+        // Insulated: the stored heat does not change.
+        let (s0, s1) = (
+            rows[0][col(&h, "stored_heat")],
+            last[col(&h, "stored_heat")],
+        );
+        assert!(
+            ((s1 - s0) / s0).abs() < 1e-9,
+            "{ranks} rank(s): stored heat {s0} -> {s1}"
+        );
+        runs.push(read_mech(&out, "hot-block-on-floor"));
+    }
+    let (a, b) = (&runs[0], &runs[1]);
+    for k in 0..a.times.len() {
+        let d = rel_diff(&a.temperature[k], &b.temperature[k]);
+        assert!(d < 1e-8, "t = {}: temperatures differ by {d:e}", a.times[k]);
+    }
+}

@@ -433,15 +433,8 @@ impl ExplicitDomain {
     fn detect(&mut self, comm: &SimpleCommunicator, model: &Model, layout: &Layout) -> Result<()> {
         let clock = std::time::Instant::now();
         let mesh = &model.mesh;
-        // Every node's current position, gathered in PETSc order.
-        let owned: Vec<f64> = self.x[..self.n_owned]
-            .iter()
-            .flat_map(|p| [p.x, p.y, p.z])
-            .collect();
-        let all = super::all_gather_f64(comm, &owned);
-        for (g, c) in all.chunks_exact(3).enumerate() {
-            self.x_all[self.orig_of_global[g] as usize] = [c[0], c[1], c[2]];
-        }
+        // Every node's current position.
+        self.gather_positions(comm);
         // Candidate pairs.
         let mut contact_nodes: Vec<u32> = Vec::new();
         self.candidates.clear();
@@ -1011,7 +1004,8 @@ impl ExplicitDomain {
         &self.x_all
     }
 
-    /// Collective. Refresh [`Self::positions`] from the owners.
+    /// Collective. Refresh [`Self::positions`] from the owners (gathered in
+    /// PETSc order).
     pub fn gather_positions(&mut self, comm: &SimpleCommunicator) {
         let owned: Vec<f64> = self.x[..self.n_owned]
             .iter()

@@ -27,14 +27,8 @@ struct Mech {
 
 fn read_mech(dir: &Path, stem: &str) -> Mech {
     let h5 = dir.join(format!("{stem}.h5"));
-    let times = fdem::io::read_times(&h5).unwrap();
-    let mesh = fdem::io::read_mesh(&h5).unwrap();
-    let ids = fdem::io::read_static_node_field_i32(&h5, "node_id").unwrap();
+    let (times, mesh, ids, coords) = read_nodes(&h5);
     let n = ids.len();
-    let mut coords = vec![[0.0; 3]; n];
-    for (row, &id) in ids.iter().enumerate() {
-        coords[id as usize] = mesh.coords[row];
-    }
     let cells = mesh
         .cells
         .iter()

@@ -65,17 +65,24 @@ pub struct Results {
     pub temperature: Vec<Vec<f64>>,
 }
 
-/// Read `<dir>/<stem>.h5` back, reordering rows to original node ids.
-pub fn read_results(dir: &Path, stem: &str) -> Results {
-    let h5 = dir.join(format!("{stem}.h5"));
-    let times = fdem::io::read_times(&h5).unwrap();
-    let mesh = fdem::io::read_mesh(&h5).unwrap();
-    let ids = fdem::io::read_static_node_field_i32(&h5, "node_id").unwrap();
-    let n = ids.len();
-    let mut coords = vec![[0.0; 3]; n];
+/// Output times, the mesh as written, the original node id of every row,
+/// and the coordinates by original node id.
+pub fn read_nodes(h5: &Path) -> (Vec<f64>, fdem::io::MeshData, Vec<i32>, Vec<[f64; 3]>) {
+    let times = fdem::io::read_times(h5).unwrap();
+    let mesh = fdem::io::read_mesh(h5).unwrap();
+    let ids = fdem::io::read_static_node_field_i32(h5, "node_id").unwrap();
+    let mut coords = vec![[0.0; 3]; ids.len()];
     for (row, &id) in ids.iter().enumerate() {
         coords[id as usize] = mesh.coords[row];
     }
+    (times, mesh, ids, coords)
+}
+
+/// Read `<dir>/<stem>.h5` back, reordering rows to original node ids.
+pub fn read_results(dir: &Path, stem: &str) -> Results {
+    let h5 = dir.join(format!("{stem}.h5"));
+    let (times, _, ids, coords) = read_nodes(&h5);
+    let n = ids.len();
     let temperature = (0..times.len())
         .map(|k| {
             let t = fdem::io::read_node_field_step(&h5, "temperature", k).unwrap();

@@ -15,6 +15,7 @@ PKGS=(
   libhdf5-openmpi-dev
   hdf5-tools          # h5dump, used by tests to check output files
   bc                  # arithmetic in scripts/bench.sh
+  fonts-dejavu-core   # DejaVuSans.ttf: text in PNG plots (src/io/plot.rs)
 )
 
 missing=()

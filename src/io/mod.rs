@@ -65,9 +65,12 @@
 //! of a deadlock. A [`TimeSeriesWriter`] must be dropped or closed before MPI is
 //! finalised.
 
+pub mod checkpoint;
 mod ffi;
 mod hdf5_out;
 mod history;
+pub mod particles;
+pub mod plot;
 mod read;
 mod xdmf;
 

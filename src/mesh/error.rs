@@ -185,6 +185,16 @@ pub enum MeshError {
     #[error("invalid mesh parameter: {0}")]
     InvalidParameter(String),
 
+    /// The mesh is not a single closed volume
+    /// ([`TetMesh::check_closed_volume`](super::TetMesh::check_closed_volume)):
+    /// no elements, a non-manifold boundary edge, several unconnected
+    /// pieces, or a boundary that does not enclose the element volume.
+    #[error("mesh is not a closed volume: {message}")]
+    NotClosed {
+        /// What is wrong (names the offending edge, piece count or volumes).
+        message: String,
+    },
+
     /// The mesh would exceed the `u32` index range.
     #[error("mesh too large: {0}")]
     TooLarge(String),

@@ -1,5 +1,5 @@
 //! Tet4 meshes: storage, boundary faces, orientation/quality checks, Gmsh
-//! import and box/bar generators.
+//! import and structured generators (box, cylinders, nut, container).
 //!
 //! Self-contained: depends only on std, nalgebra, mshio and thiserror, so it
 //! unit-tests without MPI or PETSc. Node and element indices are `u32`
@@ -17,19 +17,31 @@
 //! - [`generate`]: structured generators ([`generate::box_mesh`]).
 //! - [`gmsh`]: MSH 4.1 import (ASCII and binary, [`gmsh::read_msh`]) and
 //!   ASCII export ([`gmsh::write_msh_ascii`]).
+//! - [`nut`]: structured hexagonal-nut particle ([`nut::nut_mesh`], the
+//!   192-tet default of seed 000 sec 6 [`nut::nut_mesh_default`]; template
+//!   file `scenarios/meshes/nut-192.msh`).
+//! - [`container`]: open-top cylindrical cup ([`container::container_mesh`]).
+//! - `closed`: [`TetMesh::check_closed_volume`], the single closed solid
+//!   check for particle templates.
 
 use std::collections::BTreeMap;
 
 mod boundary;
+mod closed;
+pub mod container;
 mod error;
 pub mod generate;
 mod geometry;
 pub mod gmsh;
+pub mod nut;
 mod sets;
 
 pub use boundary::{BoundaryFace, LOCAL_FACES};
+pub use closed::CLOSED_VOLUME_REL_TOL;
+pub use container::container_mesh;
 pub use error::MeshError;
 pub use geometry::{tet_quality, tet_signed_volume, DEGENERATE_REL_TOL};
+pub use nut::{nut_mesh, nut_mesh_default};
 
 /// A Tet4 mesh holding one or more bodies.
 ///

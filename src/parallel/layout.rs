@@ -29,13 +29,22 @@ pub struct Layout {
 impl Layout {
     /// Collective. Partition on rank 0 with METIS, broadcast, and number.
     pub fn new<C: Communicator>(comm: &C, mesh: &TetMesh) -> Result<Layout, String> {
+        Self::new_weighted(comm, mesh, None)
+    }
+
+    /// Collective. As [`Layout::new`], balancing per-element work `weights`.
+    pub fn new_weighted<C: Communicator>(
+        comm: &C,
+        mesh: &TetMesh,
+        weights: Option<&[i32]>,
+    ) -> Result<Layout, String> {
         let size = comm.size() as usize;
         let rank = comm.rank() as usize;
         let ne = mesh.tets.len();
         let mut part: Vec<u32> = vec![0; ne];
         let mut status: i32 = 0;
         if rank == 0 {
-            match super::partition_elements(mesh, size) {
+            match super::partition_elements_weighted(mesh, size, weights) {
                 Ok(p) => part = p,
                 Err(_) => status = 1,
             }
@@ -43,7 +52,7 @@ impl Layout {
         comm.process_at_rank(0).broadcast_into(&mut status);
         if status != 0 {
             // Recompute on every rank to get the same message everywhere.
-            return Err(super::partition_elements(mesh, size)
+            return Err(super::partition_elements_weighted(mesh, size, weights)
                 .err()
                 .unwrap_or_else(|| "partitioning failed".into()));
         }

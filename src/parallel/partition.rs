@@ -53,6 +53,16 @@ pub fn dual_graph(mesh: &TetMesh) -> (Vec<i32>, Vec<i32>) {
 /// Partition the elements into `nparts` parts with METIS k-way (element
 /// count balanced, face cut minimised). Deterministic for a given mesh.
 pub fn partition_elements(mesh: &TetMesh, nparts: usize) -> Result<Vec<u32>, String> {
+    partition_elements_weighted(mesh, nparts, None)
+}
+
+/// As [`partition_elements`], balancing the sum of per-element `weights`
+/// (work estimates) instead of the element count.
+pub fn partition_elements_weighted(
+    mesh: &TetMesh,
+    nparts: usize,
+    weights: Option<&[i32]>,
+) -> Result<Vec<u32>, String> {
     let ne = mesh.tets.len();
     if nparts <= 1 || ne == 0 {
         return Ok(vec![0; ne]);
@@ -62,8 +72,14 @@ pub fn partition_elements(mesh: &TetMesh, nparts: usize) -> Result<Vec<u32>, Str
     }
     let (xadj, adj) = dual_graph(mesh);
     let mut part = vec![0i32; ne];
-    let graph = metis::Graph::new(1, nparts as i32, &xadj, &adj)
+    let mut graph = metis::Graph::new(1, nparts as i32, &xadj, &adj)
         .map_err(|e| format!("METIS graph: {e}"))?;
+    if let Some(w) = weights {
+        if w.len() != ne {
+            return Err(format!("{} element weights for {ne} elements", w.len()));
+        }
+        graph = graph.set_vwgt(w);
+    }
     graph
         .set_option(metis::option::Seed(1))
         .part_kway(&mut part)

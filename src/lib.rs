@@ -26,6 +26,7 @@ pub mod io;
 pub mod mechanics;
 pub mod mesh;
 pub mod model;
+pub mod pack;
 pub mod parallel;
 pub mod petsc;
 pub mod run;

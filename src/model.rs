@@ -76,6 +76,8 @@ pub struct MechanicsModel {
     pub traction: Vec<[f64; 3]>,
     /// Penalty contact.
     pub contact: Option<PenaltySpec>,
+    /// Stop once settled (deposition).
+    pub settle: Option<crate::scenario::SettleSpec>,
 }
 
 /// The thermal problem resolved to nodes and faces (original numbering).
@@ -175,8 +177,43 @@ impl Model {
         let mut combined = TetMesh::default();
         let mut bodies = Vec::new();
         let mut elem_material: Vec<u32> = Vec::new();
+        let mut checkpoints: std::collections::BTreeMap<
+            std::path::PathBuf,
+            crate::io::checkpoint::Checkpoint,
+        > = Default::default();
         for b in &s.bodies {
             let context = format!("{path}: body `{}`", b.name);
+            if let MeshSpec::Checkpoint { file, template } = &b.mesh {
+                let file = sc.resolve(file);
+                if !checkpoints.contains_key(&file) {
+                    let ck = crate::io::checkpoint::Checkpoint::read(&file)?;
+                    checkpoints.insert(file.clone(), ck);
+                }
+                let copies =
+                    crate::pack::from_checkpoint(&checkpoints[&file], template).map_err(|m| {
+                        model_err(format!("body `{}`: {}: {m}", b.name, file.display()))
+                    })?;
+                if !b.regions.is_empty() {
+                    return Err(model_err(format!(
+                        "body `{}`: regions cannot be given for bodies from a checkpoint",
+                        b.name
+                    )));
+                }
+                let material = material_index(&b.material) as usize;
+                for (name, mut c) in copies {
+                    if let Some(t) = b.translate {
+                        translate(&mut c, t);
+                    }
+                    c.validate().map_err(|source| Error::Mesh {
+                        context: format!("{context} ({name} from {})", file.display()),
+                        source,
+                    })?;
+                    let ne = c.tets.len();
+                    push_body(&mut combined, &mut bodies, b, name, c, material);
+                    elem_material.extend(std::iter::repeat_n(material as u32, ne));
+                }
+                continue;
+            }
             let mut m = match &b.mesh {
                 MeshSpec::Box {
                     origin,
@@ -215,6 +252,39 @@ impl Model {
                     *width,
                     *element_size,
                 ),
+                MeshSpec::Nut {
+                    center,
+                    across_flats,
+                    hole_radius,
+                    thickness,
+                    per_side,
+                    radial,
+                    layers,
+                } => mesh::nut::nut_mesh(
+                    *center,
+                    *across_flats,
+                    *hole_radius,
+                    *thickness,
+                    *per_side,
+                    *radial,
+                    *layers,
+                ),
+                MeshSpec::Container {
+                    center,
+                    inner_radius,
+                    wall,
+                    bottom,
+                    height,
+                    element_size,
+                } => mesh::container::container_mesh(
+                    *center,
+                    *inner_radius,
+                    *wall,
+                    bottom.unwrap_or(*wall),
+                    *height,
+                    *element_size,
+                ),
+                MeshSpec::Checkpoint { .. } => unreachable!("handled above"),
                 MeshSpec::Gmsh { file } => mesh::gmsh::read_msh(&sc.resolve(file)),
             }
             .map_err(|source| Error::Mesh {
@@ -259,7 +329,24 @@ impl Model {
                     mat_of_elem[e as usize] = material_index(mat);
                 }
             }
-            // The body itself, or its copies on a lattice.
+            // The body itself, its copies on a lattice, or a pack of particles.
+            if let Some(p) = &b.pack {
+                let into = s
+                    .bodies
+                    .iter()
+                    .find(|o| o.name == p.into)
+                    .expect("validated");
+                let interior =
+                    crate::pack::ContainerInterior::from_spec(&into.mesh, into.translate)
+                        .expect("validated");
+                let copies = crate::pack::place(&b.name, &m, p, &interior, &|f| sc.resolve(f))
+                    .map_err(|msg| model_err(format!("body `{}`: pack: {msg}", b.name)))?;
+                for (name, c) in copies {
+                    push_body(&mut combined, &mut bodies, b, name, c, material);
+                    elem_material.extend_from_slice(&mat_of_elem);
+                }
+                continue;
+            }
             let copies: Vec<(String, [f64; 3])> = match &b.lattice {
                 None => vec![(b.name.clone(), [0.0; 3])],
                 Some(l) => {
@@ -282,25 +369,7 @@ impl Model {
             for (name, off) in copies {
                 let mut c = m.clone();
                 translate(&mut c, off);
-                c.node_sets = prefix_sets(std::mem::take(&mut c.node_sets), &name);
-                c.face_sets = prefix_sets(std::mem::take(&mut c.face_sets), &name);
-                c.elem_sets = prefix_sets(std::mem::take(&mut c.elem_sets), &name);
-                let n0 = combined.nodes.len() as u32;
-                let e0 = combined.tets.len() as u32;
-                combined.append(c, bodies.len() as u32);
-                bodies.push(Body {
-                    name,
-                    template: b.name.clone(),
-                    material,
-                    initial_temperature: b.initial_temperature,
-                    velocity: b.velocity.unwrap_or([0.0; 3]),
-                    node_range: (n0, combined.nodes.len() as u32),
-                    elem_range: (e0, combined.tets.len() as u32),
-                    fixed: b.fixed,
-                    initial_velocity: b.initial_velocity.unwrap_or([0.0; 3]),
-                    reference_temperature: b.reference_temperature.unwrap_or(b.initial_temperature),
-                    heating: b.heating.map(|h| (h.to, h.over)),
-                });
+                push_body(&mut combined, &mut bodies, b, name, c, material);
                 elem_material.extend_from_slice(&mat_of_elem);
             }
         }
@@ -502,6 +571,7 @@ impl Model {
                     bc,
                     traction,
                     contact: ms.contact.clone(),
+                    settle: ms.settle,
                 })
             }
         };
@@ -600,6 +670,36 @@ fn prefix_sets<V>(
     sets.into_iter()
         .map(|(k, v)| (format!("{name}.{k}"), v))
         .collect()
+}
+
+/// Append one body (its sets prefixed by its name) to the combined mesh.
+fn push_body(
+    combined: &mut TetMesh,
+    bodies: &mut Vec<Body>,
+    b: &crate::scenario::BodySpec,
+    name: String,
+    mut c: TetMesh,
+    material: usize,
+) {
+    c.node_sets = prefix_sets(std::mem::take(&mut c.node_sets), &name);
+    c.face_sets = prefix_sets(std::mem::take(&mut c.face_sets), &name);
+    c.elem_sets = prefix_sets(std::mem::take(&mut c.elem_sets), &name);
+    let n0 = combined.nodes.len() as u32;
+    let e0 = combined.tets.len() as u32;
+    combined.append(c, bodies.len() as u32);
+    bodies.push(Body {
+        name,
+        template: b.name.clone(),
+        material,
+        initial_temperature: b.initial_temperature,
+        velocity: b.velocity.unwrap_or([0.0; 3]),
+        node_range: (n0, combined.nodes.len() as u32),
+        elem_range: (e0, combined.tets.len() as u32),
+        fixed: b.fixed,
+        initial_velocity: b.initial_velocity.unwrap_or([0.0; 3]),
+        reference_temperature: b.reference_temperature.unwrap_or(b.initial_temperature),
+        heating: b.heating.map(|h| (h.to, h.over)),
+    });
 }
 
 fn translate(m: &mut TetMesh, t: [f64; 3]) {

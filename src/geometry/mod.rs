@@ -4,6 +4,7 @@
 
 mod clip;
 pub mod overlap;
+pub mod placement;
 
 pub use clip::{face_tet_clip, polygon_area, tet_tet_overlap, triangle_in_tet_area, Polygon};
 pub use overlap::{tet_tet_intersection, tets_within, FacePatch, Intersection, TetPlanes};

@@ -163,6 +163,10 @@ pub struct BodySpec {
     /// Replicate this body on a regular grid: bodies `<name>_i_j_k`.
     #[serde(default)]
     pub lattice: Option<LatticeSpec>,
+    /// Replicate this body (a particle template) `count` times in a column
+    /// above a container, randomly oriented: bodies `<name>_<i>`.
+    #[serde(default)]
+    pub pack: Option<PackSpec>,
     /// Mechanics: hold every node of the body in place (a container, a floor).
     #[serde(default)]
     pub fixed: bool,
@@ -201,6 +205,36 @@ pub struct LatticeSpec {
     pub count: [u32; 3],
     /// Offset between neighbouring copies (m).
     pub spacing: [f64; 3],
+}
+
+/// Particles dropped into a container (seed 000 sec 6).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PackSpec {
+    /// Number of particles.
+    pub count: usize,
+    /// Seed of the random orientations (same seed, same placement).
+    #[serde(default)]
+    pub seed: u64,
+    /// The body to fill: its mesh must be of kind `container`.
+    pub into: String,
+    /// Clearance between the particles' bounding spheres (m); default a
+    /// tenth of the bounding radius.
+    #[serde(default)]
+    pub gap: Option<f64>,
+    /// Largest solid fraction the container can hold (the capacity check
+    /// before any work): default 0.64, random close packing of spheres.
+    #[serde(default = "default_max_fraction")]
+    pub max_fraction: f64,
+    /// Place the particles from a CSV file instead (relative to the
+    /// scenario): one line `x, y, z, rx, ry, rz` per particle (centroid in
+    /// m, rotations in degrees about x then y then z); `#` comments.
+    #[serde(default)]
+    pub positions: Option<String>,
+}
+
+fn default_max_fraction() -> f64 {
+    0.64
 }
 
 /// Mesh source of a body.
@@ -258,11 +292,80 @@ pub enum MeshSpec {
         /// Target element size h (m).
         element_size: f64,
     },
+    /// A hexagonal nut with a round hole, axis along z, centred on
+    /// `center` (named sets outer, hole, zmin, zmax). The defaults are the
+    /// 192-tet nut of seed 000 Fig 17 (see `mesh::nut`).
+    Nut {
+        /// Centroid (m).
+        #[serde(default)]
+        center: [f64; 3],
+        /// Width across flats (m).
+        #[serde(default = "default_nut_width")]
+        across_flats: f64,
+        /// Hole radius (m).
+        #[serde(default = "default_nut_hole")]
+        hole_radius: f64,
+        /// Thickness along z (m).
+        #[serde(default = "default_nut_thickness")]
+        thickness: f64,
+        /// Segments per hexagon side.
+        #[serde(default = "default_two")]
+        per_side: usize,
+        /// Element layers between hole and flats.
+        #[serde(default = "default_one")]
+        radial: usize,
+        /// Element layers through the thickness.
+        #[serde(default = "default_one")]
+        layers: usize,
+    },
+    /// An open cylindrical container with a floor, axis along z, the
+    /// floor's top at `center` (named sets inner, outer, rim, floor, wall_inner).
+    Container {
+        /// Centre of the floor's top face (m).
+        #[serde(default)]
+        center: [f64; 3],
+        /// Inner radius (m).
+        inner_radius: f64,
+        /// Wall thickness (m).
+        wall: f64,
+        /// Floor thickness (m), default the wall's.
+        #[serde(default)]
+        bottom: Option<f64>,
+        /// Inner height above the floor (m).
+        height: f64,
+        /// Target element size (m).
+        element_size: f64,
+    },
+    /// Bodies from an fdem checkpoint, in their positions there (the
+    /// deformed state becomes this run's reference): all bodies that came
+    /// from the scenario entry `template` (e.g. every particle of a pack).
+    Checkpoint {
+        /// Checkpoint file, relative to the scenario.
+        file: String,
+        /// Name of the scenario entry the bodies came from.
+        template: String,
+    },
     /// A Gmsh MSH 4.1 file (ASCII or binary); physical groups become named sets.
     Gmsh {
         /// Path, relative to the scenario file.
         file: String,
     },
+}
+
+fn default_nut_width() -> f64 {
+    crate::mesh::nut::NUT_ACROSS_FLATS
+}
+fn default_nut_hole() -> f64 {
+    crate::mesh::nut::NUT_HOLE_RADIUS
+}
+fn default_nut_thickness() -> f64 {
+    crate::mesh::nut::NUT_THICKNESS
+}
+fn default_two() -> usize {
+    2
+}
+fn default_one() -> usize {
+    1
 }
 
 /// Capacity matrix form.
@@ -396,6 +499,37 @@ pub struct OutputSpec {
     /// Also write at these times (rounded to the nearest step).
     #[serde(default)]
     pub times: Vec<f64>,
+    /// Write a restart checkpoint (`<stem>_checkpoint.h5`) at the end of
+    /// the run (and when the packing settles).
+    #[serde(default)]
+    pub checkpoint: bool,
+    /// Also overwrite the checkpoint every N steps (0: only at the end).
+    #[serde(default)]
+    pub checkpoint_every: u64,
+    /// Particle statistics: CSV and PNG of the particles' temperatures.
+    #[serde(default)]
+    pub particles: Option<ParticleOutputSpec>,
+}
+
+/// Temperature statistics over many particles (seed 000 sec 6, Fig 20).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ParticleOutputSpec {
+    /// Bodies that came from this scenario entry are the particles.
+    pub template: String,
+    /// Vertical axis (x, y) for the temperature-against-radius profile.
+    #[serde(default)]
+    pub axis: [f64; 2],
+    /// Radial bins of the profile.
+    #[serde(default = "default_bins")]
+    pub radial_bins: usize,
+    /// Times of the radial profiles (s; default: 4 evenly spaced).
+    #[serde(default)]
+    pub radial_times: Vec<f64>,
+}
+
+fn default_bins() -> usize {
+    8
 }
 
 /// Explicit finite-strain mechanics (seed 004 sec 2; seed 000 sec 3.4 for
@@ -428,6 +562,26 @@ pub struct MechanicsSpec {
     /// Penalty contact between bodies (absent: bodies pass through each other).
     #[serde(default)]
     pub contact: Option<PenaltySpec>,
+    /// Stop the run once the bodies have settled (deposition).
+    #[serde(default)]
+    pub settle: Option<SettleSpec>,
+}
+
+/// When a deposition has settled: the kinetic energy, checked after every
+/// step (`time.dt`) from `after` on, falls below `kinetic_energy` (J) or
+/// below `relative` × the largest kinetic energy seen so far.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SettleSpec {
+    /// Absolute threshold (J).
+    #[serde(default)]
+    pub kinetic_energy: Option<f64>,
+    /// Threshold relative to the peak kinetic energy.
+    #[serde(default)]
+    pub relative: Option<f64>,
+    /// Earliest time to stop (s).
+    #[serde(default)]
+    pub after: f64,
 }
 
 fn default_safety() -> f64 {
@@ -628,6 +782,48 @@ impl Scenario {
                     return bad(&key(f), "must be finite".into());
                 }
             }
+            if let Some(p) = &b.pack {
+                if b.lattice.is_some() {
+                    return bad(&key("pack"), "give `pack` or `lattice`, not both".into());
+                }
+                if p.count == 0 {
+                    return bad(&key("pack.count"), "must be at least 1".into());
+                }
+                if p.gap.is_some_and(|g| !(g.is_finite() && g >= 0.0)) {
+                    return bad(&key("pack.gap"), "must be finite and >= 0".into());
+                }
+                if !(p.max_fraction > 0.0 && p.max_fraction <= 1.0) {
+                    return bad(
+                        &key("pack.max_fraction"),
+                        format!("must be in (0, 1], got {}", p.max_fraction),
+                    );
+                }
+                match self.bodies.iter().find(|o| o.name == p.into) {
+                    Some(o) if matches!(o.mesh, MeshSpec::Container { .. }) => {
+                        if o.rotate.is_some() || o.lattice.is_some() || o.pack.is_some() {
+                            return bad(
+                                &key("pack.into"),
+                                format!("container `{}` must not be rotated or replicated", o.name),
+                            );
+                        }
+                    }
+                    Some(_) => {
+                        return bad(
+                            &key("pack.into"),
+                            format!("body `{}` is not a mesh of kind `container`", p.into),
+                        )
+                    }
+                    None => return bad(&key("pack.into"), format!("no body named `{}`", p.into)),
+                }
+            }
+            if matches!(b.mesh, MeshSpec::Checkpoint { .. })
+                && (b.pack.is_some() || b.lattice.is_some() || b.rotate.is_some())
+            {
+                return bad(
+                    &key("mesh"),
+                    "bodies from a checkpoint cannot be rotated, packed or replicated".into(),
+                );
+            }
             if let MeshSpec::Box {
                 size,
                 element_size,
@@ -646,6 +842,32 @@ impl Scenario {
                 if origin.iter().any(|o| !o.is_finite()) {
                     return bad(&key("mesh.origin"), "must be finite".into());
                 }
+            }
+        }
+        if let Some(p) = &self.output.particles {
+            if !self.bodies.iter().any(|b| b.name == p.template) {
+                return bad(
+                    "output.particles.template",
+                    format!("no body entry named `{}`", p.template),
+                );
+            }
+            if p.radial_bins == 0 {
+                return bad("output.particles.radial_bins", "must be at least 1".into());
+            }
+        }
+        if let Some(st) = self.mechanics.as_ref().and_then(|m| m.settle) {
+            let ok = |v: Option<f64>| v.is_none_or(|x| x.is_finite() && x > 0.0);
+            if st.kinetic_energy.is_none() && st.relative.is_none() {
+                return bad(
+                    "mechanics.settle",
+                    "give `kinetic_energy` (J) or `relative` (of the peak)".into(),
+                );
+            }
+            if !ok(st.kinetic_energy) || !ok(st.relative) || st.after.is_nan() || st.after < 0.0 {
+                return bad(
+                    "mechanics.settle",
+                    "thresholds must be positive and `after` >= 0".into(),
+                );
             }
         }
         if let Some(c) = &self.contact {

@@ -77,6 +77,24 @@ pub fn pair_stiffness(penalty_pa: f64, ref_vol_a: f64, ref_vol_b: f64) -> f64 {
     penalty_pa / (3.0 * (ref_vol_a + ref_vol_b))
 }
 
+/// Whether the axis-aligned boxes of two tets are strictly separated.
+#[inline]
+fn boxes_apart(a: &[[f64; 3]; 4], b: &[[f64; 3]; 4]) -> bool {
+    (0..3).any(|d| {
+        let (amin, amax) = a
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+                (lo.min(p[d]), hi.max(p[d]))
+            });
+        let (bmin, bmax) = b
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+                (lo.min(p[d]), hi.max(p[d]))
+            });
+        amin > bmax || bmin > amax
+    })
+}
+
 /// Contact forces between tet a (nodes `xa`, velocities `va`) and tet b.
 /// `None` when they do not overlap (V = 0).
 pub fn tet_tet_penalty(
@@ -86,6 +104,11 @@ pub fn tet_tet_penalty(
     vb: &[[f64; 3]; 4],
     params: &PenaltyParams,
 ) -> Option<PenaltyResult> {
+    // Most candidates are apart: a bounding-box gap rules them out before
+    // the planes of either tet are built.
+    if boxes_apart(xa, xb) {
+        return None;
+    }
     let it = tet_tet_intersection(xa, xb);
     let v = it.volume;
     if v <= 0.0 {

@@ -42,6 +42,10 @@ enum Command {
         /// No progress bar.
         #[arg(long)]
         quiet: bool,
+        /// Continue from a checkpoint written by this scenario
+        /// (`[output] checkpoint = true`).
+        #[arg(long, value_name = "CHECKPOINT.h5")]
+        restart: Option<PathBuf>,
     },
     /// Validate a scenario and its meshes without running.
     Check {
@@ -262,11 +266,13 @@ fn dispatch(
             output,
             set,
             quiet,
+            restart,
         } => {
             let sc = scenario::load(path, set)?;
             let opts = RunOptions {
                 output_dir: output.clone(),
                 progress: !quiet,
+                restart: restart.clone(),
             };
             let summary = run(petsc, world, &sc, &opts)?;
             if rank == 0 {

@@ -13,6 +13,8 @@ use mpi::traits::*;
 
 use crate::contact::{detect_contacts, BoundaryTets, ContactPair, ContactSet, ContactSurface};
 use crate::error::{Error, Result};
+use crate::io::checkpoint::Checkpoint;
+use crate::io::particles::ParticleReport;
 use crate::io::{HistoryWriter, MeshPart, TimeSeriesWriter};
 use crate::model::Model;
 use crate::parallel::ExplicitDomain;
@@ -29,6 +31,8 @@ pub struct RunOptions {
     pub output_dir: Option<PathBuf>,
     /// Show a progress bar on rank 0.
     pub progress: bool,
+    /// Continue from this checkpoint (written by a run of the same scenario).
+    pub restart: Option<PathBuf>,
 }
 
 /// Wall-clock seconds spent per phase (rank 0's view, max over ranks).
@@ -110,6 +114,14 @@ pub struct RunSummary {
     pub assemblies: u64,
     /// Mechanics, when it ran.
     pub mechanics: Option<MechanicsSummary>,
+    /// Step the run started from (0, or a checkpoint's).
+    pub start_step: u64,
+    /// Step, time and kinetic energy at which the bodies settled (the run stopped there).
+    pub settled: Option<(u64, f64, f64)>,
+    /// Checkpoint written.
+    pub checkpoint: Option<PathBuf>,
+    /// Particle statistics files written.
+    pub particle_files: Vec<PathBuf>,
 }
 
 impl std::fmt::Display for RunSummary {
@@ -178,7 +190,19 @@ impl std::fmt::Display for RunSummary {
             "  memory      peak {:.1} MiB per rank",
             self.peak_memory as f64 / 1048576.0
         )?;
+        if self.start_step > 0 {
+            writeln!(f, "  restart     from step {}", self.start_step)?;
+        }
+        if let Some((step, time, ke)) = self.settled {
+            writeln!(
+                f,
+                "  settled     at step {step}, t = {time:.4} s (kinetic energy {ke:.3e} J)"
+            )?;
+        }
         writeln!(f, "  output      {}", self.xdmf.display())?;
+        for p in self.checkpoint.iter().chain(&self.particle_files) {
+            writeln!(f, "              {}", p.display())?;
+        }
         write!(f, "              {}", self.history.display())
     }
 }
@@ -309,8 +333,32 @@ pub fn run(
     times.model = clock.elapsed().as_secs_f64();
 
     let clock = Instant::now();
-    let layout = Layout::new(comm, &model.mesh).map_err(Error::Partition)?;
+    // With mechanics, elements of held bodies (a container) cost only their
+    // thermal share: weight the partition by the explicit work.
+    let weights: Option<Vec<i32>> = model.mechanics.as_ref().map(|_| {
+        model
+            .mesh
+            .body
+            .iter()
+            .map(|&b| {
+                let body = &model.bodies[b as usize];
+                if body.fixed || body.velocity != [0.0; 3] {
+                    1
+                } else {
+                    8
+                }
+            })
+            .collect()
+    });
+    let layout =
+        Layout::new_weighted(comm, &model.mesh, weights.as_deref()).map_err(Error::Partition)?;
     times.partition = clock.elapsed().as_secs_f64();
+
+    let restart = match &opts.restart {
+        Some(p) => Some(read_restart(p, &model)?),
+        None => None,
+    };
+    let start_step = restart.as_ref().map_or(0, |c| c.step);
 
     // Mechanics first: its set-up checks the time step before any work.
     let clock = Instant::now();
@@ -318,6 +366,19 @@ pub fn run(
         Some(_) => Some(ExplicitDomain::new(comm, &model, &layout, model.dt)?),
         None => None,
     };
+    if let (Some(ck), Some((m, _))) = (restart.as_ref(), mech.as_mut()) {
+        let (Some(x), Some(v)) = (&ck.positions, &ck.velocities) else {
+            return Err(Error::Model {
+                path: opts
+                    .restart
+                    .as_ref()
+                    .map_or(String::new(), |p| p.display().to_string()),
+                message: "the checkpoint has no mechanical state, the scenario has mechanics"
+                    .into(),
+            });
+        };
+        m.restore(comm, &model, &layout, x, v, ck.dissipated)?;
+    }
     times.mechanics = clock.elapsed().as_secs_f64();
     let mech_setup = times.mechanics;
 
@@ -326,8 +387,20 @@ pub fn run(
     // Positions of moving bodies are updated at each detection (a copy of
     // the mesh only when something moves).
     let mut moved = (model.has_motion() || mech.is_some()).then(|| model.mesh.clone());
+    if let (Some(ck), Some(mesh_now)) = (restart.as_ref(), moved.as_mut()) {
+        match &ck.positions {
+            Some(x) => mesh_now.nodes.copy_from_slice(x),
+            None => model.positions_at(ck.time, &mut mesh_now.nodes),
+        }
+    }
     let mut contacts = if model.thermal_active {
-        find_contacts(comm, &model, &model.mesh, &layout, &bt)
+        find_contacts(
+            comm,
+            &model,
+            moved.as_ref().unwrap_or(&model.mesh),
+            &layout,
+            &bt,
+        )
     } else {
         ContactSet::default()
     };
@@ -345,9 +418,40 @@ pub fn run(
     };
     times.assembly = clock.elapsed().as_secs_f64();
     let detect_every = model.contact.as_ref().map_or(0, |c| c.every);
+    if let (Some(ck), Some(s)) = (restart.as_ref(), sys.as_mut()) {
+        let Some(t) = &ck.temperature else {
+            return Err(Error::Model {
+                path: opts
+                    .restart
+                    .as_ref()
+                    .map_or(String::new(), |p| p.display().to_string()),
+                message: "the checkpoint has no temperatures, the scenario has a thermal problem"
+                    .into(),
+            });
+        };
+        let owned: Vec<f64> = layout.owned_nodes.iter().map(|&n| t[n as usize]).collect();
+        let h = ck.heat;
+        let account = EnergyAccount {
+            stored: h[0],
+            stored_change: h[1],
+            dirichlet_in: h[2],
+            flux_in: h[3],
+            convection_in: h[4],
+        };
+        s.restore(&owned, account, ck.step)?;
+    }
     if let (Some((m, _)), Some(s)) = (mech.as_mut(), sys.as_ref()) {
         let t = s.t.to_local_vec()?;
         m.set_temperatures(comm, &t, None);
+    } else if let (Some((m, _)), Some(ck)) = (mech.as_mut(), restart.as_ref()) {
+        if model.has_heating() {
+            let t: Vec<f64> = layout
+                .owned_nodes
+                .iter()
+                .map(|&n| model.prescribed_temperature(n, ck.time))
+                .collect();
+            m.set_temperatures(comm, &t, None);
+        }
     }
 
     // Output: only now that the input is known good are files created.
@@ -397,10 +501,12 @@ pub fn run(
             header.push(h.into());
         }
     }
+    // Per-body columns, or per scenario entry when there are many bodies.
+    let groups = BodyGroups::new(&model);
     if sys.is_some() {
-        for b in &model.bodies {
+        for g in &groups.names {
             for s in ["min", "mean", "max"] {
-                header.push(format!("{}_{s}_T", b.name));
+                header.push(format!("{g}_{s}_T"));
             }
         }
     }
@@ -478,18 +584,61 @@ pub fn run(
             ]);
         }
         if let Some(t) = &t {
-            for s in stats.compute(comm, t) {
+            for s in groups.reduce(&stats.compute(comm, t)) {
                 row.extend_from_slice(&s);
             }
         }
         history.append(&row)?;
         Ok(())
     };
-    write_output(&mut sys, &mech, &mut writer, &mut history, &contacts, 0)?;
+    write_output(
+        &mut sys,
+        &mech,
+        &mut writer,
+        &mut history,
+        &contacts,
+        start_step,
+    )?;
+    // Particle statistics (rank 0 keeps them; every rank takes part in the reductions).
+    let mut report = sc.scenario.output.particles.as_ref().and_then(|p| {
+        sys.as_ref()?;
+        particle_report(&model, p)
+    });
+    let radial_steps: Vec<u64> = match &sc.scenario.output.particles {
+        Some(p) if !p.radial_times.is_empty() => p
+            .radial_times
+            .iter()
+            .map(|&t| (t / model.dt).round() as u64)
+            .collect(),
+        _ => (1..=4).map(|k| k * model.steps / 4).collect(),
+    };
+    let record = |sys: &Option<ThermalSystem>,
+                  report: &mut Option<ParticleReport>,
+                  step: u64|
+     -> Result<()> {
+        if let (Some(r), Some(s)) = (report.as_mut(), sys.as_ref()) {
+            let t = s.t.to_local_vec()?;
+            let st = stats.compute(comm, &t);
+            let time = step as f64 * model.dt;
+            r.record(time, &st);
+            if radial_steps.contains(&step) {
+                r.record_profile(time, &st);
+            }
+        }
+        Ok(())
+    };
+    record(&sys, &mut report, start_step)?;
     times.output += clock.elapsed().as_secs_f64();
+    let settle = model.mechanics.as_ref().and_then(|m| m.settle);
+    let mut peak_ke = restart.as_ref().map_or(0.0, |c| c.peak_kinetic);
+    let mut settled = None;
+    let ck_every = sc.scenario.output.checkpoint_every;
+    let ck_path = dir.join(format!("{stem}_checkpoint.h5"));
+    let mut checkpoint = None;
 
     let bar = if opts.progress && rank == 0 {
         let b = indicatif::ProgressBar::new(model.steps);
+        b.set_position(start_step);
         let what = match (sys.is_some(), mech.is_some()) {
             (true, true) => "thermo-mechanics",
             (false, true) => "mechanics",
@@ -511,11 +660,12 @@ pub fn run(
         .output_steps
         .iter()
         .copied()
-        .filter(|&s| s > 0)
+        .filter(|&s| s > start_step)
         .peekable();
     let mut stepping = 0.0;
     let mut mech_time = 0.0;
-    let mut step = 0u64;
+    let mut step = start_step;
+    let every_step = report.is_some() || settle.is_some();
     while step < model.steps {
         // Run uninterrupted until the next output, check or progress tick.
         let next_detect = step
@@ -526,6 +676,9 @@ pub fn run(
             (step / check_every + 1) * check_every,
             (step / tick + 1) * tick,
             next_detect,
+            if every_step { step + 1 } else { model.steps },
+            step.checked_div(ck_every)
+                .map_or(model.steps, |k| (k + 1) * ck_every),
         ]
         .into_iter()
         .min()
@@ -596,12 +749,62 @@ pub fn run(
                 check_finite(comm, s, &layout, step, model.dt)?;
             }
         }
-        if Some(step) == next_out.peek().copied() {
-            next_out.next();
-            let clock = Instant::now();
-            write_output(&mut sys, &mech, &mut writer, &mut history, &contacts, step)?;
-            times.output += clock.elapsed().as_secs_f64();
+        if let (Some(st), Some((m, _))) = (settle, mech.as_ref()) {
+            let ke = m.state(comm).kinetic;
+            peak_ke = f64::max(peak_ke, ke);
+            let time = step as f64 * model.dt;
+            // Settled when below either threshold given.
+            let threshold = st
+                .kinetic_energy
+                .unwrap_or(0.0)
+                .max(st.relative.map_or(0.0, |r| r * peak_ke));
+            if time >= st.after && peak_ke > 0.0 && ke < threshold {
+                settled = Some((step, time, ke));
+            }
         }
+        let clock = Instant::now();
+        record(&sys, &mut report, step)?;
+        if Some(step) == next_out.peek().copied() || (settled.is_some() && step < model.steps) {
+            next_out.next();
+            write_output(&mut sys, &mech, &mut writer, &mut history, &contacts, step)?;
+        }
+        if ck_every > 0 && step.is_multiple_of(ck_every) && settled.is_none() {
+            save_checkpoint(
+                comm, &model, &layout, &mut sys, &mut mech, step, peak_ke, &contacts, &ck_path,
+            )?;
+            checkpoint = Some(ck_path.clone());
+        }
+        times.output += clock.elapsed().as_secs_f64();
+        if settled.is_some() {
+            break;
+        }
+    }
+    if sc.scenario.output.checkpoint || settled.is_some() && ck_every > 0 {
+        let clock = Instant::now();
+        save_checkpoint(
+            comm, &model, &layout, &mut sys, &mut mech, step, peak_ke, &contacts, &ck_path,
+        )?;
+        checkpoint = Some(ck_path.clone());
+        times.output += clock.elapsed().as_secs_f64();
+    }
+    let mut particle_files = Vec::new();
+    if let Some(r) = &report {
+        let written = if rank == 0 {
+            r.write(&dir, &stem).map_err(Error::from)
+        } else {
+            Ok(Vec::new())
+        };
+        particle_files = agree(comm, written)?;
+    }
+    if model.thermal_active && model.contact.is_some() {
+        let path = dir.join(format!("{stem}_body_contacts.csv"));
+        let written = if rank == 0 {
+            write_body_contacts(&model, &contacts, &path)
+        } else {
+            Ok(())
+        };
+        agree(comm, written)?;
+        particle_files.push(path);
     }
     if let Some(b) = bar {
         b.finish_and_clear();
@@ -666,8 +869,12 @@ pub fn run(
         ranks: layout.size,
         nodes: model.mesh.nodes.len(),
         elements: model.mesh.tets.len(),
-        steps: model.steps,
+        steps: step - start_step,
         ksp_iterations: sys.as_ref().map_or(0, |s| s.iterations),
+        start_step,
+        settled,
+        checkpoint,
+        particle_files,
         solver: sys
             .as_ref()
             .map_or("none (no thermal problem)".into(), |s| {
@@ -758,5 +965,227 @@ fn check_finite(
         step,
         time: step as f64 * dt,
         node: node as usize,
+    })
+}
+
+/// Read a checkpoint and check it belongs to this model (same mesh).
+fn read_restart(path: &Path, model: &Model) -> Result<Checkpoint> {
+    let ck = Checkpoint::read(path)?;
+    let bad = |m: String| Error::Model {
+        path: path.display().to_string(),
+        message: format!("the checkpoint does not match the scenario: {m}"),
+    };
+    if ck.reference.len() != model.mesh.nodes.len() || ck.tets.len() != model.mesh.tets.len() {
+        return Err(bad(format!(
+            "it has {} nodes and {} elements, the scenario {} and {}",
+            ck.reference.len(),
+            ck.tets.len(),
+            model.mesh.nodes.len(),
+            model.mesh.tets.len()
+        )));
+    }
+    if ck.tets != model.mesh.tets || ck.reference != model.mesh.nodes {
+        return Err(bad(
+            "the meshes differ (another placement seed or mesh size?)".into(),
+        ));
+    }
+    if ck.step > model.steps {
+        return Err(bad(format!(
+            "it is at step {}, after the scenario's last step {}",
+            ck.step, model.steps
+        )));
+    }
+    Ok(ck)
+}
+
+/// Collective. Gather the state and write the checkpoint from rank 0.
+#[allow(clippy::too_many_arguments)]
+fn save_checkpoint(
+    comm: &SimpleCommunicator,
+    model: &Model,
+    layout: &Layout,
+    sys: &mut Option<ThermalSystem>,
+    mech: &mut Option<(ExplicitDomain, u64)>,
+    step: u64,
+    peak_kinetic: f64,
+    contacts: &ContactSet,
+    path: &Path,
+) -> Result<()> {
+    let mut ck = Checkpoint {
+        step,
+        time: step as f64 * model.dt,
+        reference: model.mesh.nodes.clone(),
+        tets: model.mesh.tets.clone(),
+        elem_body: model.mesh.body.clone(),
+        body_names: model.bodies.iter().map(|b| b.name.clone()).collect(),
+        body_templates: model.bodies.iter().map(|b| b.template.clone()).collect(),
+        body_nodes: model
+            .bodies
+            .iter()
+            .map(|b| [b.node_range.0, b.node_range.1])
+            .collect(),
+        body_elems: model
+            .bodies
+            .iter()
+            .map(|b| [b.elem_range.0, b.elem_range.1])
+            .collect(),
+        peak_kinetic,
+        thermal_contacts: contacts.all.len() as u64,
+        ..Default::default()
+    };
+    if let Some((m, _)) = mech.as_mut() {
+        m.gather_positions(comm);
+        ck.positions = Some(m.positions().to_vec());
+        ck.velocities = Some(m.gather_velocities(comm));
+        ck.dissipated = m.state(comm).dissipated;
+        ck.substeps = m.counters.substeps;
+    } else if model.has_motion() {
+        let mut x = model.mesh.nodes.clone();
+        model.positions_at(ck.time, &mut x);
+        ck.positions = Some(x);
+    }
+    if let Some(s) = sys.as_mut() {
+        let owned = s.t.to_local_vec()?;
+        let all = crate::parallel::all_gather_f64(comm, &owned);
+        ck.temperature = Some(
+            (0..model.mesh.nodes.len())
+                .map(|n| all[layout.global_of[n] as usize])
+                .collect(),
+        );
+        let e = s.energy()?;
+        ck.heat = [
+            e.stored,
+            e.stored_change,
+            e.dirichlet_in,
+            e.flux_in,
+            e.convection_in,
+        ];
+    }
+    let written = if comm.rank() == 0 {
+        ck.write(path).map_err(Error::from)
+    } else {
+        Ok(())
+    };
+    agree(comm, written)
+}
+
+/// The particles of `[output.particles]`: their bodies, volumes and
+/// distances from the axis.
+fn particle_report(
+    model: &Model,
+    p: &crate::scenario::ParticleOutputSpec,
+) -> Option<ParticleReport> {
+    let bodies: Vec<usize> = (0..model.bodies.len())
+        .filter(|&b| model.bodies[b].template == p.template)
+        .collect();
+    if bodies.is_empty() {
+        return None;
+    }
+    let mut volumes = Vec::new();
+    let mut radii = Vec::new();
+    for &b in &bodies {
+        let (e0, e1) = model.bodies[b].elem_range;
+        let (mut v, mut c) = (0.0, [0.0; 3]);
+        for e in e0 as usize..e1 as usize {
+            let ve = model.mesh.element_volume(e);
+            let x = model.mesh.element_coords(e);
+            v += ve;
+            for d in 0..3 {
+                c[d] += ve * (x[0][d] + x[1][d] + x[2][d] + x[3][d]) / 4.0;
+            }
+        }
+        volumes.push(v);
+        radii.push((c[0] / v - p.axis[0]).hypot(c[1] / v - p.axis[1]));
+    }
+    Some(ParticleReport::new(bodies, volumes, radii, p.radial_bins))
+}
+
+/// History columns per body, or per scenario entry (template) when there
+/// are more than [`BodyGroups::MAX_BODY_COLUMNS`] bodies.
+struct BodyGroups {
+    names: Vec<String>,
+    /// Group of every body, and each body's volume.
+    group: Vec<usize>,
+    volume: Vec<f64>,
+}
+
+impl BodyGroups {
+    const MAX_BODY_COLUMNS: usize = 16;
+
+    fn new(model: &Model) -> BodyGroups {
+        let volume: Vec<f64> = model
+            .bodies
+            .iter()
+            .map(|b| {
+                (b.elem_range.0..b.elem_range.1)
+                    .map(|e| model.mesh.element_volume(e as usize))
+                    .sum()
+            })
+            .collect();
+        if model.bodies.len() <= Self::MAX_BODY_COLUMNS {
+            return BodyGroups {
+                names: model.bodies.iter().map(|b| b.name.clone()).collect(),
+                group: (0..model.bodies.len()).collect(),
+                volume,
+            };
+        }
+        let mut names: Vec<String> = Vec::new();
+        let group = model
+            .bodies
+            .iter()
+            .map(|b| match names.iter().position(|n| *n == b.template) {
+                Some(i) => i,
+                None => {
+                    names.push(b.template.clone());
+                    names.len() - 1
+                }
+            })
+            .collect();
+        BodyGroups {
+            names,
+            group,
+            volume,
+        }
+    }
+
+    /// (min, volume-weighted mean, max) per group from per-body values.
+    fn reduce(&self, per_body: &[[f64; 3]]) -> Vec<[f64; 3]> {
+        let ng = self.names.len();
+        let mut out = vec![[f64::INFINITY, 0.0, f64::NEG_INFINITY]; ng];
+        let mut vol = vec![0.0; ng];
+        for (b, s) in per_body.iter().enumerate() {
+            let g = self.group[b];
+            out[g][0] = out[g][0].min(s[0]);
+            out[g][1] += self.volume[b] * s[1];
+            out[g][2] = out[g][2].max(s[2]);
+            vol[g] += self.volume[b];
+        }
+        for (o, v) in out.iter_mut().zip(vol) {
+            o[1] /= v;
+        }
+        out
+    }
+}
+
+/// Contact area summed per pair of bodies: `body_a,body_b,name_a,name_b,pairs,area`.
+fn write_body_contacts(model: &Model, contacts: &ContactSet, path: &Path) -> Result<()> {
+    let mut per: std::collections::BTreeMap<(u32, u32), (u64, f64)> = Default::default();
+    for p in &contacts.all {
+        let a = model.mesh.body[p.target as usize];
+        let b = model.mesh.body[p.contactor as usize];
+        let e = per.entry((a.min(b), a.max(b))).or_default();
+        e.0 += 1;
+        e.1 += p.area();
+    }
+    let mut text = String::from("body_a,body_b,name_a,name_b,pairs,area\n");
+    for ((a, b), (n, s)) in per {
+        text.push_str(&format!(
+            "{a},{b},{},{},{n},{s:.12e}\n",
+            model.bodies[a as usize].name, model.bodies[b as usize].name
+        ));
+    }
+    std::fs::write(path, text).map_err(|source| Error::File {
+        path: path.display().to_string(),
+        source,
     })
 }

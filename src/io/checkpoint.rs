@@ -76,7 +76,11 @@ fn put<T: H5Type + Copy>(
     cols: usize,
 ) -> Result<(), IoError> {
     let rows = data.len() / cols.max(1);
-    let shape: Vec<usize> = if cols == 1 { vec![rows] } else { vec![rows, cols] };
+    let shape: Vec<usize> = if cols == 1 {
+        vec![rows]
+    } else {
+        vec![rows, cols]
+    };
     file.new_dataset::<T>()
         .shape(shape)
         .create(name)
@@ -202,7 +206,9 @@ impl Checkpoint {
         let format = file
             .attr("format")
             .and_then(|a| a.read_raw::<u8>())
-            .map_err(|_| IoError::invalid(path, "not an fdem checkpoint (no `format` attribute)"))?;
+            .map_err(|_| {
+                IoError::invalid(path, "not an fdem checkpoint (no `format` attribute)")
+            })?;
         if format != FORMAT.as_bytes() {
             return Err(IoError::invalid(path, "not an fdem checkpoint"));
         }
@@ -268,7 +274,9 @@ impl Checkpoint {
         if self.elem_body.len() != self.tets.len() {
             return bad("mesh/body and mesh/tets differ in length".into());
         }
-        if self.body_templates.len() != nb || self.body_nodes.len() != nb || self.body_elems.len() != nb
+        if self.body_templates.len() != nb
+            || self.body_nodes.len() != nb
+            || self.body_elems.len() != nb
         {
             return bad("the /bodies datasets differ in length".into());
         }
@@ -278,7 +286,9 @@ impl Checkpoint {
             .enumerate()
             .find(|(_, t)| t.iter().any(|&n| n as usize >= nn))
         {
-            return bad(format!("element {e} refers to a node beyond the {nn} nodes"));
+            return bad(format!(
+                "element {e} refers to a node beyond the {nn} nodes"
+            ));
         }
         if self.elem_body.iter().any(|&b| b as usize >= nb) {
             return bad("an element refers to a body beyond the body list".into());
@@ -289,7 +299,10 @@ impl Checkpoint {
             ("state/temperature", self.temperature.as_ref().map(Vec::len)),
         ] {
             if len.is_some_and(|l| l != nn) {
-                return bad(format!("{name} has {} rows for {nn} nodes", len.unwrap_or(0)));
+                return bad(format!(
+                    "{name} has {} rows for {nn} nodes",
+                    len.unwrap_or(0)
+                ));
             }
         }
         Ok(())

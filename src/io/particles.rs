@@ -35,9 +35,7 @@ impl ParticleReport {
     /// to the largest radius.
     pub fn new(bodies: Vec<usize>, volumes: Vec<f64>, radii: Vec<f64>, bins: usize) -> Self {
         let rmax = radii.iter().copied().fold(0.0, f64::max) * (1.0 + 1e-9);
-        let edges = (0..=bins)
-            .map(|i| rmax * i as f64 / bins as f64)
-            .collect();
+        let edges = (0..=bins).map(|i| rmax * i as f64 / bins as f64).collect();
         ParticleReport {
             bodies,
             volumes,
@@ -107,7 +105,8 @@ impl ParticleReport {
         }
         write_atomic(&csv, &text)?;
         out.push(csv);
-        let col = |i: usize| -> Vec<(f64, f64)> { self.history.iter().map(|r| (r[0], r[i])).collect() };
+        let col =
+            |i: usize| -> Vec<(f64, f64)> { self.history.iter().map(|r| (r[0], r[i])).collect() };
         let (mean, lo, hi, plo, phi) = (col(1), col(2), col(3), col(4), col(5));
         let png = dir.join(format!("{stem}_particles.png"));
         let plot = LinePlot {
@@ -115,19 +114,40 @@ impl ParticleReport {
             x_label: "time [s]",
             y_label: "temperature",
             series: vec![
-                Series { label: "mean", points: &mean, dashed: false },
-                Series { label: "min (nodes)", points: &lo, dashed: true },
-                Series { label: "max (nodes)", points: &hi, dashed: true },
-                Series { label: "coldest particle (mean)", points: &plo, dashed: false },
-                Series { label: "hottest particle (mean)", points: &phi, dashed: false },
+                Series {
+                    label: "mean",
+                    points: &mean,
+                    dashed: false,
+                },
+                Series {
+                    label: "min (nodes)",
+                    points: &lo,
+                    dashed: true,
+                },
+                Series {
+                    label: "max (nodes)",
+                    points: &hi,
+                    dashed: true,
+                },
+                Series {
+                    label: "coldest particle (mean)",
+                    points: &plo,
+                    dashed: false,
+                },
+                Series {
+                    label: "hottest particle (mean)",
+                    points: &phi,
+                    dashed: false,
+                },
             ],
         };
-        write_png(&plot, &png, (1000, 700))
-            .map_err(|e| IoError::invalid(&png, e.to_string()))?;
+        write_png(&plot, &png, (1000, 700)).map_err(|e| IoError::invalid(&png, e.to_string()))?;
         out.push(png);
         if !self.profiles.is_empty() {
             let nb = self.edges.len() - 1;
-            let mids: Vec<f64> = (0..nb).map(|i| 0.5 * (self.edges[i] + self.edges[i + 1])).collect();
+            let mids: Vec<f64> = (0..nb)
+                .map(|i| 0.5 * (self.edges[i] + self.edges[i + 1]))
+                .collect();
             let csv = dir.join(format!("{stem}_radial.csv"));
             let mut text = String::from("radius");
             for (t, _) in &self.profiles {
@@ -143,7 +163,11 @@ impl ParticleReport {
             }
             write_atomic(&csv, &text)?;
             out.push(csv);
-            let labels: Vec<String> = self.profiles.iter().map(|(t, _)| format!("t = {t} s")).collect();
+            let labels: Vec<String> = self
+                .profiles
+                .iter()
+                .map(|(t, _)| format!("t = {t} s"))
+                .collect();
             let points: Vec<Vec<(f64, f64)>> = self
                 .profiles
                 .iter()
@@ -157,7 +181,11 @@ impl ParticleReport {
                 series: labels
                     .iter()
                     .zip(&points)
-                    .map(|(l, p)| Series { label: l, points: p, dashed: false })
+                    .map(|(l, p)| Series {
+                        label: l,
+                        points: p,
+                        dashed: false,
+                    })
                     .collect(),
             };
             write_png(&plot, &png, (1000, 700))
@@ -199,6 +227,11 @@ mod tests {
         assert_eq!(files.len(), 4);
         let csv = std::fs::read_to_string(dir.path().join("x_particles.csv")).unwrap();
         assert_eq!(csv.lines().count(), 3);
-        assert!(std::fs::metadata(dir.path().join("x_radial.png")).unwrap().len() > 1000);
+        assert!(
+            std::fs::metadata(dir.path().join("x_radial.png"))
+                .unwrap()
+                .len()
+                > 1000
+        );
     }
 }

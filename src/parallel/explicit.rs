@@ -1017,6 +1017,43 @@ impl ExplicitDomain {
         }
     }
 
+    /// Collective. Velocities of every node (original numbering).
+    pub fn gather_velocities(&self, comm: &SimpleCommunicator) -> Vec<[f64; 3]> {
+        let owned = self.velocity();
+        let all = super::all_gather_f64(comm, &owned);
+        let mut out = vec![[0.0; 3]; self.x_all.len()];
+        for (g, c) in all.chunks_exact(3).enumerate() {
+            out[self.orig_of_global[g] as usize] = [c[0], c[1], c[2]];
+        }
+        out
+    }
+
+    /// Collective. Continue from a saved state: positions and velocities
+    /// of every node (original numbering) and the energy dissipated so
+    /// far. Contact candidates are detected afresh; forces depend only on
+    /// the overlapping pairs and are summed in a fixed order, so the
+    /// trajectory continues exactly as it would have.
+    pub fn restore(
+        &mut self,
+        comm: &SimpleCommunicator,
+        model: &Model,
+        layout: &Layout,
+        positions: &[[f64; 3]],
+        velocities: &[[f64; 3]],
+        dissipated: f64,
+    ) -> Result<()> {
+        self.x_all.copy_from_slice(positions);
+        for (i, &n) in self.node_of_local.iter().enumerate() {
+            self.x[i] = Vector3::from(positions[n as usize]);
+            self.v[i] = Vector3::from(velocities[n as usize]);
+        }
+        self.dissipated = if comm.rank() == 0 { dissipated } else { 0.0 };
+        self.v_prev.clear();
+        self.detect(comm, model, layout)?;
+        self.redetect = false;
+        Ok(())
+    }
+
     /// Search margin of the contact candidates (m).
     pub fn margin(&self) -> f64 {
         self.margin

@@ -411,6 +411,21 @@ impl<'p> ThermalSystem<'p> {
         Ok(())
     }
 
+    /// Continue from a saved state: owned temperatures (PETSc order), the
+    /// heat balance so far and the steps done.
+    pub fn restore(&mut self, owned: &[f64], account: EnergyAccount, steps: u64) -> Result<()> {
+        self.t.copy_from_slice(owned)?;
+        self.t0.copy_from(&self.t)?;
+        self.t_sum.set(0.0)?;
+        self.steps = 0;
+        self.steps_total = steps;
+        let stored = account.stored;
+        self.base = account;
+        // energy() adds the change since t0 to the base: keep `stored` as saved.
+        self.base.stored = stored;
+        Ok(())
+    }
+
     /// Collective. Fail if a temperature is NaN or infinite; returns the
     /// local index of the first bad owned entry on this rank, if any.
     pub fn first_non_finite(&self) -> Result<Option<usize>> {

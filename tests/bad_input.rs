@@ -343,3 +343,102 @@ fn mechanics_blow_up_is_an_error_not_a_corrupt_file() {
         h5dump_ok(&out.join("bad.h5"));
     }
 }
+
+/// A packing scenario: nuts into a container, with `pack_extra` appended
+/// to the nut's `pack` table and `nut_mesh` as its mesh.
+fn packing(dir: &Path, nut_mesh: &str, pack_extra: &str, height: f64) -> PathBuf {
+    write(
+        dir,
+        "pack.toml",
+        &format!(
+            r#"
+[time]
+dt = 0.01
+steps = 2
+
+[[materials]]
+name = "m"
+density = 1000.0
+young = 1e6
+poisson = 0.22
+
+[[bodies]]
+name = "container"
+material = "m"
+fixed = true
+mesh = {{ kind = "container", inner_radius = 0.1, wall = 0.02, height = {height}, element_size = 0.03 }}
+
+[[bodies]]
+name = "nut"
+material = "m"
+mesh = {nut_mesh}
+pack = {{ count = 20, into = "container"{pack_extra} }}
+
+[mechanics]
+gravity = [0.0, 0.0, -9.81]
+
+[mechanics.contact]
+penalty = 1e6
+"#
+        ),
+    )
+}
+
+#[test]
+fn overlapping_initial_placement_is_refused_before_any_work() {
+    let dir = scenario_dir("pack-overlap");
+    let mut lines = String::new();
+    for i in 0..20 {
+        // Nuts 0 and 1 only 1 cm apart (they are 4 cm across); the rest stacked apart.
+        let x = if i == 1 { 0.01 } else { 0.0 };
+        let z = if i <= 1 { 0.05 } else { 0.05 + 0.05 * i as f64 };
+        lines.push_str(&format!("{x}, 0.0, {z}, 0, 0, 0\n"));
+    }
+    write(&dir, "pos.csv", &lines);
+    let scen = packing(
+        &dir,
+        r#"{ kind = "nut" }"#,
+        r#", positions = "pos.csv""#,
+        2.0,
+    );
+    for ranks in [1, 2] {
+        let out = dir.join(format!("out{ranks}"));
+        let (_, err) = run_bad(ranks, &scen, &out, &[]);
+        assert!(
+            err.contains("pack.toml") && err.contains("`nut_0` and `nut_1` overlap"),
+            "{err}"
+        );
+        assert_no_output(&out);
+    }
+}
+
+#[test]
+fn particle_template_that_is_not_closed_is_refused() {
+    // Two boxes sharing no node (two pieces) as one particle template.
+    let dir = scenario_dir("pack-open");
+    let mut a = fdem::mesh::generate::box_mesh([0.0; 3], [0.02, 0.02, 0.01], 0.01).unwrap();
+    let b = fdem::mesh::generate::box_mesh([0.0, 0.0, 0.01], [0.02, 0.02, 0.01], 0.01).unwrap();
+    a.append(b, 0);
+    fdem::mesh::gmsh::write_msh_ascii(&a, &dir.join("split.msh")).unwrap();
+    let scen = packing(&dir, r#"{ kind = "gmsh", file = "split.msh" }"#, "", 2.0);
+    let out = dir.join("out");
+    let (_, err) = run_bad(2, &scen, &out, &[]);
+    assert!(
+        err.contains("pack.toml") && err.contains("not a closed volume"),
+        "{err}"
+    );
+    assert_no_output(&out);
+}
+
+#[test]
+fn container_too_small_for_the_particles_is_refused() {
+    let dir = scenario_dir("pack-small");
+    let scen = packing(&dir, r#"{ kind = "nut" }"#, "", 0.01);
+    let out = dir.join("out");
+    let (_, err) = run_bad(1, &scen, &out, &[]);
+    assert!(
+        err.contains("pack.toml") && err.contains("too small for 20 particles"),
+        "{err}"
+    );
+    assert_no_output(&out);
+}

@@ -1,10 +1,12 @@
 //! Analytic and exact reference solutions the validation tests compare against.
 
+pub mod lumped;
 pub mod pipe_network;
 pub mod semidiscrete;
 pub mod slab;
 pub mod thermoelastic;
 
+pub use lumped::LumpedNetwork;
 pub use pipe_network::{
     circle_overlap_half_angle, circle_overlap_surface, contact_half_angle, particle_resistance,
     PipeNetwork,

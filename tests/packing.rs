@@ -1,0 +1,262 @@
+//! Large-packing heat-up (seed 000 sec 6, Table 4; issue 5) at N = 50 on two
+//! ranks: the deposition is deterministic and restarts exactly from a
+//! checkpoint; the heat-up from one checkpoint agrees between 1 and 2 ranks;
+//! the heat through the container equals the heat stored in the particles;
+//! with k × 1000 the mean particle temperature follows the lumped
+//! (average-temperature) network built from the same contact areas.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+
+use common::*;
+use fdem::io::checkpoint::Checkpoint;
+use fdem::validation::LumpedNetwork;
+
+const N: &str = "bodies.1.pack.count=50";
+/// CI settings of the packing stage: a softer packing modulus and penalty
+/// (twice the explicit step), more damping and a looser settling test than
+/// the scenario's defaults (kinetic energy below 3e-4 J, ~2 cm/s rms for 50
+/// nuts, from 0.3 s on), so N = 50 settles within ~0.4 s of simulated time.
+const FAST: [&str; 6] = [
+    "materials.0.young=2.5e5",
+    "mechanics.contact.penalty=2.5e5",
+    "mechanics.damping=10.0",
+    "mechanics.settle.kinetic_energy=3e-4",
+    "mechanics.settle.relative=1e-9",
+    "mechanics.settle.after=0.3",
+];
+
+fn deposit_scenario() -> PathBuf {
+    root().join("scenarios/nut-packing-deposit.toml")
+}
+
+fn heatup_scenario() -> PathBuf {
+    root().join("scenarios/nut-packing-heatup.toml")
+}
+
+fn deposit(dir: &Path, extra: &[&str]) -> String {
+    let mut args = vec!["--set", N];
+    for s in FAST.iter() {
+        args.extend_from_slice(&["--set", s]);
+    }
+    args.extend_from_slice(extra);
+    run_ok(2, &deposit_scenario(), dir, &args)
+}
+
+/// The settled N = 50 packing (deposited once per test run, 2 ranks).
+fn packing() -> &'static (PathBuf, String) {
+    static P: OnceLock<(PathBuf, String)> = OnceLock::new();
+    P.get_or_init(|| {
+        let dir = out_dir("packing/deposit-a");
+        let stdout = deposit(&dir, &[]);
+        (dir.join("nut-packing-deposit_checkpoint.h5"), stdout)
+    })
+}
+
+fn heatup(ranks: usize, name: &str, extra: &[&str]) -> (PathBuf, String) {
+    let (ck, _) = packing();
+    let dir = out_dir(name);
+    let file = format!("bodies.1.mesh.file={}", ck.display());
+    let mut args = vec!["--set", file.as_str()];
+    args.extend_from_slice(extra);
+    let stdout = run_ok(ranks, &heatup_scenario(), &dir, &args);
+    (dir, stdout)
+}
+
+#[test]
+fn deposition_settles_inside_the_container_deterministically() {
+    let (ck_path, stdout) = packing();
+    assert!(
+        summary_line(stdout, "settled").is_some(),
+        "the packing did not settle:\n{stdout}"
+    );
+    let a = Checkpoint::read(ck_path).unwrap();
+    let x = a.positions.as_ref().unwrap();
+    // Every nut node inside the container: r < 0.225, z > floor (0), and
+    // the 50 nuts (one layer) below 3 nut widths.
+    let nuts = a.bodies_of("nut");
+    assert_eq!(nuts.len(), 50);
+    for &b in &nuts {
+        let [n0, n1] = a.body_nodes[b];
+        for p in &x[n0 as usize..n1 as usize] {
+            assert!(
+                p[0].hypot(p[1]) < 0.225 + 1e-3,
+                "{}: node at r = {}",
+                a.body_names[b],
+                p[0].hypot(p[1])
+            );
+            assert!(
+                p[2] > -1e-3 && p[2] < 0.12,
+                "{}: node at z = {}",
+                a.body_names[b],
+                p[2]
+            );
+        }
+    }
+    // A rerun on the same rank count settles to the same positions, bitwise.
+    let dir = out_dir("packing/deposit-b");
+    let again = deposit(&dir, &[]);
+    assert_eq!(
+        summary_line(stdout, "settled"),
+        summary_line(&again, "settled")
+    );
+    let b = Checkpoint::read(&dir.join("nut-packing-deposit_checkpoint.h5")).unwrap();
+    assert_eq!(a.positions, b.positions, "positions differ between reruns");
+    assert_eq!(
+        a.velocities, b.velocities,
+        "velocities differ between reruns"
+    );
+}
+
+#[test]
+fn restart_from_a_checkpoint_continues_bitwise() {
+    // 0.06 s straight vs 0.03 s, checkpoint, restart, 0.03 s more (2 ranks).
+    let full = out_dir("packing/restart-full");
+    deposit(&full, &["--set", "time.end_time=0.06"]);
+    let first = out_dir("packing/restart-first");
+    deposit(&first, &["--set", "time.end_time=0.03"]);
+    let ck = first.join("nut-packing-deposit_checkpoint.h5");
+    assert_eq!(Checkpoint::read(&ck).unwrap().step, 3);
+    let second = out_dir("packing/restart-second");
+    let out = deposit(
+        &second,
+        &[
+            "--set",
+            "time.end_time=0.06",
+            "--restart",
+            ck.to_str().unwrap(),
+        ],
+    );
+    assert!(summary_line(&out, "restart").is_some(), "{out}");
+    let a = Checkpoint::read(&full.join("nut-packing-deposit_checkpoint.h5")).unwrap();
+    let b = Checkpoint::read(&second.join("nut-packing-deposit_checkpoint.h5")).unwrap();
+    assert_eq!(a.step, 6);
+    assert_eq!(b.step, 6);
+    assert_eq!(a.positions, b.positions, "restarted positions differ");
+    assert_eq!(a.velocities, b.velocities, "restarted velocities differ");
+    // A checkpoint from another scenario (other seed) is refused.
+    let o = fdem(
+        1,
+        &[
+            "run",
+            deposit_scenario().to_str().unwrap(),
+            "--quiet",
+            "--set",
+            N,
+            "--set",
+            "bodies.1.pack.seed=9",
+            "--restart",
+            ck.to_str().unwrap(),
+            "--output",
+            out_dir("packing/restart-bad").to_str().unwrap(),
+        ],
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(err.contains("does not match the scenario"), "{err}");
+}
+
+#[test]
+fn heatup_agrees_on_one_and_two_ranks_and_balances_heat() {
+    let (d1, _) = heatup(1, "packing/heatup-1", &[]);
+    let (d2, s2) = heatup(2, "packing/heatup-2", &[]);
+    let stem = "nut-packing-heatup";
+    let r1 = read_results(&d1, stem);
+    let r2 = read_results(&d2, stem);
+    assert_same_temperatures(&r1, &r2, 1e-8, "heat-up 1 vs 2 ranks");
+    // Contacts: nut–nut and nut–container pairs exist.
+    let contacts = summary_line(&s2, "contact").unwrap();
+    assert!(!contacts.starts_with("contact     0 pairs"), "{contacts}");
+    // Heat in through the container (Dirichlet nodes) = rise of the stored heat
+    // (the container's own is constant), to solver tolerance.
+    let (h, rows) = history(&d2, stem);
+    let last = rows.last().unwrap();
+    let stored0 = rows[0][col(&h, "stored_heat")];
+    let rise = last[col(&h, "stored_heat")] - stored0;
+    let inflow = last[col(&h, "boundary_heat_in")];
+    assert!(inflow > 0.0, "no heat entered");
+    assert!(
+        (rise - inflow).abs() <= 1e-6 * inflow,
+        "stored rise {rise:e} vs heat in {inflow:e}"
+    );
+    // Particle statistics: files written, mean rising, bounded by 0 and 300.
+    let csv = std::fs::read_to_string(d2.join(format!("{stem}_particles.csv"))).unwrap();
+    let means: Vec<f64> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').nth(1).unwrap().parse().unwrap())
+        .collect();
+    assert_eq!(means.len(), 81);
+    assert!(means.windows(2).all(|w| w[1] >= w[0] - 1e-9));
+    assert!(means[80] > 0.0 && means[80] < 300.0);
+    for f in [
+        "_particles.png",
+        "_radial.png",
+        "_radial.csv",
+        "_body_contacts.csv",
+    ] {
+        assert!(d2.join(format!("{stem}{f}")).is_file(), "{f} missing");
+    }
+}
+
+#[test]
+fn high_conductivity_follows_the_lumped_network() {
+    // k × 1000 (Table 4: 0.001 → 1 W/m/K): particles nearly isothermal.
+    let (dir, _) = heatup(
+        2,
+        "packing/heatup-k1000",
+        &["--set", "materials.0.conductivity=1.0"],
+    );
+    let stem = "nut-packing-heatup";
+    let names_of = |s: &str| s.to_string();
+    // Contact areas per pair of bodies, from the run.
+    let text = std::fs::read_to_string(dir.join(format!("{stem}_body_contacts.csv"))).unwrap();
+    let ck = Checkpoint::read(&packing().0).unwrap();
+    let nuts: Vec<String> = ck
+        .bodies_of("nut")
+        .iter()
+        .map(|&b| names_of(&ck.body_names[b]))
+        .collect();
+    let index = |n: &str| nuts.iter().position(|x| x == n);
+    // Table 4: ρ c V per nut (V of the meshed nut), Rc = 0.01.
+    let v = fdem::mesh::nut::nut_mesh_default([0.0; 3])
+        .unwrap()
+        .total_volume();
+    let (rho, c, rc) = (1000.0, 1.0, 0.01);
+    let mut net = LumpedNetwork {
+        capacity: vec![rho * c * v; nuts.len()],
+        links: Vec::new(),
+        held: Vec::new(),
+    };
+    for line in text.lines().skip(1) {
+        let f: Vec<&str> = line.split(',').collect();
+        let area: f64 = f[5].parse().unwrap();
+        match (index(f[2]), index(f[3])) {
+            (Some(i), Some(j)) => net.links.push((i, j, area / rc)),
+            (Some(i), None) | (None, Some(i)) => net.held.push((i, area / rc, 300.0)),
+            (None, None) => {}
+        }
+    }
+    assert!(!net.held.is_empty(), "no nut touches the container");
+    let lumped = net.run(&vec![0.0; nuts.len()], 1.0, 1.0, 80);
+    let csv = std::fs::read_to_string(dir.join(format!("{stem}_particles.csv"))).unwrap();
+    let fdem_mean: Vec<f64> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').nth(1).unwrap().parse().unwrap())
+        .collect();
+    let mut worst: f64 = 0.0;
+    for k in 1..=80 {
+        let m = net.mean(&lumped[k]);
+        // Error relative to the temperature rise the lumped model predicts.
+        worst = worst.max((fdem_mean[k] - m).abs() / m);
+    }
+    println!("k x 1000: worst relative difference of the mean particle temperature vs the lumped network: {:.3} %", 100.0 * worst);
+    assert!(
+        worst < 0.02,
+        "mean particle temperature differs from the lumped network by {:.2} %",
+        100.0 * worst
+    );
+}

@@ -74,7 +74,8 @@ mrow=()
 # mech_case LABEL RANKS SCENARIO
 mech_case() {
   local label=$1 ranks=$2 scen=$3
-  local cmd=("$BIN" run "$scen" --quiet --output "$OUT/mech")
+  shift 3
+  local cmd=("$BIN" run "$scen" --quiet --output "$OUT/mech" "$@")
   if [ "$ranks" -gt 1 ]; then cmd=(mpirun -n "$ranks" --oversubscribe "${cmd[@]}"); fi
   echo "== $label on $ranks rank(s): ${cmd[*]}" >&2
   local log
@@ -100,6 +101,17 @@ mech_case "block 215,622 tets, 200 substeps" 1 scenarios/bench-mech-block.toml
 mech_case "block 215,622 tets, 200 substeps" 2 scenarios/bench-mech-block.toml
 mech_case "dense pack, 256 cubes, 100 substeps" 1 scenarios/bench-contact-pack.toml
 mech_case "dense pack, 256 cubes, 100 substeps" 2 scenarios/bench-contact-pack.toml
+
+# Packings (issue 5): N = 50 deposition with the CI settings of tests/packing.rs,
+# then the heat-up of 2009 nuts on a lattice (the paper's size).
+DEPOSIT_CI=(--set bodies.1.pack.count=50 --set materials.0.young=2.5e5
+  --set mechanics.contact.penalty=2.5e5 --set mechanics.damping=10.0
+  --set mechanics.settle.kinetic_energy=3e-4 --set mechanics.settle.relative=1e-9
+  --set mechanics.settle.after=0.3)
+mech_case "nut deposition N=50 (CI settings), to settled" 1 scenarios/nut-packing-deposit.toml "${DEPOSIT_CI[@]}"
+mech_case "nut deposition N=50 (CI settings), to settled" 2 scenarios/nut-packing-deposit.toml "${DEPOSIT_CI[@]}"
+run_case "heat-up, 2009 nuts on a lattice, 80 steps (seed 000 sec 6 size)" 1 scenarios/bench-nut-lattice-heatup.toml
+run_case "heat-up, 2009 nuts on a lattice, 80 steps (seed 000 sec 6 size)" 2 scenarios/bench-nut-lattice-heatup.toml
 
 # Mechanics kernel throughput (issue 4, the first part built).
 cargo build --release --example mech_kernel_bench
@@ -152,6 +164,17 @@ echo "$kernel_line" >&2
   echo "| case | ranks | tets | dt (s) | substeps | mechanics (s) | set-up (s) | detection (s) | per substep (ms) | M tet updates/s/rank | M pair evaluations/s/rank | peak MiB/rank |"
   echo "|---|---|---|---|---|---|---|---|---|---|---|---|"
   for r in "${mrow[@]}"; do echo "$r"; done
+  echo
+  echo "## Packings (issue 5)"
+  echo
+  echo "The nut deposition rows above use \`scenarios/nut-packing-deposit.toml\` at N = 50 with"
+  echo "the CI settings of \`tests/packing.rs\` (E = penalty = 0.25 MPa, damping 10 /s, settled when"
+  echo "the kinetic energy is below 3e-4 J after 0.3 s); the run stops when settled. The heat-up rows in the"
+  echo "first table run \`scenarios/bench-nut-lattice-heatup.toml\`: 2009 nuts (192 Tet4 each)"
+  echo "on a 7 x 7 x 41 lattice overlapping by 0.2 mm, in the container, Table 4 properties,"
+  echo "80 backward-Euler steps of 1 s (the paper's heat-up at its size, on a lattice instead"
+  echo "of a deposited packing). Issue 5 targets: heat-up of N = 2000 under 60 s on 2 ranks;"
+  echo "deposition of N = 2000 under 30 min on 2 ranks (not run here: see the README)."
   echo
   echo "## Mechanics kernel"
   echo

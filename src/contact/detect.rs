@@ -97,6 +97,33 @@ fn aabb(x: &[[f64; 3]; 4]) -> Aabb {
     )
 }
 
+/// Pairs `(x, y)`, `x < y`, of boundary tets of different bodies whose
+/// boxes overlap: the broad phase alone, no narrow phase. Used to tell the
+/// partitioner which bodies touch, so that touching particles land on the
+/// same rank.
+pub fn proximity_pairs(mesh: &TetMesh, bt: &BoundaryTets) -> Vec<(u32, u32)> {
+    if bt.is_empty() {
+        return Vec::new();
+    }
+    let boxes: Vec<Aabb> = bt
+        .elems
+        .iter()
+        .map(|&e| aabb(&mesh.element_coords(e as usize)))
+        .collect();
+    let bvh = Bvh::from_leaves(BvhBuildStrategy::Binned, &boxes);
+    let mut pairs = Vec::new();
+    for (i, &x) in bt.elems.iter().enumerate() {
+        for j in bvh.intersect_aabb(&boxes[i]) {
+            let y = bt.elems[j as usize];
+            if x < y && mesh.body[x as usize] != mesh.body[y as usize] {
+                pairs.push((x, y));
+            }
+        }
+    }
+    pairs.sort_unstable();
+    pairs
+}
+
 /// Find the contact pairs this caller is responsible for: those found
 /// from a boundary tet `x` with `owns(x)`. The contactor volume may be any
 /// tet of another body (a face that penetrates a few per cent of an element
@@ -184,6 +211,23 @@ mod tests {
                 .iter()
                 .all(|p| m.body[p.target as usize] != m.body[p.contactor as usize]));
         }
+    }
+
+    #[test]
+    fn proximity_pairs_link_only_touching_bodies() {
+        let m = two_bars(0.001, 0.1);
+        let bt = BoundaryTets::new(&m);
+        let near = proximity_pairs(&m, &bt);
+        assert!(!near.is_empty());
+        // Every contact pair of two boundary tets is among them.
+        for p in detect_contacts(&m, &bt, |_| true) {
+            let key = (p.target.min(p.contactor), p.target.max(p.contactor));
+            assert!(near.binary_search(&key).is_ok(), "{key:?} missing");
+        }
+        assert!(near
+            .iter()
+            .all(|&(a, b)| a < b && m.body[a as usize] != m.body[b as usize]));
+        assert!(proximity_pairs(&two_bars(-0.01, 0.1), &bt).is_empty());
     }
 
     #[test]

@@ -9,7 +9,7 @@ mod detect;
 pub mod penalty;
 mod surface;
 
-pub use detect::{detect_contacts, BoundaryTets, FaceList};
+pub use detect::{detect_contacts, proximity_pairs, BoundaryTets, FaceList};
 pub use penalty::{pair_stiffness, tet_tet_penalty, PenaltyParams, PenaltyResult};
 pub use surface::{tet_tet_contact_surface, ContactSurface};
 

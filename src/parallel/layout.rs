@@ -43,8 +43,19 @@ impl Layout {
         let ne = mesh.tets.len();
         let mut part: Vec<u32> = vec![0; ne];
         let mut status: i32 = 0;
+        // Touching bodies (boundary tets with overlapping boxes) are linked
+        // in the graph so a packing is not cut through every contact.
+        let links = |mesh: &TetMesh| {
+            let multi = mesh.body.iter().any(|&b| b != mesh.body[0]);
+            if size > 1 && multi {
+                let bt = crate::contact::BoundaryTets::new(mesh);
+                crate::contact::proximity_pairs(mesh, &bt)
+            } else {
+                Vec::new()
+            }
+        };
         if rank == 0 {
-            match super::partition_elements_weighted(mesh, size, weights) {
+            match super::partition_elements_weighted(mesh, size, weights, &links(mesh)) {
                 Ok(p) => part = p,
                 Err(_) => status = 1,
             }
@@ -52,7 +63,7 @@ impl Layout {
         comm.process_at_rank(0).broadcast_into(&mut status);
         if status != 0 {
             // Recompute on every rank to get the same message everywhere.
-            return Err(super::partition_elements_weighted(mesh, size, weights)
+            return Err(super::partition_elements_weighted(mesh, size, weights, &links(mesh))
                 .err()
                 .unwrap_or_else(|| "partitioning failed".into()));
         }

@@ -16,7 +16,7 @@ mod partition;
 pub use explicit::{ExplicitDomain, MechanicsState};
 pub use halo::Halo;
 pub use layout::Layout;
-pub use partition::{dual_graph, partition_elements, partition_elements_weighted};
+pub use partition::{dual_graph, dual_graph_with, partition_elements, partition_elements_weighted};
 
 use mpi::collective::SystemOperation;
 use mpi::traits::*;

@@ -4,6 +4,12 @@ use crate::mesh::TetMesh;
 
 /// The dual graph in CSR form: elements are adjacent when they share a face.
 pub fn dual_graph(mesh: &TetMesh) -> (Vec<i32>, Vec<i32>) {
+    dual_graph_with(mesh, &[])
+}
+
+/// The dual graph plus `extra` edges (element pairs, e.g. boundary tets of
+/// touching bodies), each counted once.
+pub fn dual_graph_with(mesh: &TetMesh, extra: &[(u32, u32)]) -> (Vec<i32>, Vec<i32>) {
     let ne = mesh.tets.len();
     let mut faces: Vec<([u32; 3], u32)> = Vec::with_capacity(4 * ne);
     for (e, t) in mesh.tets.iter().enumerate() {
@@ -35,6 +41,13 @@ pub fn dual_graph(mesh: &TetMesh) -> (Vec<i32>, Vec<i32>) {
             i += 1;
         }
     }
+    for &(a, b) in extra {
+        if a != b {
+            pairs.push((a, b));
+            deg[a as usize + 1] += 1;
+            deg[b as usize + 1] += 1;
+        }
+    }
     for e in 0..ne {
         deg[e + 1] += deg[e];
     }
@@ -53,15 +66,19 @@ pub fn dual_graph(mesh: &TetMesh) -> (Vec<i32>, Vec<i32>) {
 /// Partition the elements into `nparts` parts with METIS k-way (element
 /// count balanced, face cut minimised). Deterministic for a given mesh.
 pub fn partition_elements(mesh: &TetMesh, nparts: usize) -> Result<Vec<u32>, String> {
-    partition_elements_weighted(mesh, nparts, None)
+    partition_elements_weighted(mesh, nparts, None, &[])
 }
 
 /// As [`partition_elements`], balancing the sum of per-element `weights`
-/// (work estimates) instead of the element count.
+/// (work estimates) instead of the element count, and counting the
+/// `links` (pairs of elements of touching bodies) in the cut like shared
+/// faces, so that a packing is cut between clusters of particles rather
+/// than through every contact.
 pub fn partition_elements_weighted(
     mesh: &TetMesh,
     nparts: usize,
     weights: Option<&[i32]>,
+    links: &[(u32, u32)],
 ) -> Result<Vec<u32>, String> {
     let ne = mesh.tets.len();
     if nparts <= 1 || ne == 0 {
@@ -70,7 +87,7 @@ pub fn partition_elements_weighted(
     if ne < nparts {
         return Err(format!("{ne} elements cannot be split over {nparts} ranks"));
     }
-    let (xadj, adj) = dual_graph(mesh);
+    let (xadj, adj) = dual_graph_with(mesh, links);
     let mut part = vec![0i32; ne];
     let mut graph = metis::Graph::new(1, nparts as i32, &xadj, &adj)
         .map_err(|e| format!("METIS graph: {e}"))?;

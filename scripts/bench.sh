@@ -110,6 +110,18 @@ DEPOSIT_CI=(--set bodies.1.pack.count=50 --set materials.0.young=2.5e5
   --set mechanics.settle.after=0.3)
 mech_case "nut deposition N=50 (CI settings), to settled" 1 scenarios/nut-packing-deposit.toml "${DEPOSIT_CI[@]}"
 mech_case "nut deposition N=50 (CI settings), to settled" 2 scenarios/nut-packing-deposit.toml "${DEPOSIT_CI[@]}"
+mkdir -p "$OUT/dep50" && cp "$OUT/mech/nut-packing-deposit_checkpoint.h5" "$OUT/dep50/"
+# N = 200 (four layers) to settled, same settings with the kinetic-energy
+# threshold scaled with N, then the heat-up of that packing (2 ranks).
+DEPOSIT_200=(--set bodies.1.pack.count=200 --set materials.0.young=2.5e5
+  --set mechanics.contact.penalty=2.5e5 --set mechanics.damping=10.0
+  --set mechanics.settle.kinetic_energy=1.2e-3 --set mechanics.settle.relative=1e-9
+  --set mechanics.settle.after=0.3)
+mech_case "nut deposition N=200 (CI settings, KE < 1.2e-3 J), to settled" 2 scenarios/nut-packing-deposit.toml "${DEPOSIT_200[@]}"
+run_case "heat-up of the N=200 deposited packing, 80 steps" 2 scenarios/nut-packing-heatup.toml \
+  --set "bodies.1.mesh.file=$OUT/mech/nut-packing-deposit_checkpoint.h5"
+run_case "heat-up of the N=50 deposited packing, 80 steps" 2 scenarios/nut-packing-heatup.toml \
+  --set "bodies.1.mesh.file=$OUT/dep50/nut-packing-deposit_checkpoint.h5"
 run_case "heat-up, 2009 nuts on a lattice, 80 steps (seed 000 sec 6 size)" 1 scenarios/bench-nut-lattice-heatup.toml
 run_case "heat-up, 2009 nuts on a lattice, 80 steps (seed 000 sec 6 size)" 2 scenarios/bench-nut-lattice-heatup.toml
 
@@ -173,8 +185,10 @@ echo "$kernel_line" >&2
   echo "first table run \`scenarios/bench-nut-lattice-heatup.toml\`: 2009 nuts (192 Tet4 each)"
   echo "on a 7 x 7 x 41 lattice overlapping by 0.2 mm, in the container, Table 4 properties,"
   echo "80 backward-Euler steps of 1 s (the paper's heat-up at its size, on a lattice instead"
-  echo "of a deposited packing). Issue 5 targets: heat-up of N = 2000 under 60 s on 2 ranks;"
-  echo "deposition of N = 2000 under 30 min on 2 ranks (not run here: see the README)."
+  echo "of a deposited packing). The N = 200 rows deposit four layers of nuts with the same"
+  echo "settings (settled below 1.2e-3 J, the same rms speed per nut) and heat that packing"
+  echo "(\\`scenarios/nut-packing-heatup.toml\\`, Table 4). Issue 5 targets: heat-up of N = 2000 under"
+  echo "60 s on 2 ranks; deposition of N = 2000 under 30 min on 2 ranks (not run here: see the README)."
   echo
   echo "## Mechanics kernel"
   echo

@@ -268,7 +268,11 @@ fn high_conductivity_follows_the_lumped_network() {
         .map(|f| nut.face_area_normal(f.nodes).0)
         .sum();
     let biot = |k: f64| (1.0 / 0.01) * (nut.total_volume() / area) / k;
-    assert!(biot(100.0) < 0.01 && biot(1.0) > 0.1, "Bi(1) = {}", biot(1.0));
+    assert!(
+        biot(100.0) < 0.01 && biot(1.0) > 0.1,
+        "Bi(1) = {}",
+        biot(1.0)
+    );
     // Local face temperatures (the default), k x 1e5: within 2 %.
     let (f, n) = heatup_vs_lumped("packing/heatup-k1e5", 100.0, "local");
     let local = worst_relative(&f, &n);
@@ -289,7 +293,11 @@ fn high_conductivity_follows_the_lumped_network() {
         100.0 * finite_biot
     );
     assert!(local < 0.02, "local dT, k x 1e5: {:.2} %", 100.0 * local);
-    assert!(average < 0.02, "average dT, k x 1000: {:.2} %", 100.0 * average);
+    assert!(
+        average < 0.02,
+        "average dT, k x 1000: {:.2} %",
+        100.0 * average
+    );
     // At finite Bi the nuts' insides lag: the FDEM mean is below the
     // network's, and the gap closes as k grows.
     assert!(finite_biot > local, "{finite_biot} vs {local}");

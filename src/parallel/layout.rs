@@ -63,9 +63,11 @@ impl Layout {
         comm.process_at_rank(0).broadcast_into(&mut status);
         if status != 0 {
             // Recompute on every rank to get the same message everywhere.
-            return Err(super::partition_elements_weighted(mesh, size, weights, &links(mesh))
-                .err()
-                .unwrap_or_else(|| "partitioning failed".into()));
+            return Err(
+                super::partition_elements_weighted(mesh, size, weights, &links(mesh))
+                    .err()
+                    .unwrap_or_else(|| "partitioning failed".into()),
+            );
         }
         if size > 1 {
             comm.process_at_rank(0).broadcast_into(&mut part[..]);

@@ -171,6 +171,7 @@ impl TetMesh {
 #[cfg(test)]
 mod tests {
     use super::super::generate::box_mesh;
+    use super::super::testutil::unit_tet;
     use super::*;
 
     fn message(m: &TetMesh) -> String {
@@ -179,20 +180,6 @@ mod tests {
         let s = e.to_string();
         assert!(s.starts_with("mesh is not a closed volume: "), "{s}");
         s
-    }
-
-    fn unit_tet() -> TetMesh {
-        TetMesh {
-            nodes: vec![
-                [0.0, 0.0, 0.0],
-                [1.0, 0.0, 0.0],
-                [0.0, 1.0, 0.0],
-                [0.0, 0.0, 1.0],
-            ],
-            tets: vec![[0, 1, 2, 3]],
-            body: vec![0],
-            ..Default::default()
-        }
     }
 
     #[test]

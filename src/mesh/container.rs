@@ -3,6 +3,7 @@
 
 use std::collections::BTreeMap;
 
+use super::generate::check_center_and_sizes;
 use super::{tet_signed_volume, MeshError, TetMesh};
 
 /// Planar section of the container: a disc of radius `inner_radius` (centre
@@ -193,24 +194,17 @@ pub fn container_mesh(
     height: f64,
     h: f64,
 ) -> Result<TetMesh, MeshError> {
-    if !center.iter().all(|v| v.is_finite()) {
-        return Err(MeshError::InvalidParameter(format!(
-            "container center {center:?} must be finite"
-        )));
-    }
-    for (name, v) in [
-        ("inner_radius", inner_radius),
-        ("wall", wall),
-        ("bottom", bottom),
-        ("height", height),
-        ("element size h", h),
-    ] {
-        if !(v.is_finite() && v > 0.0) {
-            return Err(MeshError::InvalidParameter(format!(
-                "container {name} = {v} must be positive and finite"
-            )));
-        }
-    }
+    check_center_and_sizes(
+        "container",
+        center,
+        &[
+            ("inner_radius", inner_radius),
+            ("wall", wall),
+            ("bottom", bottom),
+            ("height", height),
+            ("element size h", h),
+        ],
+    )?;
     let r_out = inner_radius + wall;
     let m_f = 8.0
         * (std::f64::consts::TAU * inner_radius / (8.0 * h))
@@ -390,7 +384,7 @@ pub fn container_mesh(
 
 #[cfg(test)]
 mod tests {
-    use std::collections::HashMap;
+    use super::super::testutil::assert_conforming;
     use std::f64::consts::PI;
 
     use super::*;
@@ -451,15 +445,7 @@ mod tests {
         );
 
         // Conforming.
-        let mut faces: HashMap<[u32; 3], usize> = HashMap::new();
-        for e in 0..mesh.num_elems() {
-            for f in 0..4 {
-                let mut k = mesh.local_face_nodes(e, f);
-                k.sort_unstable();
-                *faces.entry(k).or_default() += 1;
-            }
-        }
-        assert!(faces.values().all(|&k| k <= 2));
+        assert_conforming(&mesh);
 
         // inner + rim + outer partition the boundary; inner = floor + wall_inner.
         let bf = mesh.boundary_faces();

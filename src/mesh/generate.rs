@@ -432,18 +432,11 @@ pub fn cylinder_mesh(
     width: f64,
     h: f64,
 ) -> Result<TetMesh, MeshError> {
-    if !center.iter().all(|v| v.is_finite()) {
-        return Err(MeshError::InvalidParameter(format!(
-            "cylinder center {center:?} must be finite"
-        )));
-    }
-    for (name, v) in [("radius", radius), ("width", width), ("element size h", h)] {
-        if !(v.is_finite() && v > 0.0) {
-            return Err(MeshError::InvalidParameter(format!(
-                "cylinder {name} = {v} must be positive and finite"
-            )));
-        }
-    }
+    check_center_and_sizes(
+        "cylinder",
+        center,
+        &[("radius", radius), ("width", width), ("element size h", h)],
+    )?;
     let n_b_f = (std::f64::consts::TAU * radius / h).round().max(8.0);
     let n_r_f = (radius / h).round().max(1.0);
     let n_z_f = (width / h).round().max(1.0);
@@ -612,13 +605,12 @@ fn push_ring(points: &mut Vec<[f64; 2]>, rho: f64, m: usize) -> RingNodes {
     ring
 }
 
-/// Checks a ring generator's centre and positive parameters.
-fn check_ring_params(
+/// Checks a generator's centre (finite) and sizes (positive and finite),
+/// naming the generator `what` and the offending parameter.
+pub(crate) fn check_center_and_sizes(
     what: &str,
     center: [f64; 3],
     params: &[(&str, f64)],
-    inner: (&str, f64),
-    outer: (&str, f64),
 ) -> Result<(), MeshError> {
     if !center.iter().all(|v| v.is_finite()) {
         return Err(MeshError::InvalidParameter(format!(
@@ -632,6 +624,18 @@ fn check_ring_params(
             )));
         }
     }
+    Ok(())
+}
+
+/// Checks a ring generator's centre and positive parameters.
+fn check_ring_params(
+    what: &str,
+    center: [f64; 3],
+    params: &[(&str, f64)],
+    inner: (&str, f64),
+    outer: (&str, f64),
+) -> Result<(), MeshError> {
+    check_center_and_sizes(what, center, params)?;
     if inner.1 >= outer.1 {
         return Err(MeshError::InvalidParameter(format!(
             "{what} {} = {} must be below {} = {}",
@@ -973,6 +977,7 @@ pub fn concentric_cylinder_mesh(
 
 #[cfg(test)]
 mod tests {
+    use super::super::testutil::assert_conforming;
     use std::collections::HashMap;
 
     use super::*;
@@ -1179,15 +1184,7 @@ mod tests {
 
         // Conforming: no face shared by more than two tets, and the boundary
         // faces are exactly the named sides.
-        let mut faces: HashMap<[u32; 3], usize> = HashMap::new();
-        for e in 0..m.num_elems() {
-            for f in 0..4 {
-                let mut k = m.local_face_nodes(e, f);
-                k.sort_unstable();
-                *faces.entry(k).or_default() += 1;
-            }
-        }
-        assert!(faces.values().all(|&c| c <= 2));
+        assert_conforming(&m);
         let n_tri = m.face_sets["zmin"].len();
         assert_eq!(m.face_sets["zmax"].len(), n_tri);
         assert_eq!(m.face_sets["side"].len(), 2 * n_b * n_z);
@@ -1343,15 +1340,7 @@ mod tests {
         let (z_lo, z_hi) = (center[2] - 0.5 * height, center[2] + 0.5 * height);
 
         // Conforming: no face in more than two tets.
-        let mut faces: HashMap<[u32; 3], usize> = HashMap::new();
-        for e in 0..m.num_elems() {
-            for f in 0..4 {
-                let mut k = m.local_face_nodes(e, f);
-                k.sort_unstable();
-                *faces.entry(k).or_default() += 1;
-            }
-        }
-        assert!(faces.values().all(|&c| c <= 2));
+        assert_conforming(m);
 
         // Closed, consistently oriented boundary: every directed boundary
         // edge appears once and its reverse once, so every boundary edge is

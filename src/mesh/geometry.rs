@@ -256,6 +256,7 @@ impl TetMesh {
 
 #[cfg(test)]
 mod tests {
+    use super::super::testutil::unit_tet;
     use super::*;
 
     fn regular() -> [[f64; 3]; 4] {
@@ -268,23 +269,9 @@ mod tests {
         ]
     }
 
-    fn unit() -> TetMesh {
-        TetMesh {
-            nodes: vec![
-                [0.0, 0.0, 0.0],
-                [1.0, 0.0, 0.0],
-                [0.0, 1.0, 0.0],
-                [0.0, 0.0, 1.0],
-            ],
-            tets: vec![[0, 1, 2, 3]],
-            body: vec![0],
-            ..Default::default()
-        }
-    }
-
     #[test]
     fn signed_volume_of_reference_tet() {
-        let m = unit();
+        let m = unit_tet();
         assert!((tet_signed_volume(&m.element_coords(0)) - 1.0 / 6.0).abs() < 1e-15);
         let mut x = m.element_coords(0);
         x.swap(2, 3);
@@ -302,7 +289,7 @@ mod tests {
         assert!((tet_quality(&y) - 1.0).abs() < 1e-9);
         x.swap(2, 3);
         assert!((tet_quality(&x) + 1.0).abs() < 1e-12);
-        let m = unit();
+        let m = unit_tet();
         let (q, e) = m.min_quality().unwrap();
         assert_eq!(e, 0);
         assert!(q > 0.5 && q < 1.0, "{q}");
@@ -311,7 +298,7 @@ mod tests {
 
     #[test]
     fn validate_accepts_good_mesh() {
-        let m = unit();
+        let m = unit_tet();
         m.validate().unwrap();
         assert_eq!(m.num_nodes(), 4);
         assert_eq!(m.num_elems(), 1);
@@ -321,7 +308,7 @@ mod tests {
 
     #[test]
     fn validate_reports_inverted_and_fix_orientation_repairs() {
-        let mut m = unit();
+        let mut m = unit_tet();
         m.tets[0] = [0, 1, 3, 2];
         let err = m.validate().unwrap_err();
         assert!(matches!(err, MeshError::Inverted { elem: 0, .. }));
@@ -340,20 +327,20 @@ mod tests {
 
     #[test]
     fn validate_reports_degenerate() {
-        let mut m = unit();
+        let mut m = unit_tet();
         m.nodes[3] = [0.5, 0.5, 1e-14];
         let msg = m.validate().unwrap_err().to_string();
         assert!(msg.contains("element 0 is degenerate"), "{msg}");
         assert!(msg.contains("(nodes 0,1,2,3)"), "{msg}");
         // Repeated node.
-        let mut m = unit();
+        let mut m = unit_tet();
         m.tets[0] = [0, 1, 2, 2];
         assert!(matches!(
             m.validate().unwrap_err(),
             MeshError::Degenerate { elem: 0, .. }
         ));
         // A tiny but well-shaped element is fine (relative tolerance).
-        let mut m = unit();
+        let mut m = unit_tet();
         for p in &mut m.nodes {
             *p = p.map(|c| c * 1e-6);
         }
@@ -362,34 +349,34 @@ mod tests {
 
     #[test]
     fn validate_reports_nan_range_body_and_sets() {
-        let mut m = unit();
+        let mut m = unit_tet();
         m.nodes[2][1] = f64::NAN;
         let msg = m.validate().unwrap_err().to_string();
         assert!(msg.contains("node 2 has a non-finite coordinate"), "{msg}");
 
-        let mut m = unit();
+        let mut m = unit_tet();
         m.tets[0][3] = 9;
         let msg = m.validate().unwrap_err().to_string();
         assert!(msg.contains("element 0 refers to node 9"), "{msg}");
 
-        let mut m = unit();
+        let mut m = unit_tet();
         m.body.push(1);
         assert!(matches!(
             m.validate().unwrap_err(),
             MeshError::BodyLength { .. }
         ));
 
-        let mut m = unit();
+        let mut m = unit_tet();
         m.node_sets.insert("top".into(), vec![3, 4]);
         let msg = m.validate().unwrap_err().to_string();
         assert!(msg.contains("node set 'top' refers to node 4"), "{msg}");
 
-        let mut m = unit();
+        let mut m = unit_tet();
         m.elem_sets.insert("s".into(), vec![1]);
         let msg = m.validate().unwrap_err().to_string();
         assert!(msg.contains("element set 's' refers to element 1"), "{msg}");
 
-        let mut m = unit();
+        let mut m = unit_tet();
         m.face_sets.insert("f".into(), vec![[0, 1, 7]]);
         let msg = m.validate().unwrap_err().to_string();
         assert!(msg.contains("face set 'f' refers to node 7"), "{msg}");

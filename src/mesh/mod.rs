@@ -35,6 +35,8 @@ mod geometry;
 pub mod gmsh;
 pub mod nut;
 mod sets;
+#[cfg(test)]
+pub(crate) mod testutil;
 
 pub use boundary::{BoundaryFace, LOCAL_FACES};
 pub use closed::CLOSED_VOLUME_REL_TOL;

@@ -14,6 +14,7 @@
 
 use std::collections::BTreeMap;
 
+use super::generate::check_center_and_sizes;
 use super::{tet_signed_volume, MeshError, TetMesh};
 
 /// Width across flats of the default nut (m); seed 000 Table 4 "outer width".
@@ -93,22 +94,15 @@ pub fn nut_mesh(
     radial: usize,
     layers: usize,
 ) -> Result<TetMesh, MeshError> {
-    if !center.iter().all(|v| v.is_finite()) {
-        return Err(MeshError::InvalidParameter(format!(
-            "nut center {center:?} must be finite"
-        )));
-    }
-    for (name, v) in [
-        ("across_flats", across_flats),
-        ("hole_radius", hole_radius),
-        ("thickness", thickness),
-    ] {
-        if !(v.is_finite() && v > 0.0) {
-            return Err(MeshError::InvalidParameter(format!(
-                "nut {name} = {v} must be positive and finite"
-            )));
-        }
-    }
+    check_center_and_sizes(
+        "nut",
+        center,
+        &[
+            ("across_flats", across_flats),
+            ("hole_radius", hole_radius),
+            ("thickness", thickness),
+        ],
+    )?;
     let apothem = 0.5 * across_flats;
     if hole_radius >= apothem {
         return Err(MeshError::InvalidParameter(format!(
@@ -311,7 +305,7 @@ pub fn nut_mesh(
 
 #[cfg(test)]
 mod tests {
-    use std::collections::HashMap;
+    use super::super::testutil::assert_conforming;
     use std::f64::consts::PI;
 
     use super::super::gmsh::{read_msh, write_msh_ascii};
@@ -369,15 +363,7 @@ mod tests {
         assert!(rel(v, expect) < 1e-12, "volume {v} vs {expect}");
 
         // Conforming: every element face is shared by at most 2 elements.
-        let mut faces: HashMap<[u32; 3], usize> = HashMap::new();
-        for e in 0..m.num_elems() {
-            for f in 0..4 {
-                let mut k = m.local_face_nodes(e, f);
-                k.sort_unstable();
-                *faces.entry(k).or_default() += 1;
-            }
-        }
-        assert!(faces.values().all(|&k| k <= 2));
+        assert_conforming(&m);
 
         // The named face sets partition the boundary.
         let bf = m.boundary_faces();

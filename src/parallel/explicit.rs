@@ -17,8 +17,9 @@
 //! Local numbering: owned nodes first, in the layout's (PETSc) order, then
 //! the ghosts of the owned elements, then the ghosts that only contacts
 //! need. A contact pair is handled by the rank owning its boundary tet
-//! `a`, found as in `contact::detect_contacts` (the lower id of two
-//! boundary tets), so every pair is counted once over the ranks.
+//! `a`, found as in `contact::detect_contacts` (of two boundary tets, the
+//! free body's against a held body, else the lower id), so every pair is
+//! counted once over the ranks.
 
 use mpi::collective::SystemOperation;
 use mpi::topology::SimpleCommunicator;
@@ -460,22 +461,53 @@ impl ExplicitDomain {
                 })
                 .collect();
             let bvh = Bvh::from_leaves(BvhBuildStrategy::Binned, &boxes);
+            // Tets of free bodies alone: a held body (a container) only
+            // looks for those.
+            let free: Vec<u32> = (0..ne as u32)
+                .filter(|&e| !self.body_held[mesh.body[e as usize] as usize])
+                .collect();
+            let free_boxes: Vec<Aabb> = free.iter().map(|&e| boxes[e as usize]).collect();
+            let bvh_free = Bvh::from_leaves(BvhBuildStrategy::Binned, &free_boxes);
             let mut is_boundary = vec![false; ne];
             for &e in &self.boundary.elems {
                 is_boundary[e as usize] = true;
             }
+            let mut hits: Vec<u32> = Vec::new();
             for &a in &self.boundary.elems {
                 if layout.elem_part[a as usize] != self.rank {
                     continue;
                 }
                 let ba = mesh.body[a as usize] as usize;
-                for b in bvh.intersect_aabb(&boxes[a as usize]) {
+                let held_a = self.body_held[ba];
+                hits.clear();
+                if held_a {
+                    hits.extend(
+                        bvh_free
+                            .intersect_aabb(&boxes[a as usize])
+                            .map(|i| free[i as usize]),
+                    );
+                } else {
+                    hits.extend(bvh.intersect_aabb(&boxes[a as usize]));
+                }
+                for &b in &hits {
                     let bb = mesh.body[b as usize] as usize;
-                    if bb == ba || (is_boundary[b as usize] && b < a) {
+                    if bb == ba {
                         continue;
                     }
-                    if self.body_held[ba] && self.body_held[bb] {
+                    let held_b = self.body_held[bb];
+                    if held_a && held_b {
                         continue;
+                    }
+                    // Two boundary tets: one of them finds the pair, the
+                    // free one against a held body (so the pairs of
+                    // particles resting on a container are evaluated by
+                    // the particles' ranks, which the partition balances),
+                    // else the lower id.
+                    if is_boundary[b as usize] {
+                        let a_finds = if held_a != held_b { !held_a } else { a < b };
+                        if !a_finds {
+                            continue;
+                        }
                     }
                     let corners = |e: u32| mesh.tets[e as usize].map(|n| self.x_all[n as usize]);
                     if !tets_within(&corners(a), &corners(b), self.margin) {

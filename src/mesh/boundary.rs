@@ -168,22 +168,16 @@ impl TetMesh {
 
 #[cfg(test)]
 mod tests {
+    use super::super::testutil::unit_tet;
     use super::*;
 
     fn two_tets() -> TetMesh {
         // Two unit-corner tets sharing the face (1,2,3).
-        TetMesh {
-            nodes: vec![
-                [0.0, 0.0, 0.0],
-                [1.0, 0.0, 0.0],
-                [0.0, 1.0, 0.0],
-                [0.0, 0.0, 1.0],
-                [1.0, 1.0, 1.0],
-            ],
-            tets: vec![[0, 1, 2, 3], [4, 1, 3, 2]],
-            body: vec![0, 0],
-            ..Default::default()
-        }
+        let mut m = unit_tet();
+        m.nodes.push([1.0, 1.0, 1.0]);
+        m.tets.push([4, 1, 3, 2]);
+        m.body.push(0);
+        m
     }
 
     fn centroid(m: &TetMesh, e: usize) -> [f64; 3] {

@@ -1,8 +1,6 @@
 //! Structured Tet4 mesh of an open-top cylindrical container (a cup):
 //! [`container_mesh`].
 
-use std::collections::BTreeMap;
-
 use super::generate::check_center_and_sizes;
 use super::{tet_signed_volume, MeshError, TetMesh};
 
@@ -330,15 +328,7 @@ pub fn container_mesh(
             }
         }
     }
-    let ne = tets.len();
-    let mut mesh = TetMesh {
-        nodes,
-        tets,
-        body: vec![0; ne],
-        node_sets: BTreeMap::new(),
-        face_sets: BTreeMap::new(),
-        elem_sets: BTreeMap::new(),
-    };
+    let mut mesh = TetMesh::one_body(nodes, tets);
     // No element may be degenerate (only possible for extreme aspect ratios).
     mesh.validate()?;
 
@@ -377,8 +367,6 @@ pub fn container_mesh(
         let ns = mesh.nodes_of_face_set(name).unwrap_or_default();
         mesh.node_sets.insert(name.to_string(), ns);
     }
-    mesh.elem_sets
-        .insert("all".to_string(), (0..ne as u32).collect());
     Ok(mesh)
 }
 

@@ -2,8 +2,6 @@
 //! [`cylinder_mesh`], [`annulus_mesh`] (hollow cylinder) and
 //! [`concentric_cylinder_mesh`] (core bonded inside a ring).
 
-use std::collections::BTreeMap;
-
 use super::{tet_signed_volume, MeshError, TetMesh};
 
 /// Kuhn (Freudenthal) split of the unit cube into 6 positively oriented
@@ -109,15 +107,7 @@ pub fn box_mesh(origin: [f64; 3], size: [f64; 3], h: f64) -> Result<TetMesh, Mes
             }
         }
     }
-    let ne = tets.len();
-    let mut mesh = TetMesh {
-        nodes,
-        tets,
-        body: vec![0; ne],
-        node_sets: BTreeMap::new(),
-        face_sets: BTreeMap::new(),
-        elem_sets: BTreeMap::new(),
-    };
+    let mut mesh = TetMesh::one_body(nodes, tets);
 
     // Grid index of a node along axis d.
     let grid = |v: u32, d: usize| {
@@ -164,8 +154,6 @@ pub fn box_mesh(origin: [f64; 3], size: [f64; 3], h: f64) -> Result<TetMesh, Mes
     for (s, ns) in node_sets.into_iter().enumerate() {
         mesh.node_sets.insert(SIDES[s].to_string(), ns);
     }
-    mesh.elem_sets
-        .insert("all".to_string(), (0..ne as u32).collect());
     Ok(mesh)
 }
 
@@ -471,15 +459,7 @@ pub fn cylinder_mesh(
     let n2d = disc.points.len();
     let zs = layer_zs(center[2], width, n_z);
     let (nodes, tets) = extrude(center, &zs, &disc.points, &disc.tris);
-    let ne = tets.len();
-    let mut mesh = TetMesh {
-        nodes,
-        tets,
-        body: vec![0; ne],
-        node_sets: BTreeMap::new(),
-        face_sets: BTreeMap::new(),
-        elem_sets: BTreeMap::new(),
-    };
+    let mut mesh = TetMesh::one_body(nodes, tets);
     // No element may be degenerate (only possible for extreme aspect ratios).
     mesh.validate()?;
 
@@ -508,8 +488,6 @@ pub fn cylinder_mesh(
         "zmax".to_string(),
         ((n_z * n2d) as u32..((n_z + 1) * n2d) as u32).collect(),
     );
-    mesh.elem_sets
-        .insert("all".to_string(), (0..ne as u32).collect());
     Ok(mesh)
 }
 
@@ -695,15 +673,7 @@ fn extruded_mesh_with_sets(
 ) -> Result<TetMesh, MeshError> {
     let zs = layer_zs(center[2], height, n_z);
     let (nodes, tets) = extrude(center, &zs, points, tris);
-    let ne = tets.len();
-    let mut mesh = TetMesh {
-        nodes,
-        tets,
-        body: vec![0; ne],
-        node_sets: BTreeMap::new(),
-        face_sets: BTreeMap::new(),
-        elem_sets: BTreeMap::new(),
-    };
+    let mut mesh = TetMesh::one_body(nodes, tets);
     // No element may be degenerate (only possible for extreme aspect ratios).
     mesh.validate()?;
 
@@ -743,8 +713,6 @@ fn extruded_mesh_with_sets(
         "zmax".to_string(),
         ((n_z * n2d) as u32..((n_z + 1) * n2d) as u32).collect(),
     );
-    mesh.elem_sets
-        .insert("all".to_string(), (0..ne as u32).collect());
     Ok(mesh)
 }
 

@@ -65,3 +65,20 @@ pub struct TetMesh {
     /// Named element sets (e.g. Gmsh physical volumes).
     pub elem_sets: BTreeMap<String, Vec<u32>>,
 }
+
+impl TetMesh {
+    /// One body (id 0) of the given nodes and elements, with the element
+    /// set `all` (what the generators return before adding their face sets).
+    pub fn one_body(nodes: Vec<[f64; 3]>, tets: Vec<[u32; 4]>) -> TetMesh {
+        let ne = tets.len();
+        let mut elem_sets = BTreeMap::new();
+        elem_sets.insert("all".to_string(), (0..ne as u32).collect());
+        TetMesh {
+            nodes,
+            tets,
+            body: vec![0; ne],
+            elem_sets,
+            ..Default::default()
+        }
+    }
+}

@@ -12,8 +12,6 @@
 //! ([`NUT_DIVISIONS`]) the mesh has `6 * 2 * 1 * 2 * 1 * 8 = 192`
 //! tetrahedra, the paper's count ([`nut_mesh_default`]).
 
-use std::collections::BTreeMap;
-
 use super::generate::check_center_and_sizes;
 use super::{tet_signed_volume, MeshError, TetMesh};
 
@@ -254,15 +252,7 @@ pub fn nut_mesh(
         }
     }
     debug_assert_eq!(nodes.len(), n_grid + n_prisms);
-    let ne = tets.len();
-    let mut mesh = TetMesh {
-        nodes,
-        tets,
-        body: vec![0; ne],
-        node_sets: BTreeMap::new(),
-        face_sets: BTreeMap::new(),
-        elem_sets: BTreeMap::new(),
-    };
+    let mut mesh = TetMesh::one_body(nodes, tets);
     mesh.validate()?;
 
     // Grid node v: layer v / n2d, ray level (v % n2d) / n_out. Centroid
@@ -298,8 +288,6 @@ pub fn nut_mesh(
     for (name, ns) in names.iter().zip(node_sets) {
         mesh.node_sets.insert(name.to_string(), ns);
     }
-    mesh.elem_sets
-        .insert("all".to_string(), (0..ne as u32).collect());
     Ok(mesh)
 }
 

@@ -192,18 +192,7 @@ fn check_no_overlap(copies: &[(String, TetMesh)], r: f64) -> Result<(), String> 
 pub fn overlap_volume(a: &TetMesh, b: &TetMesh) -> Option<f64> {
     let boxes = |m: &TetMesh| -> Vec<([f64; 3], [f64; 3])> {
         (0..m.tets.len())
-            .map(|e| {
-                let x = m.element_coords(e);
-                let mut lo = x[0];
-                let mut hi = x[0];
-                for p in &x[1..] {
-                    for d in 0..3 {
-                        lo[d] = lo[d].min(p[d]);
-                        hi[d] = hi[d].max(p[d]);
-                    }
-                }
-                (lo, hi)
-            })
+            .map(|e| crate::geometry::tet_bounds(&m.element_coords(e)))
             .collect()
     };
     let (ba, bb) = (boxes(a), boxes(b));

@@ -81,14 +81,7 @@ impl BoundaryTets {
 }
 
 fn aabb(x: &[[f64; 3]; 4]) -> Aabb {
-    let mut lo = x[0];
-    let mut hi = x[0];
-    for p in &x[1..] {
-        for d in 0..3 {
-            lo[d] = lo[d].min(p[d]);
-            hi[d] = hi[d].max(p[d]);
-        }
-    }
+    let (lo, hi) = crate::geometry::tet_bounds(x);
     // Loosen by a hair so touching boxes are candidates too.
     let pad = 1e-9 * ((hi[0] - lo[0]) + (hi[1] - lo[1]) + (hi[2] - lo[2]));
     Aabb::new(

@@ -9,6 +9,20 @@ pub mod placement;
 pub use clip::{face_tet_clip, polygon_area, tet_tet_overlap, triangle_in_tet_area, Polygon};
 pub use overlap::{tet_tet_intersection, tets_within, FacePatch, Intersection, TetPlanes};
 
+/// Axis-aligned bounds (min, max corners) of a tet.
+#[inline]
+pub fn tet_bounds(x: &[[f64; 3]; 4]) -> ([f64; 3], [f64; 3]) {
+    let mut lo = x[0];
+    let mut hi = x[0];
+    for p in &x[1..] {
+        for d in 0..3 {
+            lo[d] = lo[d].min(p[d]);
+            hi[d] = hi[d].max(p[d]);
+        }
+    }
+    (lo, hi)
+}
+
 /// a − b.
 #[inline]
 pub fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {

@@ -50,17 +50,7 @@ impl TetMesh {
         if self.tets.is_empty() {
             return not_closed("the mesh has no tetrahedra".into());
         }
-        let n = self.nodes.len();
-        for (e, t) in self.tets.iter().enumerate() {
-            if let Some(&bad) = t.iter().find(|&&v| v as usize >= n) {
-                return Err(MeshError::NodeOutOfRange {
-                    elem: e,
-                    gmsh_tag: None,
-                    node: bad,
-                    num_nodes: n,
-                });
-            }
-        }
+        self.check_node_indices()?;
 
         // (1) + (3): element faces keyed by their sorted nodes; equal keys
         // are shared faces and join their elements.

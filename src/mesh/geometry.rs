@@ -111,6 +111,23 @@ impl TetMesh {
         Some((lo, hi))
     }
 
+    /// Every element's node indices are within the node list
+    /// ([`MeshError::NodeOutOfRange`] naming the first that is not).
+    pub(crate) fn check_node_indices(&self) -> Result<(), MeshError> {
+        let n = self.nodes.len();
+        for (e, t) in self.tets.iter().enumerate() {
+            if let Some(&bad) = t.iter().find(|&&v| v as usize >= n) {
+                return Err(MeshError::NodeOutOfRange {
+                    elem: e,
+                    gmsh_tag: None,
+                    node: bad,
+                    num_nodes: n,
+                });
+            }
+        }
+        Ok(())
+    }
+
     /// Checks the mesh and returns the first problem found:
     ///
     /// 1. `body.len() == tets.len()`;

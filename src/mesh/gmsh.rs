@@ -942,16 +942,7 @@ pub fn write_msh_ascii(mesh: &TetMesh, path: &Path) -> Result<(), MeshError> {
             coords: *p,
         });
     }
-    for (e, t) in mesh.tets.iter().enumerate() {
-        if let Some(&bad) = t.iter().find(|&&v| v as usize >= n) {
-            return Err(MeshError::NodeOutOfRange {
-                elem: e,
-                gmsh_tag: None,
-                node: bad,
-                num_nodes: n,
-            });
-        }
-    }
+    mesh.check_node_indices()?;
     for (name, faces) in &mesh.face_sets {
         if let Some(&bad) = faces.iter().flatten().find(|&&v| v as usize >= n) {
             return Err(MeshError::SetOutOfRange {

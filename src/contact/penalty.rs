@@ -66,15 +66,18 @@ pub struct PenaltyResult {
     pub point: [f64; 3],
 }
 
-/// κ = p_n / ℓ³ with ℓ³ = 3 (V0a + V0b), i.e. 6 × the mean reference tet
-/// volume, so that a Kuhn cell of edge h (6 tets of h³/6) gives ℓ = h.
+/// κ = p_n / ℓ³ with ℓ³ = 6 min(V0a, V0b), 6 × the smaller reference tet
+/// volume, so that a Kuhn cell of edge h (6 tets of h³/6) gives ℓ = h. The
+/// finer side sets the scale: with the mean volume, a particle resting on a
+/// coarse container (tets 20× its own) met a 10× softer floor than another
+/// particle and sank 5 mm into it.
 ///
 /// For flat face-to-face contact of area A and penetration δ, V ≈ A δ and
 /// |∂V/∂x| ≈ A, so the contact pressure is ≈ κ V A / A = p_n A δ / ℓ³; with
 /// the right-angle face of a Kuhn tet, A = ℓ²/2, that is p_n δ / (2ℓ).
 pub fn pair_stiffness(penalty_pa: f64, ref_vol_a: f64, ref_vol_b: f64) -> f64 {
-    // Not in the seeds: stiffness scaling κ = p_n / ℓ³, ℓ³ = 3 (V0a + V0b).
-    penalty_pa / (3.0 * (ref_vol_a + ref_vol_b))
+    // Not in the seeds: stiffness scaling κ = p_n / ℓ³, ℓ³ = 6 min(V0a, V0b).
+    penalty_pa / (6.0 * ref_vol_a.min(ref_vol_b))
 }
 
 /// Whether the axis-aligned boxes of two tets are strictly separated.

@@ -12,6 +12,8 @@
 //! - [`explicit`]: lumped mass, central-difference update with gravity,
 //!   mass-proportional damping and velocity boundary conditions, stable
 //!   time step, and the serial [`ExplicitSolver`] (sec 3.2 free expansion).
+//! - [`frequency`]: the highest natural frequency of a whole small body
+//!   (its exact explicit step limit) and congruence of template copies.
 //! - `error`: [`MechanicsError`].
 //!
 //! Conventions: tension-positive Cauchy stress; nodal force arrays hold the
@@ -21,6 +23,7 @@
 pub mod element;
 mod error;
 pub mod explicit;
+pub mod frequency;
 pub mod material;
 
 pub use element::{element_response, ElementResponse, Kinematics, Tet4Reference, ThermalState};

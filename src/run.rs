@@ -73,7 +73,7 @@ pub struct MechanicsSummary {
     pub element_updates: u64,
     /// Contact pair evaluations, all ranks.
     pub pair_updates: u64,
-    /// Search margin (m).
+    /// Smallest (at-rest) contact search margin (m).
     pub margin: f64,
 }
 
@@ -863,7 +863,7 @@ pub fn run(
         detections: m.counters.detections,
         element_updates: mech_counts[0] as u64,
         pair_updates: mech_counts[1] as u64,
-        margin: m.margin(),
+        margin: m.min_margin(),
     });
     Ok(RunSummary {
         ranks: layout.size,

@@ -44,6 +44,11 @@ use crate::model::Model;
 
 const NONE: u32 = u32::MAX;
 
+/// Substeps the fastest node should need before contact re-detection.
+const DETECT_EVERY: f64 = 10.0;
+/// Largest search margin, as a multiple of the configured one.
+const MARGIN_GROWTH: f64 = 4.0;
+
 /// A candidate contact pair: tets `a` (owned boundary tet) and `b` (any
 /// tet of another body) whose boxes, grown by the margin, overlap.
 #[derive(Debug, Clone, Copy)]
@@ -125,7 +130,10 @@ pub struct ExplicitDomain {
     body_held: Vec<bool>,
     boundary: BoundaryTets,
     penalty: Option<(PenaltyParams, f64)>,
+    /// Search margin (m) of the current candidates, between `margin_min`
+    /// and [`MARGIN_GROWTH`] × `margin_min`, chosen at each detection.
     margin: f64,
+    margin_min: f64,
     candidates: Vec<Candidate>,
     x_detect: Vec<Vector3<f64>>,
     /// Force contributions: 4 per element, 8 per candidate pair, then those
@@ -354,6 +362,7 @@ impl ExplicitDomain {
             boundary: BoundaryTets::new(mesh),
             penalty,
             margin,
+            margin_min: margin,
             candidates: Vec::new(),
             x_detect: Vec::new(),
             v_prev: Vec::new(),
@@ -483,6 +492,7 @@ impl ExplicitDomain {
         // Candidate pairs.
         let mut contact_nodes: Vec<u32> = Vec::new();
         self.candidates.clear();
+        self.margin = self.adapted_margin(comm);
         if let Some((_, penalty)) = self.penalty {
             let ne = mesh.tets.len();
             let grow = 0.5 * self.margin;
@@ -1130,9 +1140,30 @@ impl ExplicitDomain {
         Ok(())
     }
 
-    /// Search margin of the contact candidates (m).
-    pub fn margin(&self) -> f64 {
-        self.margin
+    /// Smallest search margin of the contact candidates (m), used at rest
+    /// (see [`Self::adapted_margin`]).
+    pub fn min_margin(&self) -> f64 {
+        self.margin_min
+    }
+
+    /// Collective. The margin for the next candidate lists: wide enough
+    /// that the fastest node needs [`DETECT_EVERY`] substeps to use up
+    /// half of it (re-detection), at least the configured one (half the
+    /// smallest element length by default) and at most [`MARGIN_GROWTH`]
+    /// times that. Falling particles then re-detect every ~10 substeps
+    /// instead of every one or two, and a bed at rest keeps the tight
+    /// margin (a wider one only adds candidates). The trajectory does not
+    /// depend on it: pairs out of reach have no force.
+    fn adapted_margin(&self, comm: &SimpleCommunicator) -> f64 {
+        let mine = self.v[..self.n_owned]
+            .iter()
+            .map(|v| v.norm())
+            .fold(0.0, f64::max);
+        let mut v_max = 0.0;
+        comm.all_reduce_into(&mine, &mut v_max, SystemOperation::max());
+        // Not in the seeds: Verlet-list skin, re-detect after the margin/2 a node may move in DETECT_EVERY substeps.
+        (2.0 * DETECT_EVERY * v_max * self.dt)
+            .clamp(self.margin_min, MARGIN_GROWTH * self.margin_min)
     }
 
     /// Number of elements this rank integrates.

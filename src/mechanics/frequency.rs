@@ -17,7 +17,7 @@
 
 use nalgebra::{DMatrix, Matrix3, Vector3};
 
-use super::{ElasticMaterial, MechanicsError};
+use super::{ElasticMaterial, MechanicsError, Tet4Reference};
 
 /// Largest body (nodes) whose frequency is computed exactly; larger bodies
 /// keep the element bound (a dense eigenproblem of 3 × nodes unknowns).
@@ -25,7 +25,8 @@ pub const BODY_EIGEN_MAX_NODES: usize = 400;
 
 /// ω_max (rad/s) of the lumped-mass, linear-elastic, unsupported body at
 /// positions `x` with elements `tets` (indices into `x`; every node used)
-/// of materials `materials[e]`. Errors on a degenerate element.
+/// of materials `materials[e]` (positively oriented, as in the meshes).
+/// Errors on an inverted or degenerate element, naming it.
 pub fn body_max_frequency(
     x: &[Vector3<f64>],
     tets: &[[u32; 4]],
@@ -35,17 +36,8 @@ pub fn body_max_frequency(
     let mut k = DMatrix::<f64>::zeros(3 * n, 3 * n);
     let mut mass = vec![0.0; n];
     for (e, (t, m)) in tets.iter().zip(materials).enumerate() {
-        let p = t.map(|i| x[i as usize]);
-        let jac = Matrix3::from_columns(&[p[1] - p[0], p[2] - p[0], p[3] - p[0]]);
-        let vol = jac.determinant().abs() / 6.0;
-        let inv = jac.try_inverse().filter(|_| vol > 0.0).ok_or_else(|| {
-            MechanicsError::InvalidParameter(format!("element {e} is degenerate"))
-        })?;
-        let mut g = [Vector3::zeros(); 4];
-        for r in 0..3 {
-            g[r + 1] = inv.row(r).transpose();
-        }
-        g[0] = -(g[1] + g[2] + g[3]);
+        let r = Tet4Reference::new(&t.map(|i| x[i as usize])).map_err(|err| err.at_element(e))?;
+        let (g, vol) = (r.reference_gradients(), r.volume0);
         let (mu, lambda) = m.lame();
         for a in 0..4 {
             // Not numbered in the seeds: row-sum lumped mass ρ V/4 per node (as the solver's).

@@ -21,7 +21,7 @@
 //!
 //! Pure, no MPI, no allocation.
 
-use crate::geometry::{dot, tet_tet_intersection};
+use crate::geometry::{dot, tet_tet_intersection_with, TetPlanes};
 
 /// Parameters of one tet pair.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -112,7 +112,26 @@ pub fn tet_tet_penalty(
     if boxes_apart(xa, xb) {
         return None;
     }
-    let it = tet_tet_intersection(xa, xb);
+    tet_tet_penalty_with(
+        (xa, &TetPlanes::new(xa)),
+        (xb, &TetPlanes::new(xb)),
+        va,
+        vb,
+        params,
+    )
+}
+
+/// [`tet_tet_penalty`] with the planes of each tet given (`TetPlanes::new`
+/// of its corners), for callers that build them once per tet and reuse
+/// them over all of its pairs. No bounding-box pre-check.
+pub fn tet_tet_penalty_with(
+    (xa, pa): (&[[f64; 3]; 4], &TetPlanes),
+    (xb, pb): (&[[f64; 3]; 4], &TetPlanes),
+    va: &[[f64; 3]; 4],
+    vb: &[[f64; 3]; 4],
+    params: &PenaltyParams,
+) -> Option<PenaltyResult> {
+    let it = tet_tet_intersection_with(xa, pa, xb, pb);
     let v = it.volume;
     if v <= 0.0 {
         return None;

@@ -370,8 +370,19 @@ fn edges_separated(a: &[[f64; 3]; 4], b: &[[f64; 3]; 4], eps: f64) -> bool {
 /// tolerance 1e-12 × the larger tet's longest edge) and degenerate (flat)
 /// tets give volume 0 and empty patches.
 pub fn tet_tet_intersection(a: &[[f64; 3]; 4], b: &[[f64; 3]; 4]) -> Intersection {
-    let pa = TetPlanes::new(a);
-    let pb = TetPlanes::new(b);
+    tet_tet_intersection_with(a, &TetPlanes::new(a), b, &TetPlanes::new(b))
+}
+
+/// [`tet_tet_intersection`] with the planes of a and b given (`pa` must be
+/// `TetPlanes::new(a)`, likewise `pb`), for callers that reuse them over
+/// many pairs.
+pub fn tet_tet_intersection_with(
+    a: &[[f64; 3]; 4],
+    pa: &TetPlanes,
+    b: &[[f64; 3]; 4],
+    pb: &TetPlanes,
+) -> Intersection {
+    let (pa, pb) = (*pa, *pb);
     let mut out = Intersection::empty(pa, pb);
     let size = pa.size.max(pb.size);
     let eps = 1e-12 * size;

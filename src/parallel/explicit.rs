@@ -30,10 +30,10 @@ use parry3d_f64::math::Point;
 use parry3d_f64::partitioning::{Bvh, BvhBuildStrategy};
 
 use super::{Halo, Layout};
-use crate::contact::penalty::{pair_stiffness, tet_tet_penalty, PenaltyParams};
+use crate::contact::penalty::{pair_stiffness, tet_tet_penalty_with, PenaltyParams};
 use crate::contact::BoundaryTets;
 use crate::error::{Error, Result};
-use crate::geometry::tets_within;
+use crate::geometry::{tet_bounds, tets_within, TetPlanes};
 use crate::mechanics::element::{characteristic_length, element_critical_dt, to_vectors};
 use crate::mechanics::explicit::{element_forces, update_nodes, NodeUpdate, ThermalLoad};
 use crate::mechanics::frequency::{
@@ -55,8 +55,9 @@ const MARGIN_GROWTH: f64 = 4.0;
 struct Candidate {
     a: u32,
     b: u32,
-    la: [u32; 4],
-    lb: [u32; 4],
+    /// Indices of a and b in `ExplicitDomain::pair_tets`.
+    ta: u32,
+    tb: u32,
     stiffness: f64,
     reduced_mass: f64,
 }
@@ -135,6 +136,12 @@ pub struct ExplicitDomain {
     margin: f64,
     margin_min: f64,
     candidates: Vec<Candidate>,
+    /// Local nodes of the tets of the candidate pairs, each tet once.
+    pair_tets: Vec<[u32; 4]>,
+    /// Per substep: corners and bounding box of each of `pair_tets`.
+    pair_geometry: Vec<([[f64; 3]; 4], [f64; 3], [f64; 3])>,
+    /// Per substep: planes of each of `pair_tets`.
+    pair_planes: Vec<TetPlanes>,
     x_detect: Vec<Vector3<f64>>,
     /// Force contributions: 4 per element, 8 per candidate pair, then those
     /// received from neighbours for shared nodes.
@@ -364,6 +371,9 @@ impl ExplicitDomain {
             margin,
             margin_min: margin,
             candidates: Vec::new(),
+            pair_tets: Vec::new(),
+            pair_geometry: Vec::new(),
+            pair_planes: Vec::new(),
             x_detect: Vec::new(),
             v_prev: Vec::new(),
             contrib: Vec::new(),
@@ -494,11 +504,16 @@ impl ExplicitDomain {
         self.candidates.clear();
         self.margin = self.adapted_margin(comm);
         if let Some((_, penalty)) = self.penalty {
-            let ne = mesh.tets.len();
             let grow = 0.5 * self.margin;
-            let boxes: Vec<Aabb> = (0..ne)
-                .map(|e| {
-                    let t = mesh.tets[e];
+            // Not in the seeds: the penalty potential sums over pairs of
+            // boundary tets (a face on the surface), like the contact
+            // surface of seed 000 sec 3.1; a tet that meets the surface only
+            // at an edge or corner overlaps a shallow intruder by O(δ²).
+            let bt = &self.boundary.elems;
+            let boxes: Vec<Aabb> = bt
+                .iter()
+                .map(|&e| {
+                    let t = mesh.tets[e as usize];
                     let mut lo = self.x_all[t[0] as usize];
                     let mut hi = lo;
                     for &n in &t[1..] {
@@ -515,53 +530,23 @@ impl ExplicitDomain {
                 })
                 .collect();
             let bvh = Bvh::from_leaves(BvhBuildStrategy::Binned, &boxes);
-            // Tets of free bodies alone: a held body (a container) only
-            // looks for those.
-            let free: Vec<u32> = (0..ne as u32)
-                .filter(|&e| !self.body_held[mesh.body[e as usize] as usize])
-                .collect();
-            let free_boxes: Vec<Aabb> = free.iter().map(|&e| boxes[e as usize]).collect();
-            let bvh_free = Bvh::from_leaves(BvhBuildStrategy::Binned, &free_boxes);
-            let mut is_boundary = vec![false; ne];
-            for &e in &self.boundary.elems {
-                is_boundary[e as usize] = true;
-            }
-            let mut hits: Vec<u32> = Vec::new();
-            for &a in &self.boundary.elems {
-                if layout.elem_part[a as usize] != self.rank {
+            for (ia, &a) in bt.iter().enumerate() {
+                let ba = mesh.body[a as usize] as usize;
+                // A held body's pairs are found from the free side (the
+                // particles' ranks, which the partition balances).
+                if layout.elem_part[a as usize] != self.rank || self.body_held[ba] {
                     continue;
                 }
-                let ba = mesh.body[a as usize] as usize;
-                let held_a = self.body_held[ba];
-                hits.clear();
-                if held_a {
-                    hits.extend(
-                        bvh_free
-                            .intersect_aabb(&boxes[a as usize])
-                            .map(|i| free[i as usize]),
-                    );
-                } else {
-                    hits.extend(bvh.intersect_aabb(&boxes[a as usize]));
-                }
-                for &b in &hits {
+                for ib in bvh.intersect_aabb(&boxes[ia]) {
+                    let b = bt[ib as usize];
                     let bb = mesh.body[b as usize] as usize;
                     if bb == ba {
                         continue;
                     }
                     let held_b = self.body_held[bb];
-                    if held_a && held_b {
+                    // Of two free tets, the lower id finds the pair.
+                    if !held_b && b < a {
                         continue;
-                    }
-                    // Two boundary tets: one of them finds the pair, the
-                    // free one against a held body (so the pairs of
-                    // particles resting on a container are evaluated by
-                    // the particles' ranks, which the partition balances),
-                    // else the lower id.
-                    if is_boundary[b as usize] {
-                        let a_finds = if held_a != held_b { !held_a } else { a < b };
-                        if !a_finds {
-                            continue;
-                        }
                     }
                     let corners = |e: u32| mesh.tets[e as usize].map(|n| self.x_all[n as usize]);
                     if !tets_within(&corners(a), &corners(b), self.margin) {
@@ -585,8 +570,8 @@ impl ExplicitDomain {
                     self.candidates.push(Candidate {
                         a,
                         b,
-                        la: [NONE; 4],
-                        lb: [NONE; 4],
+                        ta: NONE,
+                        tb: NONE,
                         stiffness: pair_stiffness(penalty, va, vb),
                         reduced_mass,
                     });
@@ -608,10 +593,19 @@ impl ExplicitDomain {
             }
         }
         self.refresh_local_arrays();
+        // The tets of the pairs, each once: their corners and planes are
+        // built once per substep, not once per pair.
+        let mut tets: Vec<u32> = self.candidates.iter().flat_map(|c| [c.a, c.b]).collect();
+        tets.sort_unstable();
+        tets.dedup();
         for c in self.candidates.iter_mut() {
-            c.la = mesh.tets[c.a as usize].map(|n| self.local_of[n as usize]);
-            c.lb = mesh.tets[c.b as usize].map(|n| self.local_of[n as usize]);
+            c.ta = tets.binary_search(&c.a).expect("pair tet") as u32;
+            c.tb = tets.binary_search(&c.b).expect("pair tet") as u32;
         }
+        self.pair_tets = tets
+            .iter()
+            .map(|&e| mesh.tets[e as usize].map(|n| self.local_of[n as usize]))
+            .collect();
         let ghosts: Vec<(u32, u32, u32)> = (self.n_owned..self.node_of_local.len())
             .map(|l| {
                 let n = self.node_of_local[l];
@@ -688,8 +682,12 @@ impl ExplicitDomain {
         for (j, c) in self.candidates.iter().enumerate() {
             let key = PAIR | (u64::from(c.a) << 31) | u64::from(c.b);
             for k in 0..4 {
-                push(c.la[k], key, pair_base + 8 * j + k);
-                push(c.lb[k], key, pair_base + 8 * j + 4 + k);
+                push(self.pair_tets[c.ta as usize][k], key, pair_base + 8 * j + k);
+                push(
+                    self.pair_tets[c.tb as usize][k],
+                    key,
+                    pair_base + 8 * j + 4 + k,
+                );
             }
         }
         // Tell each owner which contributions (node, key) it will receive.
@@ -732,7 +730,9 @@ impl ExplicitDomain {
                 (start, keys.len() / 2)
             })
             .collect();
-        owned.sort_unstable();
+        // Bucket by node (counting sort), then each node's few
+        // contributions by key: the order of a full sort of (node, key),
+        // in linear time (keys are unique per node).
         self.gather_off = vec![0; self.n_owned + 1];
         for &(l, _, _) in &owned {
             self.gather_off[l as usize + 1] += 1;
@@ -740,7 +740,17 @@ impl ExplicitDomain {
         for i in 0..self.n_owned {
             self.gather_off[i + 1] += self.gather_off[i];
         }
-        self.gather_slot = owned.iter().map(|&(_, _, s)| s).collect();
+        let mut fill: Vec<u32> = self.gather_off[..self.n_owned].to_vec();
+        let mut bucket = vec![(0u64, 0u32); owned.len()];
+        for &(l, key, s) in &owned {
+            let at = &mut fill[l as usize];
+            bucket[*at as usize] = (key, s);
+            *at += 1;
+        }
+        for w in self.gather_off.windows(2) {
+            bucket[w[0] as usize..w[1] as usize].sort_unstable();
+        }
+        self.gather_slot = bucket.iter().map(|&(_, s)| s).collect();
         self.contrib = vec![Vector3::zeros(); next];
     }
 
@@ -840,19 +850,44 @@ impl ExplicitDomain {
         self.active_pairs = 0;
         if let Some((params, _)) = &self.penalty {
             let mut power = 0.0;
+            self.pair_geometry.clear();
+            self.pair_geometry.extend(self.pair_tets.iter().map(|t| {
+                let x: [[f64; 3]; 4] = t.map(|l| self.x[l as usize].into());
+                let (lo, hi) = tet_bounds(&x);
+                (x, lo, hi)
+            }));
+            self.pair_planes.clear();
+            self.pair_planes
+                .extend(self.pair_geometry.iter().map(|(x, _, _)| TetPlanes::new(x)));
+            let geo = &self.pair_geometry;
             for (j, c) in self.candidates.iter().enumerate() {
-                let xa = c.la.map(|l| self.x[l as usize].into());
-                let xb = c.lb.map(|l| self.x[l as usize].into());
-                let va = c.la.map(|l| self.v[l as usize].into());
-                let vb = c.lb.map(|l| self.v[l as usize].into());
+                let out = &mut self.contrib[pair_base + 8 * j..pair_base + 8 * j + 8];
+                let ((xa, lo_a, hi_a), (xb, lo_b, hi_b)) =
+                    (&geo[c.ta as usize], &geo[c.tb as usize]);
+                // Most candidates are apart: their boxes tell.
+                if (0..3).any(|d| lo_a[d] > hi_b[d] || lo_b[d] > hi_a[d]) {
+                    out.iter_mut().for_each(|f| *f = Vector3::zeros());
+                    continue;
+                }
+                let (la, lb) = (
+                    &self.pair_tets[c.ta as usize],
+                    &self.pair_tets[c.tb as usize],
+                );
+                let va = la.map(|l| self.v[l as usize].into());
+                let vb = lb.map(|l| self.v[l as usize].into());
                 let p = PenaltyParams {
                     stiffness: c.stiffness,
                     reduced_mass: c.reduced_mass,
                     time_step: self.dt,
                     ..*params
                 };
-                let out = &mut self.contrib[pair_base + 8 * j..pair_base + 8 * j + 8];
-                match tet_tet_penalty(&xa, &xb, &va, &vb, &p) {
+                match tet_tet_penalty_with(
+                    (xa, &self.pair_planes[c.ta as usize]),
+                    (xb, &self.pair_planes[c.tb as usize]),
+                    &va,
+                    &vb,
+                    &p,
+                ) {
                     Some(r) => {
                         for k in 0..4 {
                             out[k] = Vector3::from(r.forces_a[k]);

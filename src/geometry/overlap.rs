@@ -237,6 +237,7 @@ fn clip_face(
     n_face: [f64; 3],
     other: &TetPlanes,
     skip: usize,
+    bufs: &mut (Poly, Poly),
 ) -> (f64, [f64; 3]) {
     // Classify the triangle against each plane from the table: wholly
     // outside one plane → empty; planes it is wholly inside of are skipped
@@ -253,25 +254,13 @@ fn clip_face(
         }
         cutting[k] = any_out;
     }
-    let mut buf = [Poly {
-        n: 0,
-        p: [[0.0; 3]; MAXV],
-    }; 2];
-    buf[0].n = 3;
-    buf[0].p[..3].copy_from_slice(&tri);
-    let mut cur = 0;
+    let (mut src, mut dst) = (&mut bufs.0, &mut bufs.1);
+    src.n = 3;
+    src.p[..3].copy_from_slice(&tri);
     let mut first = true;
     let mut d = [0.0; MAXV];
     for k in (0..4).filter(|&k| cutting[k]) {
         let (n, c) = (other.normal[k], other.offset[k]);
-        let (src, dst) = {
-            let (x, y) = buf.split_at_mut(1);
-            if cur == 0 {
-                (&x[0], &mut y[0])
-            } else {
-                (&y[0], &mut x[0])
-            }
-        };
         let (mut any_out, mut any_in) = (false, false);
         for i in 0..src.n {
             // Sutherland–Hodgman (1974): signed distance to the plane.
@@ -307,12 +296,12 @@ fn clip_face(
                 ]);
             }
         }
-        cur = 1 - cur;
-        if buf[cur].n < 3 {
+        std::mem::swap(&mut src, &mut dst);
+        if src.n < 3 {
             return (0.0, [0.0; 3]);
         }
     }
-    let poly = &buf[cur];
+    let poly = &*src;
     let (area, m) = polygon_moments(&poly.p[..poly.n], n_face);
     // Clipping keeps the winding, so all fan areas share the triangle's sign.
     if area < 0.0 {
@@ -418,6 +407,11 @@ pub fn tet_tet_intersection_with(
     }
     let mut total_area = 0.0;
     let mut total_m = [0.0; 3];
+    let empty = Poly {
+        n: 0,
+        p: [[0.0; 3]; MAXV],
+    };
+    let mut bufs = (empty, empty);
     for (t, dist, p, q, flush, faces) in [
         (a, &da, &pa, &pb, &flush_a, &mut out.faces_a),
         (b, &db, &pb, &pa, &flush_b, &mut out.faces_b),
@@ -430,6 +424,7 @@ pub fn tet_tet_intersection_with(
                 p.normal[f],
                 q,
                 flush[f],
+                &mut bufs,
             );
             if flush[f] < 4 {
                 // Not in the seeds: a flush face pair bounds a ∩ b once, so

@@ -49,6 +49,9 @@ const DETECT_EVERY: f64 = 10.0;
 /// Largest search margin, as a multiple of the configured one.
 const MARGIN_GROWTH: f64 = 4.0;
 
+/// Corners of a tet and its bounding box (low, high corner).
+type TetGeometry = ([[f64; 3]; 4], [f64; 3], [f64; 3]);
+
 /// A candidate contact pair: tets `a` (owned boundary tet) and `b` (any
 /// tet of another body) whose boxes, grown by the margin, overlap.
 #[derive(Debug, Clone, Copy)]
@@ -139,7 +142,7 @@ pub struct ExplicitDomain {
     /// Local nodes of the tets of the candidate pairs, each tet once.
     pair_tets: Vec<[u32; 4]>,
     /// Per substep: corners and bounding box of each of `pair_tets`.
-    pair_geometry: Vec<([[f64; 3]; 4], [f64; 3], [f64; 3])>,
+    pair_geometry: Vec<TetGeometry>,
     /// Per substep: planes of each of `pair_tets`.
     pair_planes: Vec<TetPlanes>,
     x_detect: Vec<Vector3<f64>>,

@@ -16,10 +16,10 @@
 //!
 //! Local numbering: owned nodes first, in the layout's (PETSc) order, then
 //! the ghosts of the owned elements, then the ghosts that only contacts
-//! need. A contact pair is handled by the rank owning its boundary tet
-//! `a`, found as in `contact::detect_contacts` (of two boundary tets, the
-//! free body's against a held body, else the lower id), so every pair is
-//! counted once over the ranks.
+//! need. A contact pair joins two boundary tets of different bodies and is
+//! handled by the rank owning one of them, `a` (the free body's tet against
+//! a held body, else the lower id), so every pair is counted once over the
+//! ranks.
 
 use mpi::collective::SystemOperation;
 use mpi::topology::SimpleCommunicator;
@@ -52,8 +52,8 @@ const MARGIN_GROWTH: f64 = 4.0;
 /// Corners of a tet and its bounding box (low, high corner).
 type TetGeometry = ([[f64; 3]; 4], [f64; 3], [f64; 3]);
 
-/// A candidate contact pair: tets `a` (owned boundary tet) and `b` (any
-/// tet of another body) whose boxes, grown by the margin, overlap.
+/// A candidate contact pair: boundary tets `a` (owned, of a free body) and
+/// `b` (of another body) whose boxes, grown by the margin, overlap.
 #[derive(Debug, Clone, Copy)]
 struct Candidate {
     a: u32,
@@ -563,11 +563,8 @@ impl ExplicitDomain {
                         model.material_of(a as usize).density * va,
                         model.material_of(b as usize).density * vb,
                     );
-                    let reduced_mass = match (self.body_held[ba], self.body_held[bb]) {
-                        (true, _) => mb,
-                        (_, true) => ma,
-                        _ => ma * mb / (ma + mb),
-                    };
+                    // a is never held (held bodies do not search).
+                    let reduced_mass = if held_b { ma } else { ma * mb / (ma + mb) };
                     contact_nodes.extend_from_slice(&mesh.tets[a as usize]);
                     contact_nodes.extend_from_slice(&mesh.tets[b as usize]);
                     self.candidates.push(Candidate {

@@ -579,7 +579,7 @@ mod tests {
 
     /// Throughput on random pairs (run with `--ignored --nocapture`).
     #[test]
-    #[ignore]
+    #[ignore = "benchmark: prints ns per pair; run with --ignored --nocapture"]
     fn throughput() {
         let mut rng = Rng(77);
         let n = 4096;

@@ -516,16 +516,8 @@ impl ExplicitDomain {
             let boxes: Vec<Aabb> = bt
                 .iter()
                 .map(|&e| {
-                    let t = mesh.tets[e as usize];
-                    let mut lo = self.x_all[t[0] as usize];
-                    let mut hi = lo;
-                    for &n in &t[1..] {
-                        let p = self.x_all[n as usize];
-                        for d in 0..3 {
-                            lo[d] = lo[d].min(p[d]);
-                            hi[d] = hi[d].max(p[d]);
-                        }
-                    }
+                    let x = mesh.tets[e as usize].map(|n| self.x_all[n as usize]);
+                    let (lo, hi) = tet_bounds(&x);
                     Aabb::new(
                         Point::new(lo[0] - grow, lo[1] - grow, lo[2] - grow),
                         Point::new(hi[0] + grow, hi[1] + grow, hi[2] + grow),

@@ -18,8 +18,9 @@ pub struct Column {
 
 /// Centres of `count` sites for particles of bounding radius `r` (about
 /// their centroids) with clearance `gap`: horizontal layers of a triangular
-/// lattice of spacing 2r + gap inside the column, alternate layers shifted,
-/// the lowest layer resting `gap` above the floor. Lowest sites first.
+/// lattice of spacing d = 2r + gap inside the column, alternate layers
+/// shifted and stacked d √(2/3) apart (close-packed spheres), the lowest
+/// layer resting `gap` above the floor. Lowest sites first.
 pub fn column_sites(count: usize, r: f64, gap: f64, col: &Column) -> Result<Vec<[f64; 3]>, String> {
     if !(r > 0.0 && r.is_finite() && gap >= 0.0 && gap.is_finite()) {
         return Err(format!(
@@ -36,6 +37,8 @@ pub fn column_sites(count: usize, r: f64, gap: f64, col: &Column) -> Result<Vec<
     }
     let d = 2.0 * r + gap;
     let row = d * 3f64.sqrt() / 2.0;
+    // Not in the seeds: close-packed (ABAB) layers of spheres of diameter d lie d √(2/3) apart.
+    let layer_gap = d * (2.0f64 / 3.0).sqrt();
     let mut layers: [Vec<[f64; 2]>; 2] = [Vec::new(), Vec::new()];
     for (shift, layer) in layers.iter_mut().enumerate() {
         // Alternate layers shifted by (d/2, row/3): close-packed ABAB stacking.
@@ -66,7 +69,7 @@ pub fn column_sites(count: usize, r: f64, gap: f64, col: &Column) -> Result<Vec<
     let mut k = 0usize;
     while out.len() < count {
         let layer = &layers[k % 2];
-        let z = col.floor_center[2] + gap + r + k as f64 * d;
+        let z = col.floor_center[2] + gap + r + k as f64 * layer_gap;
         for p in layer {
             if out.len() == count {
                 break;
@@ -145,6 +148,18 @@ mod tests {
         }
         // Lowest first.
         assert!(s.windows(2).all(|w| w[1][2] >= w[0][2]));
+        // Close-packed: the layers are (2r + gap) √(2/3) apart.
+        let mut z: Vec<f64> = s.iter().map(|p| p[2]).collect();
+        z.dedup();
+        assert!(z.len() > 2, "500 sites fill several layers");
+        for w in z.windows(2) {
+            let want = (2.0 * r + gap) * (2.0f64 / 3.0).sqrt();
+            assert!(
+                (w[1] - w[0] - want).abs() < 1e-12,
+                "layer gap {}",
+                w[1] - w[0]
+            );
+        }
     }
 
     #[test]

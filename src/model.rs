@@ -70,6 +70,8 @@ pub struct MechanicsModel {
     pub gravity: [f64; 3],
     /// Mass-proportional damping (1/s).
     pub damping: f64,
+    /// Mass-proportional damping (1/s) of bodies touching nothing (None: `damping`).
+    pub free_damping: Option<f64>,
     /// Velocity conditions per node (fixed and kinematic bodies included).
     pub bc: Vec<VelocityBc>,
     /// Dead-load nodal forces from tractions (N), per node.
@@ -568,6 +570,7 @@ impl Model {
                     substeps: ms.substeps,
                     gravity: ms.gravity,
                     damping: ms.damping,
+                    free_damping: ms.free_damping,
                     bc,
                     traction,
                     contact: ms.contact.clone(),

@@ -528,3 +528,90 @@ fn hot_block_on_floor_conducts_through_its_contact() {
         assert!(d < 1e-8, "t = {}: temperatures differ by {d:e}", a.times[k]);
     }
 }
+
+/// Packing-stage damping (`mechanics.free_damping = 0`): a block alone in
+/// the air falls freely, x = ½ g t² (the explicit sum g Δt² n(n+1)/2 is
+/// within Δt/t of it), while a block sliding on the floor (frictionless)
+/// is damped, its slide x = v0 (1 − e^{−ct})/c; one and two ranks agree.
+#[test]
+fn free_damping_spares_bodies_in_free_flight() {
+    let (c, v0, t_end, g) = (20.0, 0.1, 0.1, 9.81);
+    let text = format!(
+        r#"
+[time]
+dt = 0.02
+steps = 5
+
+[[materials]]
+name = "soft"
+density = 1500.0
+young = 5e6
+poisson = 0.3
+
+[[bodies]]
+name = "floor"
+material = "soft"
+fixed = true
+mesh = {{ kind = "box", origin = [-0.1, -0.1, -0.05], size = [0.5, 0.3, 0.05], element_size = 0.05 }}
+
+[[bodies]]
+name = "slider"
+material = "soft"
+initial_velocity = [{v0}, 0.0, 0.0]
+mesh = {{ kind = "box", origin = [0.0, 0.0, -1e-5], size = [0.1, 0.1, 0.1], element_size = 0.05 }}
+
+[[bodies]]
+name = "lone"
+material = "soft"
+mesh = {{ kind = "box", origin = [1.0, 0.0, 1.0], size = [0.1, 0.1, 0.1], element_size = 0.05 }}
+
+[mechanics]
+gravity = [0.0, 0.0, -{g}]
+damping = {c}
+free_damping = 0.0
+
+[mechanics.contact]
+penalty = 5e7
+friction = 0.0
+damping_ratio = 0.2
+slip_velocity = 1e-3
+"#
+    );
+    let mut runs = Vec::new();
+    for ranks in [1, 2] {
+        let out = out_dir(&format!("free-damping-{ranks}"));
+        let scen = out.join("free.toml");
+        std::fs::write(&scen, &text).unwrap();
+        run_ok(ranks, &scen, &out, &[]);
+        let m = read_mech(&out, "free");
+        let k = m.times.len() - 1;
+        assert!((m.times[k] - t_end).abs() < 1e-12);
+        let mean = |pick: &dyn Fn(&[f64; 3]) -> bool, d: usize| {
+            let v: Vec<f64> = m
+                .coords
+                .iter()
+                .zip(&m.disp[k])
+                .filter(|(x, _)| pick(x))
+                .map(|(_, u)| u[d])
+                .collect();
+            v.iter().sum::<f64>() / v.len() as f64
+        };
+        // Not in the seeds: free fall ½ g t²; damped slide v0 (1 − e^{−ct})/c.
+        let fall = mean(&|x| x[0] > 0.9, 2);
+        let want = -0.5 * g * t_end * t_end;
+        assert!(
+            (fall / want - 1.0).abs() < 0.01,
+            "{ranks} rank(s): lone block fell {fall}, free fall {want}"
+        );
+        let slide = mean(&|x| x[0] < 0.5 && x[2] > 0.01, 0);
+        let damped = v0 * (1.0 - (-c * t_end).exp()) / c;
+        assert!(
+            (slide / damped - 1.0).abs() < 0.02,
+            "{ranks} rank(s): slider moved {slide}, damped slide {damped} (undamped {})",
+            v0 * t_end
+        );
+        runs.push(m.disp[k].concat());
+    }
+    let d = rel_diff(&runs[0], &runs[1]);
+    assert!(d < 1e-10, "1 vs 2 ranks differ by {d:e}");
+}

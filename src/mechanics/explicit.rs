@@ -386,17 +386,32 @@ pub fn update_nodes(
     x: &mut [Vector3<f64>],
     v: &mut [Vector3<f64>],
 ) -> Result<(), MechanicsError> {
+    update_nodes_damped(p, |_| p.mass_damping, mass, force, bc, x, v)
+}
+
+/// [`update_nodes`] with node `i` damped by `damping(i)` (1/s) instead of
+/// `p.mass_damping` (a packing stage damps the bodies in contact and
+/// lets the others fall freely).
+pub fn update_nodes_damped(
+    p: &NodeUpdate,
+    damping: impl Fn(usize) -> f64,
+    mass: &[f64],
+    force: &[Vector3<f64>],
+    bc: &[VelocityBc],
+    x: &mut [Vector3<f64>],
+    v: &mut [Vector3<f64>],
+) -> Result<(), MechanicsError> {
     let n = x.len();
     check_len("velocities", v.len(), n)?;
     check_len("masses", mass.len(), n)?;
     check_len("forces", force.len(), n)?;
     check_len("velocity boundary conditions", bc.len(), n)?;
-    let half = 0.5 * p.mass_damping * p.dt;
-    let (keep, scale) = ((1.0 - half) / (1.0 + half), p.dt / (1.0 + half));
     for i in 0..n {
         let mut vi = v[i];
         if mass[i] > 0.0 {
             let a = force[i] / mass[i] + p.gravity;
+            let half = 0.5 * damping(i) * p.dt;
+            let (keep, scale) = ((1.0 - half) / (1.0 + half), p.dt / (1.0 + half));
             // Not numbered in the seeds: central difference with mid-point damping, v^{n+½} = ((1 − cΔt/2) v^{n−½} + Δt a^n)/(1 + cΔt/2).
             vi = vi * keep + a * scale;
         }
@@ -1103,5 +1118,41 @@ mod tests {
         }
         assert!(s.set_velocity(&[u32::MAX], 0, None).is_err());
         assert!(s.set_velocity(&top, 3, None).is_err());
+    }
+
+    /// Per-node damping: an undamped node falls freely (v = g t, x = ½ g t²
+    /// up to the half-step offset), a damped one tends to v = g / c.
+    #[test]
+    fn per_node_damping_free_fall_and_terminal_speed() {
+        let g = Vector3::new(0.0, 0.0, -9.81);
+        let (dt, c) = (1e-3, 10.0);
+        let p = NodeUpdate {
+            dt,
+            gravity: g,
+            mass_damping: c,
+        };
+        let mass = [1.0, 1.0];
+        let force = [Vector3::zeros(); 2];
+        let bc = [[None; 3]; 2];
+        let mut x = [Vector3::zeros(); 2];
+        let mut v = [Vector3::zeros(); 2];
+        let n = 2000;
+        for _ in 0..n {
+            let damping = |i: usize| if i == 0 { 0.0 } else { c };
+            update_nodes_damped(&p, damping, &mass, &force, &bc, &mut x, &mut v).unwrap();
+        }
+        let t = n as f64 * dt;
+        // Not numbered in the seeds: explicit free fall, v = g t, x = g Δt² n(n+1)/2.
+        assert!((v[0] - g * t).norm() < 1e-9 * g.norm() * t);
+        let x_want = g * dt * dt * (n * (n + 1)) as f64 / 2.0;
+        assert!((x[0] - x_want).norm() < 1e-9 * x_want.norm());
+        // Terminal speed g / c after 20 time constants.
+        assert!((v[1] - g / c).norm() < 1e-6, "{:?}", v[1]);
+        // The uniform update is the per-node one with c everywhere.
+        let (mut xa, mut va) = ([Vector3::zeros(); 2], [Vector3::new(1.0, 2.0, 3.0); 2]);
+        let (mut xb, mut vb) = (xa, va);
+        update_nodes(&p, &mass, &force, &bc, &mut xa, &mut va).unwrap();
+        update_nodes_damped(&p, |_| c, &mass, &force, &bc, &mut xb, &mut vb).unwrap();
+        assert_eq!((xa, va), (xb, vb));
     }
 }

@@ -17,9 +17,11 @@
 //! Local numbering: owned nodes first, in the layout's (PETSc) order, then
 //! the ghosts of the owned elements, then the ghosts that only contacts
 //! need. A contact pair joins two boundary tets of different bodies and is
-//! handled by the rank owning one of them, `a` (the free body's tet against
-//! a held body, else the lower id), so every pair is counted once over the
-//! ranks.
+//! found by the rank owning one of them, `a` (the free body's tet against
+//! a held body, else the lower body's), so every pair is counted once over
+//! the ranks; the found pairs are then shared out so every rank has about
+//! the same contact work (`balance_pairs`). With `free_damping`, step 3
+//! first agrees (one all-reduce over the bodies) on which bodies touch.
 
 use mpi::collective::SystemOperation;
 use mpi::topology::SimpleCommunicator;
@@ -35,7 +37,7 @@ use crate::contact::BoundaryTets;
 use crate::error::{Error, Result};
 use crate::geometry::{tet_bounds, tets_within, TetPlanes};
 use crate::mechanics::element::{characteristic_length, element_critical_dt, to_vectors};
-use crate::mechanics::explicit::{element_forces, update_nodes, NodeUpdate, ThermalLoad};
+use crate::mechanics::explicit::{element_forces, update_nodes_damped, NodeUpdate, ThermalLoad};
 use crate::mechanics::frequency::{
     body_max_frequency, stable_step, BodyShape, BODY_EIGEN_MAX_NODES,
 };
@@ -48,12 +50,24 @@ const NONE: u32 = u32::MAX;
 const DETECT_EVERY: f64 = 10.0;
 /// Largest search margin, as a multiple of the configured one.
 const MARGIN_GROWTH: f64 = 4.0;
+/// Work of a candidate pair whose tets' boxes overlap at detection (it
+/// likely runs the overlap kernel each substep), in units of one whose
+/// boxes are apart (a box test and zeroed forces).
+const HOT_PAIR_WEIGHT: u64 = 32;
 
 /// Corners of a tet and its bounding box (low, high corner).
 type TetGeometry = ([[f64; 3]; 4], [f64; 3], [f64; 3]);
 
-/// A candidate contact pair: boundary tets `a` (owned, of a free body) and
-/// `b` (of another body) whose boxes, grown by the margin, overlap.
+/// A box (low, high corner) grown by `g` on every side.
+fn grown_aabb((lo, hi): &([f64; 3], [f64; 3]), g: f64) -> Aabb {
+    Aabb::new(
+        Point::new(lo[0] - g, lo[1] - g, lo[2] - g),
+        Point::new(hi[0] + g, hi[1] + g, hi[2] + g),
+    )
+}
+
+/// A candidate contact pair: boundary tets `a` (of a free body) and `b` (of
+/// another body) whose boxes, grown by the margin, overlap.
 #[derive(Debug, Clone, Copy)]
 struct Candidate {
     a: u32,
@@ -61,6 +75,9 @@ struct Candidate {
     /// Indices of a and b in `ExplicitDomain::pair_tets`.
     ta: u32,
     tb: u32,
+    /// Bodies of a and b.
+    body_a: u32,
+    body_b: u32,
     stiffness: f64,
     reduced_mass: f64,
 }
@@ -133,6 +150,15 @@ pub struct ExplicitDomain {
     /// Whole bodies held (fixed or kinematic).
     body_held: Vec<bool>,
     boundary: BoundaryTets,
+    /// Per body, its boundary tets (indices into `boundary.elems`), and
+    /// those of them this rank owns.
+    body_bt: Vec<Vec<u32>>,
+    my_body_bt: Vec<Vec<u32>>,
+    /// Trees of the fixed bodies' boundary tets (they never move).
+    fixed_trees: Vec<Option<Bvh>>,
+    /// Per element, its index in `pair_tets` while the lists are built
+    /// (NONE otherwise).
+    tet_slot: Vec<u32>,
     penalty: Option<(PenaltyParams, f64)>,
     /// Search margin (m) of the current candidates, between `margin_min`
     /// and [`MARGIN_GROWTH`] × `margin_min`, chosen at each detection.
@@ -161,6 +187,12 @@ pub struct ExplicitDomain {
     pub dt: f64,
     gravity: Vector3<f64>,
     damping: f64,
+    /// Damping of bodies that touch nothing (None: `damping` everywhere).
+    free_damping: Option<f64>,
+    /// Body of each owned node.
+    owned_body: Vec<u32>,
+    /// Per body, this substep: 1 if some pair of it overlaps (any rank).
+    touching: Vec<u8>,
     strain_energy: f64,
     contact_energy: f64,
     dissipated: f64,
@@ -370,6 +402,10 @@ impl ExplicitDomain {
             orig_of_global,
             body_held,
             boundary: BoundaryTets::new(mesh),
+            body_bt: Vec::new(),
+            my_body_bt: Vec::new(),
+            fixed_trees: (0..model.bodies.len()).map(|_| None).collect(),
+            tet_slot: vec![NONE; mesh.tets.len()],
             penalty,
             margin,
             margin_min: margin,
@@ -387,6 +423,13 @@ impl ExplicitDomain {
             dt,
             gravity: Vector3::from(mm.gravity),
             damping: mm.damping,
+            free_damping: mm.free_damping,
+            owned_body: layout
+                .owned_nodes
+                .iter()
+                .map(|&n| model.body_of_node(n) as u32)
+                .collect(),
+            touching: vec![0; model.bodies.len()],
             strain_energy: 0.0,
             contact_energy: 0.0,
             dissipated: 0.0,
@@ -459,6 +502,15 @@ impl ExplicitDomain {
                 material: model.elem_material[e as usize],
             })
             .collect();
+        dom.body_bt = vec![Vec::new(); model.bodies.len()];
+        dom.my_body_bt = vec![Vec::new(); model.bodies.len()];
+        for (i, &e) in dom.boundary.elems.iter().enumerate() {
+            let b = mesh.body[e as usize] as usize;
+            dom.body_bt[b].push(i as u32);
+            if layout.elem_part[e as usize] == rank {
+                dom.my_body_bt[b].push(i as u32);
+            }
+        }
         dom.refresh_local_arrays();
         dom.detect(comm, model, layout)?;
         dom.update_element_temperatures(None);
@@ -503,97 +555,49 @@ impl ExplicitDomain {
         // Every node's current position.
         self.gather_positions(comm);
         // Candidate pairs.
-        let mut contact_nodes: Vec<u32> = Vec::new();
         self.candidates.clear();
         self.margin = self.adapted_margin(comm);
         if let Some((_, penalty)) = self.penalty {
-            let grow = 0.5 * self.margin;
-            // Not in the seeds: the penalty potential sums over pairs of
-            // boundary tets (a face on the surface), like the contact
-            // surface of seed 000 sec 3.1; a tet that meets the surface only
-            // at an edge or corner overlaps a shallow intruder by O(δ²).
-            let bt = &self.boundary.elems;
-            let boxes: Vec<Aabb> = bt
-                .iter()
-                .map(|&e| {
-                    let x = mesh.tets[e as usize].map(|n| self.x_all[n as usize]);
-                    let (lo, hi) = tet_bounds(&x);
-                    Aabb::new(
-                        Point::new(lo[0] - grow, lo[1] - grow, lo[2] - grow),
-                        Point::new(hi[0] + grow, hi[1] + grow, hi[2] + grow),
-                    )
-                })
-                .collect();
-            let bvh = Bvh::from_leaves(BvhBuildStrategy::Binned, &boxes);
-            for (ia, &a) in bt.iter().enumerate() {
-                let ba = mesh.body[a as usize] as usize;
-                // A held body's pairs are found from the free side (the
-                // particles' ranks, which the partition balances).
-                if layout.elem_part[a as usize] != self.rank || self.body_held[ba] {
-                    continue;
-                }
-                for ib in bvh.intersect_aabb(&boxes[ia]) {
-                    let b = bt[ib as usize];
-                    let bb = mesh.body[b as usize] as usize;
-                    if bb == ba {
-                        continue;
-                    }
-                    let held_b = self.body_held[bb];
-                    // Of two free tets, the lower id finds the pair.
-                    if !held_b && b < a {
-                        continue;
-                    }
-                    let corners = |e: u32| mesh.tets[e as usize].map(|n| self.x_all[n as usize]);
-                    if !tets_within(&corners(a), &corners(b), self.margin) {
-                        continue;
-                    }
-                    let (va, vb) = (
-                        mesh.element_volume(a as usize),
-                        mesh.element_volume(b as usize),
-                    );
-                    let (ma, mb) = (
-                        model.material_of(a as usize).density * va,
-                        model.material_of(b as usize).density * vb,
-                    );
-                    // a is never held (held bodies do not search).
-                    let reduced_mass = if held_b { ma } else { ma * mb / (ma + mb) };
-                    contact_nodes.extend_from_slice(&mesh.tets[a as usize]);
-                    contact_nodes.extend_from_slice(&mesh.tets[b as usize]);
-                    self.candidates.push(Candidate {
-                        a,
-                        b,
-                        ta: NONE,
-                        tb: NONE,
-                        stiffness: pair_stiffness(penalty, va, vb),
-                        reduced_mass,
-                    });
-                }
-            }
+            let weights = self.find_pairs(model, penalty);
+            self.balance_pairs(comm, model, penalty, &weights);
         }
-        // Ghosts: those of the elements, then those of the contacts.
+        // Ghosts: those of the elements, then those of the contacts, in
+        // ascending node order. The tets of the pairs are listed once each
+        // (their corners and planes are built once per substep, not once
+        // per pair). Marks instead of sorting the ~8 nodes per pair.
         for &n in &self.node_of_local[self.n_owned + self.n_elem_ghosts..] {
             self.local_of[n as usize] = NONE;
         }
         self.node_of_local
             .truncate(self.n_owned + self.n_elem_ghosts);
-        contact_nodes.sort_unstable();
-        contact_nodes.dedup();
-        for n in contact_nodes {
-            if self.local_of[n as usize] == NONE {
-                self.local_of[n as usize] = self.node_of_local.len() as u32;
-                self.node_of_local.push(n);
+        let mut tets: Vec<u32> = Vec::new();
+        let mut contact_nodes: Vec<u32> = Vec::new();
+        for c in self.candidates.iter_mut() {
+            for (e, slot) in [(c.a, &mut c.ta), (c.b, &mut c.tb)] {
+                let s = &mut self.tet_slot[e as usize];
+                if *s == NONE {
+                    *s = tets.len() as u32;
+                    tets.push(e);
+                    for &n in &mesh.tets[e as usize] {
+                        if self.local_of[n as usize] == NONE {
+                            // Marked as taken until numbered below.
+                            self.local_of[n as usize] = NONE - 1;
+                            contact_nodes.push(n);
+                        }
+                    }
+                }
+                *slot = *s;
             }
         }
-        self.refresh_local_arrays();
-        // The tets of the pairs, each once: their corners and planes are
-        // built once per substep, not once per pair.
-        let mut tets: Vec<u32> = self.candidates.iter().flat_map(|c| [c.a, c.b]).collect();
-        tets.sort_unstable();
-        tets.dedup();
-        for c in self.candidates.iter_mut() {
-            c.ta = tets.binary_search(&c.a).expect("pair tet") as u32;
-            c.tb = tets.binary_search(&c.b).expect("pair tet") as u32;
+        for &e in &tets {
+            self.tet_slot[e as usize] = NONE;
         }
+        contact_nodes.sort_unstable();
+        for n in contact_nodes {
+            self.local_of[n as usize] = self.node_of_local.len() as u32;
+            self.node_of_local.push(n);
+        }
+        self.refresh_local_arrays();
         self.pair_tets = tets
             .iter()
             .map(|&e| mesh.tets[e as usize].map(|n| self.local_of[n as usize]))
@@ -646,6 +650,203 @@ impl ExplicitDomain {
     /// rank computed them. Ghost contributions travel one by one, not
     /// pre-summed, so the sums, and hence the trajectories, are bitwise
     /// the same on any number of ranks.
+    /// This rank's candidate pairs, with their estimated costs (see
+    /// [`Self::balance_pairs`]). Two levels: bodies whose boxes come within
+    /// the margin, then, for each such pair, the owned boundary tets of
+    /// one tested against a tree of the other's boundary tets, so no query
+    /// wades through its own body's tets and a body falling alone costs
+    /// one box test. The fixed bodies' trees are built once.
+    fn find_pairs(&mut self, model: &Model, penalty: f64) -> Vec<u64> {
+        let mesh = &model.mesh;
+        let margin = self.margin;
+        let x_all = &self.x_all;
+        let corners = |e: u32| mesh.tets[e as usize].map(|n| x_all[n as usize]);
+        // Not in the seeds: the penalty potential sums over pairs of
+        // boundary tets (a face on the surface), like the contact
+        // surface of seed 000 sec 3.1; a tet that meets the surface only
+        // at an edge or corner overlaps a shallow intruder by O(δ²).
+        let bt = &self.boundary.elems;
+        let raw: Vec<([f64; 3], [f64; 3])> = bt.iter().map(|&e| tet_bounds(&corners(e))).collect();
+        let nb = model.bodies.len();
+        let mut body_box = vec![([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]); nb];
+        for (i, &e) in bt.iter().enumerate() {
+            let bb = &mut body_box[mesh.body[e as usize] as usize];
+            for d in 0..3 {
+                bb.0[d] = bb.0[d].min(raw[i].0[d]);
+                bb.1[d] = bb.1[d].max(raw[i].1[d]);
+            }
+        }
+        let with_tets: Vec<u32> = (0..nb as u32)
+            .filter(|&b| !self.body_bt[b as usize].is_empty())
+            .collect();
+        let leaves: Vec<Aabb> = with_tets
+            .iter()
+            .map(|&b| grown_aabb(&body_box[b as usize], 0.0))
+            .collect();
+        let body_tree = Bvh::from_leaves(BvhBuildStrategy::Binned, &leaves);
+        let tree_of = |b: usize| {
+            let leaves: Vec<Aabb> = self.body_bt[b]
+                .iter()
+                .map(|&i| grown_aabb(&raw[i as usize], 0.0))
+                .collect();
+            Bvh::from_leaves(BvhBuildStrategy::Binned, &leaves)
+        };
+        for b in 0..nb {
+            if model.bodies[b].fixed && self.fixed_trees[b].is_none() && !self.body_bt[b].is_empty()
+            {
+                self.fixed_trees[b] = Some(tree_of(b));
+            }
+        }
+        let mut moving_trees: Vec<Option<Bvh>> = (0..nb).map(|_| None).collect();
+        let mut found: Vec<(u32, u32, bool)> = Vec::new();
+        for ba in 0..nb {
+            // A held body's pairs are found from the free side (the
+            // particles' ranks, which the partition balances).
+            if self.body_held[ba] || self.my_body_bt[ba].is_empty() {
+                continue;
+            }
+            let mut near: Vec<usize> = body_tree
+                .intersect_aabb(&grown_aabb(&body_box[ba], margin))
+                .map(|i| with_tets[i as usize] as usize)
+                // Of two free bodies, the lower id finds the pairs.
+                .filter(|&bb| bb != ba && (self.body_held[bb] || ba < bb))
+                .collect();
+            near.sort_unstable();
+            for bb in near {
+                let tree = match &self.fixed_trees[bb] {
+                    Some(t) => t,
+                    None => moving_trees[bb].get_or_insert_with(|| tree_of(bb)),
+                };
+                let (lo_b, hi_b) = body_box[bb];
+                for &ia in &self.my_body_bt[ba] {
+                    let (lo, hi) = raw[ia as usize];
+                    if (0..3).any(|d| lo[d] - margin > hi_b[d] || lo_b[d] > hi[d] + margin) {
+                        continue;
+                    }
+                    for leaf in tree.intersect_aabb(&grown_aabb(&raw[ia as usize], margin)) {
+                        let ib = self.body_bt[bb][leaf as usize] as usize;
+                        let (a, b) = (bt[ia as usize], bt[ib]);
+                        if !tets_within(&corners(a), &corners(b), margin) {
+                            continue;
+                        }
+                        let (lo_t, hi_t) = raw[ib];
+                        let hot = (0..3).all(|d| lo[d] <= hi_t[d] && lo_t[d] <= hi[d]);
+                        found.push((a, b, hot));
+                    }
+                }
+            }
+        }
+        self.candidates = found
+            .iter()
+            .map(|&(a, b, _)| self.candidate(model, penalty, a, b))
+            .collect();
+        found
+            .iter()
+            .map(|&(_, _, hot)| if hot { HOT_PAIR_WEIGHT } else { 1 })
+            .collect()
+    }
+
+    /// The candidate pair of boundary tets `a` (of a free body) and `b`.
+    fn candidate(&self, model: &Model, penalty: f64, a: u32, b: u32) -> Candidate {
+        let mesh = &model.mesh;
+        let (ba, bb) = (mesh.body[a as usize], mesh.body[b as usize]);
+        let (va, vb) = (
+            mesh.element_volume(a as usize),
+            mesh.element_volume(b as usize),
+        );
+        let (ma, mb) = (
+            model.material_of(a as usize).density * va,
+            model.material_of(b as usize).density * vb,
+        );
+        // a is never held (held bodies do not search).
+        let reduced_mass = if self.body_held[bb as usize] {
+            ma
+        } else {
+            ma * mb / (ma + mb)
+        };
+        Candidate {
+            a,
+            b,
+            ta: NONE,
+            tb: NONE,
+            body_a: ba,
+            body_b: bb,
+            stiffness: pair_stiffness(penalty, va, vb),
+            reduced_mass,
+        }
+    }
+
+    /// Collective. Share the pair work evenly over the ranks. Each rank
+    /// finds the pairs of the tets it owns, so the ranks holding the
+    /// bottom of a settling column (or its contacts) would do all the
+    /// contact work while the others wait. With `weights` the estimated
+    /// cost of each found pair, the pairs of all ranks, in rank order,
+    /// are cut into equal-weight runs and rank r takes run r: an excess
+    /// moves to the next ranks as one contiguous, spatially coherent run
+    /// (the pair's nodes become ghosts there). The forces do not depend
+    /// on which rank evaluates a pair (they are summed by pair key).
+    fn balance_pairs(
+        &mut self,
+        comm: &SimpleCommunicator,
+        model: &Model,
+        penalty: f64,
+        weights: &[u64],
+    ) {
+        let size = comm.size() as usize;
+        if size == 1 {
+            return;
+        }
+        let mine: u64 = weights.iter().sum();
+        let mut all = vec![0u64; size];
+        comm.all_gather_into(&mine, &mut all[..]);
+        let total: u64 = all.iter().sum();
+        if total == 0 {
+            return;
+        }
+        let mut at: u64 = all[..self.rank as usize].iter().sum();
+        let mut out: Vec<Vec<u32>> = vec![Vec::new(); size];
+        let mut keep = Vec::with_capacity(self.candidates.len());
+        for (c, &w) in self.candidates.iter().zip(weights) {
+            // The rank whose equal share holds the pair's mid-point.
+            let mid = 2 * u128::from(at) + u128::from(w);
+            let dest = ((mid * size as u128) / (2 * u128::from(total))).min(size as u128 - 1);
+            at += w;
+            if dest == u128::from(self.rank) {
+                keep.push(*c);
+            } else {
+                out[dest as usize].extend_from_slice(&[c.a, c.b]);
+            }
+        }
+        let send_counts: Vec<i32> = out.iter().map(|v| v.len() as i32).collect();
+        let mut recv_counts = vec![0i32; size];
+        comm.all_to_all_into(&send_counts[..], &mut recv_counts[..]);
+        let displs = |c: &[i32]| -> Vec<i32> {
+            c.iter()
+                .scan(0, |acc, &x| {
+                    let d = *acc;
+                    *acc += x;
+                    Some(d)
+                })
+                .collect()
+        };
+        let send: Vec<u32> = out.concat();
+        let mut recv = vec![0u32; recv_counts.iter().sum::<i32>() as usize];
+        {
+            let send =
+                mpi::datatype::Partition::new(&send[..], send_counts.clone(), displs(&send_counts));
+            let mut part = mpi::datatype::PartitionMut::new(
+                &mut recv[..],
+                recv_counts.clone(),
+                displs(&recv_counts),
+            );
+            comm.all_to_all_varcount_into(&send, &mut part);
+        }
+        for ab in recv.chunks_exact(2) {
+            keep.push(self.candidate(model, penalty, ab[0], ab[1]));
+        }
+        self.candidates = keep;
+    }
+
     fn build_assembly(&mut self, comm: &SimpleCommunicator, layout: &Layout) {
         const PAIR: u64 = 1 << 63;
         let ne = self.elements.len();
@@ -686,9 +887,9 @@ impl ExplicitDomain {
         let mut counts_out = Vec::with_capacity(nbrs.len());
         let mut keys_out = Vec::with_capacity(nbrs.len());
         self.send_slots = ghost
-            .iter_mut()
+            .iter()
             .map(|list| {
-                list.sort_unstable();
+                // Any order: the owner sums by key.
                 counts_out.push(vec![f64::from_bits(list.len() as u64)]);
                 keys_out.push(
                     list.iter()
@@ -840,6 +1041,7 @@ impl ExplicitDomain {
         // Contact forces, 8 slots per candidate pair.
         self.contact_energy = 0.0;
         self.active_pairs = 0;
+        self.touching.iter_mut().for_each(|t| *t = 0);
         if let Some((params, _)) = &self.penalty {
             let mut power = 0.0;
             self.pair_geometry.clear();
@@ -888,6 +1090,8 @@ impl ExplicitDomain {
                         self.contact_energy += r.energy;
                         power += r.dissipation;
                         self.active_pairs += 1;
+                        self.touching[c.body_a as usize] = 1;
+                        self.touching[c.body_b as usize] = 1;
                     }
                     None => out.iter_mut().for_each(|f| *f = Vector3::zeros()),
                 }
@@ -985,8 +1189,25 @@ impl ExplicitDomain {
             gravity: self.gravity,
             mass_damping: self.damping,
         };
-        if let Err(e) = update_nodes(
+        let free = self.free_damping.unwrap_or(self.damping);
+        if self.free_damping.is_some() {
+            // Which bodies touch something, over all ranks (a body's pairs
+            // may be on another rank than its nodes).
+            let mine = self.touching.clone();
+            comm.all_reduce_into(&mine[..], &mut self.touching[..], SystemOperation::max());
+        }
+        let (touching, owned_body, damping) = (&self.touching, &self.owned_body, self.damping);
+        // Not in the seeds: packing-stage mass damping only on bodies in contact (free flight undamped).
+        let node_damping = |i: usize| {
+            if touching[owned_body[i] as usize] != 0 {
+                damping
+            } else {
+                free
+            }
+        };
+        if let Err(e) = update_nodes_damped(
             &p,
+            node_damping,
             &self.mass[..no],
             &self.f[..no],
             &self.bc[..no],

@@ -556,6 +556,12 @@ pub struct MechanicsSpec {
     /// Mass-proportional damping coefficient c (1/s): force −c m v.
     #[serde(default)]
     pub damping: f64,
+    /// Mass-proportional damping (1/s) of a body that touches no other
+    /// body in the substep (free flight). Absent: `damping` everywhere. A
+    /// packing stage sets 0 so particles fall freely and are damped once
+    /// they land; needs `contact`.
+    #[serde(default)]
+    pub free_damping: Option<f64>,
     /// Boundary conditions on named sets.
     #[serde(default)]
     pub bc: Vec<MechanicsBcSpec>,
@@ -1044,6 +1050,18 @@ impl Scenario {
         }
         if !(m.damping.is_finite() && m.damping >= 0.0) {
             return bad("mechanics.damping", "must be non-negative".into());
+        }
+        if let Some(c) = m.free_damping {
+            if !(c.is_finite() && c >= 0.0) {
+                return bad("mechanics.free_damping", "must be non-negative".into());
+            }
+            if m.contact.is_none() {
+                return bad(
+                    "mechanics.free_damping",
+                    "needs [mechanics.contact]: without contact every body is in free flight"
+                        .into(),
+                );
+            }
         }
         for (i, bc) in m.bc.iter().enumerate() {
             let key = format!("mechanics.bc[{i}]");

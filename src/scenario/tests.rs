@@ -103,3 +103,28 @@ fn set_is_validated_like_the_file() {
         .to_string();
     assert!(e.contains("KEY=VALUE"), "{e}");
 }
+
+#[test]
+fn free_damping_needs_contact_and_is_non_negative() {
+    let mech = |extra: &str| {
+        format!(
+            "{}\n[mechanics]\ndamping = 3.0\nfree_damping = {extra}\n",
+            GOOD.replace(
+                "density = 100.0",
+                "density = 100.0\nyoung = 1e6\npoisson = 0.2"
+            )
+        )
+    };
+    let e = parse_str(&mech("0.0"), p(), &[]).unwrap_err().to_string();
+    assert!(
+        e.contains("mechanics.free_damping") && e.contains("contact"),
+        "{e}"
+    );
+    let with_contact = |v: &str| format!("{}\n[mechanics.contact]\npenalty = 1e6\n", mech(v));
+    let e = parse_str(&with_contact("-1.0"), p(), &[])
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("mechanics.free_damping"), "{e}");
+    let s = parse_str(&with_contact("0.0"), p(), &[]).unwrap().scenario;
+    assert_eq!(s.mechanics.unwrap().free_damping, Some(0.0));
+}

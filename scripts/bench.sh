@@ -122,19 +122,13 @@ run_case "heat-up of the N=200 deposited packing, 80 steps" 2 scenarios/nut-pack
   --set "bodies.1.mesh.file=$OUT/mech/nut-packing-deposit_checkpoint.h5"
 run_case "heat-up of the N=50 deposited packing, 80 steps" 2 scenarios/nut-packing-heatup.toml \
   --set "bodies.1.mesh.file=$OUT/dep50/nut-packing-deposit_checkpoint.h5"
-# N = 2000, the paper's run: deposition on 2 ranks (free flight damped at
-# 5 /s: the nuts fall at up to 2 m/s), then the heat-up of that packing on
-# 1 and 2 ranks with CG + Jacobi (PETSc options pass through).
+# N = 2000, the paper's run: the first 0.5 s of the deposition on 2 ranks
+# (the whole run does not fit a bench: see the README), free flight damped
+# at 5 /s (the nuts fall at up to 2 m/s instead of 1 m/s).
 DEPOSIT_2000=(--set materials.0.young=2.5e5
   --set mechanics.contact.penalty=2.5e5 --set mechanics.damping=10.0 --set mechanics.free_damping=5.0
-  --set mechanics.settle.kinetic_energy=1.2e-2 --set mechanics.settle.relative=1e-9
-  --set mechanics.settle.after=0.3)
-mech_case "nut deposition N=2000 (CI settings, free flight 5 /s, KE < 1.2e-2 J), to settled" 2 scenarios/nut-packing-deposit.toml "${DEPOSIT_2000[@]}"
-mkdir -p "$OUT/dep2000" && cp "$OUT/mech/nut-packing-deposit_checkpoint.h5" "$OUT/dep2000/"
-for ranks in 1 2; do
-  run_case "heat-up of the N=2000 deposited packing, 80 steps, CG + Jacobi" $ranks scenarios/nut-packing-heatup.toml \
-    --set "bodies.1.mesh.file=$OUT/dep2000/nut-packing-deposit_checkpoint.h5" -ksp_type cg -pc_type jacobi
-done
+  --set time.end_time=0.5)
+mech_case "nut deposition N=2000 (CI settings, free flight 5 /s), first 0.5 s" 2 scenarios/nut-packing-deposit.toml "${DEPOSIT_2000[@]}"
 run_case "heat-up, 2009 nuts on a lattice, 80 steps (seed 000 sec 6 size)" 1 scenarios/bench-nut-lattice-heatup.toml
 run_case "heat-up, 2009 nuts on a lattice, 80 steps (seed 000 sec 6 size)" 2 scenarios/bench-nut-lattice-heatup.toml
 
@@ -200,11 +194,12 @@ echo "$kernel_line" >&2
   echo "80 backward-Euler steps of 1 s (the paper's heat-up at its size, on a lattice instead"
   echo "of a deposited packing). The N = 200 rows deposit four layers of nuts with the same"
   echo "settings (settled below 1.2e-3 J, the same rms speed per nut) and heat that packing"
-  echo "(\`scenarios/nut-packing-heatup.toml\`, Table 4). The N = 2000 rows deposit the paper's"
-  echo "packing with the same settings (settled below 1.2e-2 J) and mass damping 5 /s instead of 10 /s on"
-  echo "nuts that touch nothing (\`mechanics.free_damping\`: they fall at up to 2 m/s instead of 1 m/s),"
-  echo "then heat it with CG + Jacobi. Issue 5 targets: heat-up of N = 2000 under 60 s on 2 ranks;"
-  echo "deposition of N = 2000 under 30 min on 2 ranks; 1 -> 2 rank speed-up at least 1.6."
+  echo "(\`scenarios/nut-packing-heatup.toml\`, Table 4). The N = 2000 row runs the first 0.5 s of the"
+  echo "paper's deposition with the same settings and mass damping 5 /s instead of 10 /s on nuts that"
+  echo "touch nothing (\`mechanics.free_damping\`: they fall at up to 2 m/s instead of 1 m/s); the"
+  echo "column is still landing then. Issue 5 targets: heat-up of N = 2000 under 60 s on 2 ranks;"
+  echo "deposition of N = 2000 under 30 min on 2 ranks (not met, see the README); 1 -> 2 rank"
+  echo "speed-up at least 1.6."
   echo
   echo "## Mechanics kernel"
   echo

@@ -227,7 +227,14 @@ impl Model {
                     radius,
                     width,
                     element_size,
-                } => mesh::generate::cylinder_mesh(*center, *radius, *width, *element_size),
+                    boundary,
+                } => mesh::generate::cylinder_mesh(
+                    *center,
+                    *radius,
+                    *width,
+                    *element_size,
+                    *boundary,
+                ),
                 MeshSpec::Annulus {
                     center,
                     inner_radius,

@@ -238,32 +238,89 @@ fn disc_area(stdout: &str) -> f64 {
         .unwrap()
 }
 
-/// Seed 000 eqs 41–42 against the computed surface of the two discs.
+/// The computed surface of the two discs of `scenarios/two-discs.toml` at
+/// element size `h`, with disc A turned by `rot_a` and disc B by `rot_b`
+/// degrees about their axes, and any further settings.
+fn disc_surface(h: f64, rot_a: f64, rot_b: f64, extra: &[String], tag: &str) -> f64 {
+    let out = out_dir(tag);
+    let mut s = vec![
+        format!("bodies.A.mesh.element_size={h}"),
+        format!("bodies.B.mesh.element_size={h}"),
+        format!("bodies.A.rotate=[0.0,0.0,{rot_a}]"),
+        format!("bodies.B.rotate=[0.0,0.0,{rot_b}]"),
+        "time.end_time=0.001".to_string(),
+        "output.every=0".to_string(),
+    ];
+    s.extend_from_slice(extra);
+    let stdout = run_ok(1, &root().join("scenarios/two-discs.toml"), &out, &sets(&s));
+    let _ = std::fs::remove_dir_all(&out);
+    disc_area(&stdout)
+}
+
+/// Seed 000 eqs 41–42 against the computed surface of the two discs (issue:
+/// within 4 % at mesh 0.08 m and 0.5 % at 0.04 m; the paper 4 % and 0.4 %).
+///
+/// The lens of two discs overlapping by p = 0.01 m is ~2.5 boundary segments
+/// long at 0.08 m, and a segment's sagitta is a tenth of p, so the surface
+/// depends on where the boundary nodes fall. Besides the scenario as it is,
+/// the test turns each disc by quarter segments (16 alignments per size) and
+/// asserts the alignment average (what a packing of randomly oriented discs
+/// sees) and the envelope. With nodes on the circle (inscribed polygons) the
+/// surface is short for every alignment, which the last check shows.
 #[test]
 fn disc_contact_surface_against_circle_overlap() {
     let theory = circle_overlap_surface(1.0, 1.0, 0.01, 0.1);
-    let mut errs = Vec::new();
-    for h in [0.08, 0.04] {
-        let out = out_dir(&format!("disc-area-{h}"));
-        let s = [
-            format!("bodies.A.mesh.element_size={h}"),
-            format!("bodies.B.mesh.element_size={h}"),
-            "time.end_time=0.001".to_string(),
-            "output.every=0".to_string(),
-        ];
-        let stdout = run_ok(1, &root().join("scenarios/two-discs.toml"), &out, &sets(&s));
-        let err = (disc_area(&stdout) - theory).abs() / theory;
+    let err = |s: f64| (s - theory) / theory;
+    for (h, bound) in [(0.08, 0.04), (0.04, 0.005)] {
+        let scenario = err(disc_surface(h, 0.0, 0.0, &[], &format!("disc-area-{h}")));
+        // Boundary segments and their angle, as cylinder_mesh makes them.
+        let n_b = (std::f64::consts::TAU / h).round();
+        let seg = 360.0 / n_b;
+        let mut sweep = Vec::new();
+        for a in 0..4 {
+            for b in 0..4 {
+                let (ra, rb) = (seg * a as f64 / 4.0, seg * b as f64 / 4.0);
+                let tag = format!("disc-sweep-{h}-{a}-{b}");
+                sweep.push(err(disc_surface(h, ra, rb, &[], &tag)));
+            }
+        }
+        let mean = sweep.iter().sum::<f64>() / sweep.len() as f64;
+        let (lo, hi) = sweep
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, u), &e| {
+                (l.min(e), u.max(e))
+            });
         eprintln!(
-            "disc contact surface at h = {h}: {} (theory {theory}), error {:.2} %",
-            disc_area(&stdout),
-            100.0 * err
+            "disc contact surface at h = {h} (theory {theory:.6e}): scenario {:+.2} %, \
+             over 16 alignments {:+.2} .. {:+.2} %, mean {:+.2} %",
+            100.0 * scenario,
+            100.0 * lo,
+            100.0 * hi,
+            100.0 * mean
         );
-        errs.push(err);
+        assert!(
+            scenario.abs() < bound,
+            "h = {h}: scenario {:.2} %",
+            100.0 * scenario
+        );
+        assert!(
+            mean.abs() < 0.005,
+            "h = {h}: alignment mean {:.2} %",
+            100.0 * mean
+        );
+        // Measured envelope (docs/validation.md): within 1.2 % at both sizes.
+        assert!(
+            lo > -0.015 && hi < 0.015,
+            "h = {h}: envelope {:.2} .. {:.2} %",
+            100.0 * lo,
+            100.0 * hi
+        );
     }
-    // Measured (docs/validation.md): 5.07 % and 2.00 %; the paper 4 % and 0.4 %.
-    assert!(errs[0] < 0.055, "h = 0.08: {:.2} %", 100.0 * errs[0]);
-    assert!(errs[1] < 0.022, "h = 0.04: {:.2} %", 100.0 * errs[1]);
-    assert!(errs[1] < errs[0] / 2.0, "the error must fall as h halves");
+    // The inscribed polygons' bias: short by more than 4 % at 0.08 m.
+    let inscribed = ["A", "B"].map(|b| format!("bodies.{b}.mesh.boundary=inscribed"));
+    let e = err(disc_surface(0.08, 0.0, 0.0, &inscribed, "disc-inscribed"));
+    eprintln!("inscribed boundary nodes at h = 0.08: {:+.2} %", 100.0 * e);
+    assert!(e < -0.04, "inscribed: {:.2} %", 100.0 * e);
 }
 
 /// Mean temperature of disc B against the pipe-network model (eqs 33–40,

@@ -262,6 +262,11 @@ pub enum MeshSpec {
         width: f64,
         /// Target element size h (m).
         element_size: f64,
+        /// Where the boundary nodes lie: `inscribed` (on the circle, the
+        /// default) or `area_preserving` (just outside it, so the faceted
+        /// section has the circle's area; see `mesh::generate::CircleNodes`).
+        #[serde(default)]
+        boundary: crate::mesh::generate::CircleNodes,
     },
     /// A hollow cylinder, axis along z (named sets inner, outer, zmin, zmax).
     Annulus {
@@ -902,6 +907,7 @@ impl Scenario {
                 width,
                 element_size,
                 center,
+                ..
             } = &b.mesh
             {
                 for (f, v) in [

@@ -11,11 +11,13 @@ use std::path::Path;
 
 use nalgebra::{Matrix3, Vector3};
 
-use crate::geometry::placement::{centroid_and_radius, column_sites, random_rotations, Column};
+use crate::geometry::placement::{
+    centroid_and_radius, column_sites, drop_sites, random_rotations, Column,
+};
 use crate::geometry::tet_tet_intersection;
 use crate::io::checkpoint::Checkpoint;
 use crate::mesh::TetMesh;
-use crate::scenario::{MeshSpec, PackSpec};
+use crate::scenario::{MeshSpec, PackSpec, Placement as PlacementKind};
 
 /// Where a particle goes: its centroid and its rotation.
 type Placement = (Vector3<f64>, Matrix3<f64>);
@@ -83,13 +85,25 @@ pub fn place(
     }
     let placements: Vec<Placement> = match &spec.positions {
         None => {
-            let gap = spec.gap.unwrap_or(0.1 * r);
             let col = Column {
                 floor_center: container.floor,
                 radius: container.radius,
             };
-            let sites = column_sites(spec.count, r, gap, &col)?;
             let rots = random_rotations(spec.count, spec.seed);
+            let sites = match spec.placement {
+                PlacementKind::Column => {
+                    column_sites(spec.count, r, spec.gap.unwrap_or(0.1 * r), &col)?
+                }
+                PlacementKind::Drop => {
+                    let hull: Vec<[f64; 3]> = template
+                        .nodes
+                        .iter()
+                        .map(|p| [p[0] - c[0], p[1] - c[1], p[2] - c[2]])
+                        .collect();
+                    let gap = spec.gap.unwrap_or(0.05 * r);
+                    drop_sites(&hull, &rots, gap, spec.trials, spec.seed, &col)?
+                }
+            };
             sites
                 .into_iter()
                 .zip(rots)
@@ -255,6 +269,8 @@ mod tests {
             count,
             seed: 3,
             into: "c".into(),
+            placement: PlacementKind::Drop,
+            trials: 8,
             gap: None,
             max_fraction: 0.64,
             positions: None,
@@ -270,6 +286,14 @@ mod tests {
     #[test]
     fn placed_nuts_do_not_overlap_and_keep_their_shape() {
         let nut = nut_mesh_default([0.0; 3]).unwrap();
+        let mut column = spec(60);
+        column.placement = PlacementKind::Column;
+        let stacked = place("nut", &nut, &column, &BOX, &|s| s.into()).unwrap();
+        for i in 0..8 {
+            for j in 0..i {
+                assert!(overlap_volume(&stacked[i].1, &stacked[j].1).is_none());
+            }
+        }
         let copies = place("nut", &nut, &spec(60), &BOX, &|s| s.into()).unwrap();
         assert_eq!(copies.len(), 60);
         for (_, m) in &copies {
@@ -283,7 +307,8 @@ mod tests {
         s2.seed = 4;
         let other = place("nut", &nut, &s2, &BOX, &|s| s.into()).unwrap();
         assert_ne!(copies[0].1.nodes, other[0].1.nodes);
-        for i in 0..8 {
+        // Dropped: every pair of the first 20 (they touch within the gap).
+        for i in 0..20 {
             for j in 0..i {
                 assert!(overlap_volume(&copies[i].1, &copies[j].1).is_none());
             }

@@ -73,6 +73,9 @@ pub struct MechanicsSummary {
     pub element_updates: u64,
     /// Contact pair evaluations, all ranks.
     pub pair_updates: u64,
+    /// Of those, exact overlap computations (the rest: boxes apart, or
+    /// linearised overlaps).
+    pub exact_overlaps: u64,
     /// Smallest (at-rest) contact search margin (m).
     pub margin: f64,
 }
@@ -166,7 +169,7 @@ impl std::fmt::Display for RunSummary {
             };
             writeln!(
                 f,
-                "  mechanics   dt {:.4e} s, {} substeps ({} per step), {:.3} s ({:.3} s set-up, {:.3} s detection, {} detections), {:.2} M tet updates/s/rank, {} pair evaluations",
+                "  mechanics   dt {:.4e} s, {} substeps ({} per step), {:.3} s ({:.3} s set-up, {:.3} s detection, {} detections), {:.2} M tet updates/s/rank, {} pair evaluations ({} exact overlaps)",
                 m.dt,
                 m.substeps,
                 m.substeps_per_step,
@@ -175,7 +178,8 @@ impl std::fmt::Display for RunSummary {
                 t.mechanics_detect,
                 m.detections,
                 rate / 1e6,
-                m.pair_updates
+                m.pair_updates,
+                m.exact_overlaps
             )?;
         }
         writeln!(
@@ -630,6 +634,14 @@ pub fn run(
     record(&sys, &mut report, start_step)?;
     times.output += clock.elapsed().as_secs_f64();
     let settle = model.mechanics.as_ref().and_then(|m| m.settle);
+    // Mass of the free bodies (the settle criterion by rms speed).
+    let free_mass: f64 = (0..model.mesh.tets.len())
+        .filter(|&e| {
+            let b = &model.bodies[model.mesh.body[e] as usize];
+            !b.fixed && b.velocity == [0.0; 3]
+        })
+        .map(|e| model.material_of(e).density * model.mesh.element_volume(e))
+        .sum();
     let mut peak_ke = restart.as_ref().map_or(0.0, |c| c.peak_kinetic);
     let mut settled = None;
     let ck_every = sc.scenario.output.checkpoint_every;
@@ -753,11 +765,12 @@ pub fn run(
             let ke = m.state(comm).kinetic;
             peak_ke = f64::max(peak_ke, ke);
             let time = step as f64 * model.dt;
-            // Settled when below either threshold given.
+            // Settled when below any threshold given.
             let threshold = st
                 .kinetic_energy
                 .unwrap_or(0.0)
-                .max(st.relative.map_or(0.0, |r| r * peak_ke));
+                .max(st.relative.map_or(0.0, |r| r * peak_ke))
+                .max(st.rms_speed.map_or(0.0, |v| 0.5 * free_mass * v * v));
             if time >= st.after && peak_ke > 0.0 && ke < threshold {
                 settled = Some((step, time, ke));
             }
@@ -827,9 +840,10 @@ pub fn run(
             [
                 m.counters.element_updates as f64,
                 m.counters.pair_updates as f64,
+                m.counters.exact_overlaps as f64,
             ],
         ),
-        None => (0.0, [0.0; 2]),
+        None => (0.0, [0.0; 3]),
     };
     let local = [
         times.model,
@@ -863,6 +877,7 @@ pub fn run(
         detections: m.counters.detections,
         element_updates: mech_counts[0] as u64,
         pair_updates: mech_counts[1] as u64,
+        exact_overlaps: mech_counts[2] as u64,
         margin: m.min_margin(),
     });
     Ok(RunSummary {

@@ -340,6 +340,84 @@ fn head_on_collision_conserves_momentum_and_energy() {
     }
 }
 
+/// The head-on collision with linearised contact (`linear_tolerance`
+/// 0.02): momentum still conserved to round-off, energy within 1 %, the
+/// rebound within 1 % of the exact contact's, and one and two ranks
+/// identical. (A 1.5 m/s impact deforms the overlaps faster than the
+/// tolerance allows, so nearly every evaluation is exact here; the saving
+/// is in slowly deforming beds, see tests/packing.rs.)
+#[test]
+fn linearised_contact_follows_the_exact_collision() {
+    let lin = "mechanics.contact.linear_tolerance=0.02";
+    let exact_dir = out_dir("collision-exact-ref");
+    let exact_out = run_ok(1, &root().join("scenarios/collision.toml"), &exact_dir, &[]);
+    let (h, exact_rows) = history(&exact_dir, "collision");
+    let mut lin_rows = Vec::new();
+    for ranks in [1, 2] {
+        let out = out_dir(&format!("collision-linear-{ranks}"));
+        let stdout = run_ok(
+            ranks,
+            &root().join("scenarios/collision.toml"),
+            &out,
+            &["--set", lin],
+        );
+        let (_, rows) = history(&out, "collision");
+        let (px, ke, se, ce) = (
+            col(&h, "momentum_x"),
+            col(&h, "kinetic_energy"),
+            col(&h, "strain_energy"),
+            col(&h, "contact_energy"),
+        );
+        let (p0, e0) = (rows[0][px], rows[0][ke]);
+        for r in &rows {
+            assert!(
+                (r[px] - p0).abs() < 1e-12 * p0,
+                "momentum {} vs {p0}",
+                r[px]
+            );
+            let e = r[ke] + r[se] + r[ce];
+            assert!(
+                (e / e0 - 1.0).abs() < 0.01,
+                "t = {}: energy {e} vs {e0}",
+                r[1]
+            );
+        }
+        let count = |s: &str| -> (f64, f64) {
+            let l = summary_line(s, "mechanics").unwrap();
+            (
+                number_before(l, " pair evaluations"),
+                number_before(l, " exact overlaps"),
+            )
+        };
+        let (pairs, exact) = count(&stdout);
+        let (_, exact_ref) = count(&exact_out);
+        eprintln!(
+            "collision, {ranks} rank(s): {exact} exact overlaps of {pairs} evaluations \
+             (exact contact: {exact_ref})"
+        );
+        lin_rows.push(rows);
+    }
+    // Same trajectories; the history's sums over ranks differ by round-off.
+    for (a, b) in lin_rows[0].iter().zip(&lin_rows[1]) {
+        for (x, y) in a.iter().zip(b) {
+            assert!(
+                (x - y).abs() <= 1e-9 * x.abs().max(y.abs()) + 1e-13,
+                "1 and 2 ranks differ at t = {}: {x} vs {y}",
+                a[1]
+            );
+        }
+    }
+    // The rebound: the left cube's momentum after the impact.
+    let (l, e) = (lin_rows[0].last().unwrap(), exact_rows.last().unwrap());
+    let ke = col(&h, "kinetic_energy");
+    assert!(
+        (l[ke] / e[ke] - 1.0).abs() < 0.01,
+        "final KE {} vs exact {}",
+        l[ke],
+        e[ke]
+    );
+}
+
 /// A block sliding down a fixed 30° incline with μ = 0.3 accelerates at
 /// g (sin θ − μ cos θ).
 #[test]

@@ -8,8 +8,8 @@ pub mod placement;
 
 pub use clip::{face_tet_clip, polygon_area, tet_tet_overlap, triangle_in_tet_area, Polygon};
 pub use overlap::{
-    tet_tet_intersection, tet_tet_intersection_with, tets_within, FacePatch, Intersection,
-    TetPlanes,
+    face_planes, planes_within, separated_along, separating_axis, tet_tet_intersection,
+    tet_tet_intersection_with, tets_within, FacePatch, Intersection, TetPlanes,
 };
 
 /// Axis-aligned bounds (min, max corners) of a tet.

@@ -856,21 +856,46 @@ pub(crate) mod tests {
 /// edge–edge axes are not tried, so a few farther pairs pass. Used to prune
 /// contact candidates found by bounding boxes.
 pub fn tets_within(a: &[[f64; 3]; 4], b: &[[f64; 3]; 4], gap: f64) -> bool {
-    for (p, q) in [(a, b), (b, a)] {
-        for (f, face) in TET_FACES.iter().enumerate() {
-            let (o, u, w) = (p[face[0]], p[face[1]], p[face[2]]);
-            let mut n = cross(sub(u, o), sub(w, o));
-            // Orient away from the opposite node.
-            if dot(n, sub(p[f], o)) > 0.0 {
-                n = [-n[0], -n[1], -n[2]];
-            }
-            let len = dot(n, n).sqrt();
-            if len == 0.0 {
-                continue;
-            }
-            let top = dot(n, o);
-            let nearest = q.iter().map(|x| dot(n, *x)).fold(f64::INFINITY, f64::min);
-            if nearest - top > gap * len {
+    planes_within((a, &face_planes(a)), (b, &face_planes(b)), gap)
+}
+
+/// Outward unit face normals and offsets of a tet, `[nx, ny, nz, d]` for
+/// face f (opposite node f): a point x is beyond the face's plane by
+/// n · x − d. For [`planes_within`], built once per tet per search.
+pub fn face_planes(t: &[[f64; 3]; 4]) -> [[f64; 4]; 4] {
+    std::array::from_fn(|f| {
+        let [i, j, k] = TET_FACES[f];
+        let mut n = cross(sub(t[j], t[i]), sub(t[k], t[i]));
+        // Orient away from the opposite node.
+        if dot(n, sub(t[f], t[i])) > 0.0 {
+            n = [-n[0], -n[1], -n[2]];
+        }
+        let len = dot(n, n).sqrt();
+        if len == 0.0 {
+            // A flat tet: a plane that separates nothing.
+            return [0.0, 0.0, 0.0, f64::INFINITY];
+        }
+        let n = [n[0] / len, n[1] / len, n[2] / len];
+        [n[0], n[1], n[2], dot(n, t[i])]
+    })
+}
+
+/// [`tets_within`] with the face planes of both tets given
+/// ([`face_planes`]): false when b lies more than `gap` beyond a face plane
+/// of a, or a beyond one of b.
+#[inline]
+pub fn planes_within(
+    (a, pa): (&[[f64; 3]; 4], &[[f64; 4]; 4]),
+    (b, pb): (&[[f64; 3]; 4], &[[f64; 4]; 4]),
+    gap: f64,
+) -> bool {
+    for (q, planes) in [(b, pa), (a, pb)] {
+        for pl in planes {
+            let nearest = q
+                .iter()
+                .map(|x| pl[0] * x[0] + pl[1] * x[1] + pl[2] * x[2])
+                .fold(f64::INFINITY, f64::min);
+            if nearest - pl[3] > gap {
                 return false;
             }
         }
@@ -878,9 +903,117 @@ pub fn tets_within(a: &[[f64; 3]; 4], b: &[[f64; 3]; 4], gap: f64) -> bool {
     true
 }
 
+/// The edges of a tet as (node, node).
+const TET_EDGES: [(usize, usize); 6] = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)];
+
+/// Clearance, relative to the larger tet's longest edge, by which
+/// [`separating_axis`] and [`separated_along`] want two tets apart: far
+/// above round-off, so tets they call apart have an empty exact
+/// intersection ([`tet_tet_intersection`] gives volume 0), and far below
+/// any contact scale.
+const WITNESS_GAP: f64 = 1e-9;
+
+/// Whether tets a and b are apart by more than [`WITNESS_GAP`] along the
+/// axis coded `axis` (see [`separating_axis`]; 0 is no axis: false).
+/// Needs no planes: a face normal or an edge cross product from the
+/// corners, then 8 projections.
+#[inline]
+pub fn separated_along(a: &[[f64; 3]; 4], b: &[[f64; 3]; 4], axis: u8) -> bool {
+    let axis = axis as usize;
+    let dir = match axis {
+        1..=8 => {
+            let (p, f) = if axis <= 4 {
+                (a, axis - 1)
+            } else {
+                (b, axis - 5)
+            };
+            let [i, j, k] = TET_FACES[f];
+            cross(sub(p[j], p[i]), sub(p[k], p[i]))
+        }
+        9..=44 => {
+            let (ea, eb) = (TET_EDGES[(axis - 9) / 6], TET_EDGES[(axis - 9) % 6]);
+            cross(sub(a[ea.1], a[ea.0]), sub(b[eb.1], b[eb.0]))
+        }
+        _ => return false,
+    };
+    let (mut amin, mut amax, mut bmin, mut bmax) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
+    for p in a {
+        let x = dot(dir, *p);
+        amin = amin.min(x);
+        amax = amax.max(x);
+    }
+    for p in b {
+        let x = dot(dir, *p);
+        bmin = bmin.min(x);
+        bmax = bmax.max(x);
+    }
+    let size2 = a
+        .iter()
+        .chain(b)
+        .map(|p| dot(sub(*p, a[0]), sub(*p, a[0])))
+        .fold(0.0, f64::max);
+    let gap = WITNESS_GAP * (size2 * dot(dir, dir)).sqrt();
+    amax + gap < bmin || bmax + gap < amin
+}
+
+/// A separating axis of tets a and b with clearance (see
+/// [`separated_along`]), coded 1–4 for the normal of face 0–3 of a, 5–8
+/// for those of b, 9 + 6 i + j for edge i of a crossed with edge j of b;
+/// `None` when they overlap or touch. Kept per contact candidate, it
+/// rules the pair out in a few operations while it still separates
+/// (temporal coherence), instead of a clipping each substep.
+pub fn separating_axis(a: &[[f64; 3]; 4], b: &[[f64; 3]; 4]) -> Option<u8> {
+    (1..=44u8).find(|&axis| separated_along(a, b, axis))
+}
+
 #[cfg(test)]
 mod within_tests {
     use super::*;
+
+    /// The witness axes agree with the exact intersection: an axis is found
+    /// for disjoint pairs apart by more than round-off, never for
+    /// overlapping ones, and the axis found keeps separating the pair
+    /// after a move that does not close the gap.
+    #[test]
+    fn separating_axes_witness_disjoint_pairs() {
+        let mut rng = tests::Rng(5);
+        let (mut found, mut disjoint, mut edge_axes) = (0, 0, 0);
+        for _ in 0..4000 {
+            let a = rng.tet([0.0; 3]);
+            let d = [rng.next() - 0.5, rng.next() - 0.5, rng.next() - 0.5].map(|x| 1.6 * x);
+            let b = rng.tet(d);
+            let v = tet_tet_intersection(&a, &b).volume;
+            match separating_axis(&a, &b) {
+                Some(axis) => {
+                    assert_eq!(v, 0.0, "axis {axis} for an overlap of {v}");
+                    assert!(separated_along(&a, &b, axis));
+                    found += 1;
+                    if axis >= 9 {
+                        edge_axes += 1;
+                    }
+                }
+                None => assert!(v > 0.0 || tets_within(&a, &b, 1e-6), "no axis, volume {v}"),
+            }
+            if v == 0.0 {
+                disjoint += 1;
+            }
+        }
+        assert!(
+            found > 0 && found == disjoint,
+            "{found} axes for {disjoint} disjoint pairs"
+        );
+        assert!(
+            edge_axes > 0,
+            "some pairs are separated only by an edge-edge axis"
+        );
+        // Touching (no clearance) is not separated; a clear gap is.
+        let a = tests::corner_tet(1.0);
+        let touching = tests::shift(&a, [0.0, 0.0, -1.0]);
+        assert_eq!(separating_axis(&a, &touching), None);
+        let apart = tests::shift(&a, [0.0, 0.0, -1.0 - 1e-6]);
+        assert!(separating_axis(&a, &apart).is_some());
+        assert!(!separated_along(&a, &apart, 0));
+    }
 
     #[test]
     fn separated_beyond_the_gap_are_pruned() {

@@ -1,9 +1,15 @@
-//! Placing particles for a deposition run: sites in a vertical column
-//! above a container floor, far enough apart that bounding spheres cannot
-//! touch, and seeded random orientations. Pure functions; the same seed
-//! gives the same placement on every machine and rank count.
+//! Placing particles for a deposition run, with seeded random
+//! orientations: either sites in a vertical column above a container floor,
+//! far enough apart that bounding spheres cannot touch ([`column_sites`]),
+//! or a sequential drop of each particle's convex hull onto those placed
+//! before ([`drop_sites`]), which starts the deposition from a bed of about
+//! its final height. Pure functions; the same seed gives the same placement
+//! on every machine and rank count.
 
-use nalgebra::{Rotation3, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Rotation3, Translation3, UnitQuaternion, Vector3};
+use parry3d_f64::math::Point;
+use parry3d_f64::query::{cast_shapes, ShapeCastOptions};
+use parry3d_f64::shape::ConvexPolyhedron;
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
 
@@ -79,6 +85,164 @@ pub fn column_sites(count: usize, r: f64, gap: f64, col: &Column) -> Result<Vec<
         k += 1;
     }
     Ok(out)
+}
+
+/// Centres of particles dropped one after another, each at the lowest of
+/// `trials` random spots (seeded), into the column `col`.
+///
+/// Particle i is the convex hull of `hull` (points relative to the
+/// particle's centroid), turned by `rotations[i]`. For each trial spot
+/// (x, y), uniform over the disc where the turned hull keeps `gap` from the
+/// column's wall, it falls straight down from above everything placed until
+/// its hull comes within `gap` of the floor or of a placed particle's hull
+/// (a shape cast); it stays at the lowest of its trial spots. There is no
+/// rolling: the result is a loose bed with arches, without overlap (hulls
+/// at least `gap` apart, so the particles are too), which gravity then
+/// settles. Lowest-of-several spots fills the hollows a single random drop
+/// leaves, so the bed starts near its settled height instead of in a column
+/// of bounding spheres two to three times as tall.
+pub fn drop_sites(
+    hull: &[[f64; 3]],
+    rotations: &[Rotation3<f64>],
+    gap: f64,
+    trials: usize,
+    seed: u64,
+    col: &Column,
+) -> Result<Vec<[f64; 3]>, String> {
+    if !(gap >= 0.0 && gap.is_finite()) || trials == 0 {
+        return Err(format!(
+            "gap {gap} must be finite and not negative, trials {trials} positive"
+        ));
+    }
+    let pts: Vec<Point<f64>> = hull.iter().map(|p| Point::from(*p)).collect();
+    let degenerate = || "the particle's convex hull is degenerate (flat or fewer than 4 points)";
+    let shape = ConvexPolyhedron::from_convex_hull(&pts).ok_or_else(degenerate)?;
+    let r = hull
+        .iter()
+        .map(|p| Vector3::from(*p).norm())
+        .fold(0.0, f64::max);
+    use parry3d_f64::shape::Shape;
+    let volume = shape.mass_properties(1.0).mass();
+    if volume.is_nan() || volume <= 1e-9 * r * r * r {
+        return Err(degenerate().into());
+    }
+    // Horizontal grid of cells 2r + gap wide: particles whose centres are
+    // further apart horizontally cannot touch.
+    let cell = 2.0 * r + gap;
+    let key = |x: f64, y: f64| ((x / cell).floor() as i64, (y / cell).floor() as i64);
+    let mut grid: std::collections::HashMap<(i64, i64), Vec<usize>> =
+        std::collections::HashMap::new();
+    let mut rng = Pcg64::seed_from_u64(seed ^ 0x5eed_d20b);
+    let mut placed: Vec<(Isometry3<f64>, [f64; 3])> = Vec::with_capacity(rotations.len());
+    let [fx, fy, fz] = col.floor_center;
+    let mut near: Vec<usize> = Vec::new();
+    for (i, rot) in rotations.iter().enumerate() {
+        let q = UnitQuaternion::from_rotation_matrix(rot);
+        let turned: Vec<Vector3<f64>> = hull.iter().map(|p| rot * Vector3::from(*p)).collect();
+        let below = turned
+            .iter()
+            .map(|p| -p.z)
+            .fold(f64::NEG_INFINITY, f64::max);
+        let reach = turned.iter().map(|p| p.x.hypot(p.y)).fold(0.0, f64::max);
+        let avail = col.radius - reach - gap;
+        if avail < 0.0 {
+            return Err(format!(
+                "the container's inner radius {} m is smaller than particle {i}'s horizontal \
+                 reach {reach:.4} m plus the gap {gap} m: it does not fit",
+                col.radius
+            ));
+        }
+        // The centre's height when the hull rests `gap` above the floor.
+        let z_floor = fz + gap + below;
+        // Resting height of the centre dropped at (x, y).
+        let mut rest =
+            |x: f64, y: f64| -> Result<f64, String> {
+                near.clear();
+                let (kx, ky) = key(x, y);
+                for dx in -1..=1 {
+                    for dy in -1..=1 {
+                        if let Some(v) = grid.get(&(kx + dx, ky + dy)) {
+                            near.extend(v.iter().filter(|&&j| {
+                                (placed[j].1[0] - x).hypot(placed[j].1[1] - y) < cell
+                            }));
+                        }
+                    }
+                }
+                // Highest first: once a placed particle is too low to reach the
+                // resting height found so far, so are the rest.
+                near.sort_unstable_by(|&a, &b| {
+                    placed[b].1[2].total_cmp(&placed[a].1[2]).then(a.cmp(&b))
+                });
+                let mut z = z_floor;
+                for &j in near.iter() {
+                    let zj = placed[j].1[2];
+                    if zj + cell < z {
+                        break;
+                    }
+                    // Start with the bounding spheres more than `gap` apart.
+                    let start = zj + cell * (1.0 + 1e-9) + 1e-12;
+                    let pos = Isometry3::from_parts(Translation3::new(x, y, start), q);
+                    let opts = ShapeCastOptions {
+                        max_time_of_impact: start - z,
+                        target_distance: gap,
+                        stop_at_penetration: true,
+                        compute_impact_geometry_on_penetration: false,
+                    };
+                    let hit = cast_shapes(
+                        &pos,
+                        &Vector3::new(0.0, 0.0, -1.0),
+                        &shape,
+                        &placed[j].0,
+                        &Vector3::zeros(),
+                        &shape,
+                        opts,
+                    )
+                    .map_err(|_| "convex hull shape cast unsupported".to_string())?;
+                    if let Some(h) = hit {
+                        z = z.max(start - h.time_of_impact);
+                    }
+                }
+                Ok(z)
+            };
+        let mut p = [0.0, 0.0, f64::INFINITY];
+        for _ in 0..trials {
+            // Uniform over the disc of radius `avail`.
+            let (u, t): (f64, f64) = (rng.gen(), rng.gen());
+            let (s, c) = (std::f64::consts::TAU * t).sin_cos();
+            let (x, y) = (fx + avail * u.sqrt() * c, fy + avail * u.sqrt() * s);
+            let z = rest(x, y)?;
+            if z < p[2] {
+                p = [x, y, z];
+            }
+        }
+        // Slide down: from the best spot, horizontal moves in eight
+        // directions that lower the resting height, with halving steps
+        // (a particle's own hollow, as if it rolled without turning).
+        let mut step = 0.5 * r;
+        while step > 0.05 * r {
+            let mut moved = false;
+            for k in 0..8 {
+                let (s, c) = (std::f64::consts::FRAC_PI_4 * k as f64).sin_cos();
+                let (x, y) = (p[0] + step * c, p[1] + step * s);
+                if (x - fx).hypot(y - fy) > avail {
+                    continue;
+                }
+                let z = rest(x, y)?;
+                if z < p[2] - 1e-9 * r {
+                    p = [x, y, z];
+                    moved = true;
+                    break;
+                }
+            }
+            if !moved {
+                step *= 0.5;
+            }
+        }
+        let pos = Isometry3::from_parts(Translation3::new(p[0], p[1], p[2]), q);
+        grid.entry(key(p[0], p[1])).or_default().push(i);
+        placed.push((pos, p));
+    }
+    Ok(placed.into_iter().map(|(_, p)| p).collect())
 }
 
 /// `count` rotations uniformly distributed over SO(3), from `seed`
@@ -160,6 +324,126 @@ mod tests {
                 w[1] - w[0]
             );
         }
+    }
+
+    /// A hexagonal prism (the convex hull of a nut), about its centroid.
+    fn prism_points() -> Vec<[f64; 3]> {
+        let mut p = Vec::new();
+        for k in 0..6 {
+            let (s, c) = (std::f64::consts::FRAC_PI_3 * k as f64).sin_cos();
+            for z in [-0.008, 0.008] {
+                p.push([0.023 * c, 0.023 * s, z]);
+            }
+        }
+        p
+    }
+
+    #[test]
+    fn dropped_particles_rest_apart_inside_the_column() {
+        let hull = prism_points();
+        let col = Column {
+            floor_center: [0.1, -0.2, 0.5],
+            radius: 0.12,
+        };
+        let (n, gap) = (150, 0.001);
+        let rots = random_rotations(n, 11);
+        let s = drop_sites(&hull, &rots, gap, 4, 11, &col).unwrap();
+        assert_eq!(
+            s,
+            drop_sites(&hull, &rots, gap, 4, 11, &col).unwrap(),
+            "not reproducible"
+        );
+        let shape = ConvexPolyhedron::from_convex_hull(
+            &hull.iter().map(|p| Point::from(*p)).collect::<Vec<_>>(),
+        )
+        .unwrap();
+        let pose = |i: usize| {
+            Isometry3::from_parts(
+                Translation3::new(s[i][0], s[i][1], s[i][2]),
+                UnitQuaternion::from_rotation_matrix(&rots[i]),
+            )
+        };
+        let turned = |i: usize| -> Vec<Vector3<f64>> {
+            hull.iter()
+                .map(|p| Vector3::from(s[i]) + rots[i] * Vector3::from(*p))
+                .collect()
+        };
+        for i in 0..n {
+            let pts = turned(i);
+            let low = pts.iter().map(|p| p.z).fold(f64::INFINITY, f64::min);
+            let wall = pts
+                .iter()
+                .map(|p| (p.x - 0.1).hypot(p.y + 0.2))
+                .fold(0.0, f64::max);
+            assert!(
+                low >= 0.5 + gap - 1e-9,
+                "particle {i} below the floor gap: {low}"
+            );
+            assert!(
+                wall <= col.radius - gap + 1e-9,
+                "particle {i} in the wall: {wall}"
+            );
+            // Apart from every particle before it, and resting: on the
+            // floor or within gap (+ round-off) of one of them.
+            let mut support = low <= 0.5 + gap + 1e-6;
+            for j in 0..i {
+                let d = parry3d_f64::query::distance(&pose(i), &shape, &pose(j), &shape).unwrap();
+                assert!(
+                    d >= gap * (1.0 - 1e-6),
+                    "particles {j} and {i}: distance {d}"
+                );
+                if d <= gap * 1.01 + 1e-6 && s[j][2] < s[i][2] {
+                    support = true;
+                }
+            }
+            assert!(support, "particle {i} at {:?} hangs in the air", s[i]);
+        }
+    }
+
+    #[test]
+    fn dropped_particles_make_a_lower_bed_than_the_sphere_column() {
+        let hull = prism_points();
+        let r = hull
+            .iter()
+            .map(|p| Vector3::from(*p).norm())
+            .fold(0.0, f64::max);
+        let col = Column {
+            floor_center: [0.0; 3],
+            radius: 0.225,
+        };
+        let n = 600;
+        let top = |s: &[[f64; 3]]| s.iter().map(|p| p[2]).fold(0.0, f64::max);
+        let dropped = drop_sites(&hull, &random_rotations(n, 5), 0.05 * r, 8, 5, &col).unwrap();
+        let column = column_sites(n, r, 0.1 * r, &col).unwrap();
+        assert!(
+            top(&dropped) < 0.75 * top(&column),
+            "dropped top {} vs column top {}",
+            top(&dropped),
+            top(&column)
+        );
+    }
+
+    #[test]
+    fn a_drop_into_a_too_narrow_column_is_an_error() {
+        let col = Column {
+            floor_center: [0.0; 3],
+            radius: 0.02,
+        };
+        let e =
+            drop_sites(&prism_points(), &random_rotations(3, 1), 0.001, 4, 1, &col).unwrap_err();
+        assert!(e.contains("does not fit"), "{e}");
+        let flat = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [1.0, 1.0, 0.0],
+        ];
+        let wide = Column {
+            floor_center: [0.0; 3],
+            radius: 5.0,
+        };
+        let e = drop_sites(&flat, &random_rotations(3, 1), 0.001, 4, 1, &wide).unwrap_err();
+        assert!(e.contains("degenerate"), "{e}");
     }
 
     #[test]

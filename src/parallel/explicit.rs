@@ -32,10 +32,14 @@ use parry3d_f64::math::Point;
 use parry3d_f64::partitioning::{Bvh, BvhBuildStrategy};
 
 use super::{Halo, Layout};
-use crate::contact::penalty::{pair_stiffness, tet_tet_penalty_with, PenaltyParams};
+use crate::contact::penalty::{
+    overlap_state, pair_stiffness, penalty_forces, LinearizedOverlap, PenaltyParams,
+};
 use crate::contact::BoundaryTets;
 use crate::error::{Error, Result};
-use crate::geometry::{tet_bounds, tets_within, TetPlanes};
+use crate::geometry::{
+    face_planes, planes_within, separated_along, separating_axis, tet_bounds, TetPlanes,
+};
 use crate::mechanics::element::{characteristic_length, element_critical_dt, to_vectors};
 use crate::mechanics::explicit::{element_forces, update_nodes_damped, NodeUpdate, ThermalLoad};
 use crate::mechanics::frequency::{
@@ -110,6 +114,8 @@ pub struct MechanicsCounters {
     pub element_updates: u64,
     /// Pair evaluations.
     pub pair_updates: u64,
+    /// Exact overlap evaluations (the rest were boxes apart or linearised).
+    pub exact_overlaps: u64,
     /// Contact detections.
     pub detections: u64,
     /// Seconds in contact detection and halo rebuilds.
@@ -169,8 +175,20 @@ pub struct ExplicitDomain {
     pair_tets: Vec<[u32; 4]>,
     /// Per substep: corners and bounding box of each of `pair_tets`.
     pair_geometry: Vec<TetGeometry>,
-    /// Per substep: planes of each of `pair_tets`.
+    /// Planes of each of `pair_tets`, built when an exact evaluation
+    /// needs them, at most once per substep (`planes_stamp`).
     pair_planes: Vec<TetPlanes>,
+    planes_stamp: Vec<u64>,
+    /// Substeps since set-up (stamps `pair_planes`).
+    substep_id: u64,
+    /// `mechanics.contact.linear_tolerance` (0: every pair exact).
+    linear_tolerance: f64,
+    /// Per candidate, its slot in `linearized` (NONE: none valid).
+    lin_of: Vec<u32>,
+    linearized: Vec<LinearizedOverlap>,
+    /// Per candidate, a separating axis found when it last did not
+    /// overlap (`geometry::separating_axis`; 0: none).
+    witness: Vec<u8>,
     x_detect: Vec<Vector3<f64>>,
     /// Force contributions: 4 per element, 8 per candidate pair, then those
     /// received from neighbours for shared nodes.
@@ -413,6 +431,12 @@ impl ExplicitDomain {
             pair_tets: Vec::new(),
             pair_geometry: Vec::new(),
             pair_planes: Vec::new(),
+            planes_stamp: Vec::new(),
+            substep_id: 0,
+            linear_tolerance: mm.contact.as_ref().map_or(0.0, |c| c.linear_tolerance),
+            lin_of: Vec::new(),
+            linearized: Vec::new(),
+            witness: Vec::new(),
             x_detect: Vec::new(),
             v_prev: Vec::new(),
             contrib: Vec::new(),
@@ -602,6 +626,12 @@ impl ExplicitDomain {
             .iter()
             .map(|&e| mesh.tets[e as usize].map(|n| self.local_of[n as usize]))
             .collect();
+        // Fresh candidates: planes rebuilt on demand, no linearisations.
+        self.pair_planes = vec![TetPlanes::new(&[[0.0; 3]; 4]); tets.len()];
+        self.planes_stamp = vec![0; tets.len()];
+        self.lin_of = vec![NONE; self.candidates.len()];
+        self.linearized.clear();
+        self.witness = vec![0; self.candidates.len()];
         let ghosts: Vec<(u32, u32, u32)> = (self.n_owned..self.node_of_local.len())
             .map(|l| {
                 let n = self.node_of_local[l];
@@ -617,18 +647,39 @@ impl ExplicitDomain {
         self.halo = super::agree(comm, halo.map_err(Error::Partition))?;
         // Ghost positions and velocities from their owners.
         self.forward_state(comm);
-        // Elements touching a ghost node first (their contributions are sent).
+        // Elements touching a ghost node first (their contributions are
+        // sent), each group by element id: the two id-ordered groups of the
+        // last detection merged back into id order, then split anew, in
+        // linear time.
         let n_owned = self.n_owned;
-        let near = |l: u32| l as usize >= n_owned;
-        let mut order: Vec<usize> = (0..self.elements.len()).collect();
-        order.sort_by_key(|&i| {
-            let touches = self.elements[i].nodes.iter().any(|&l| near(l));
-            (!touches, self.elem_ids[i])
-        });
-        self.n_boundary = order
+        let touches = |el: &MechElement| el.nodes.iter().any(|&l| l as usize >= n_owned);
+        let (ids, ne, nb_old) = (&self.elem_ids, self.elem_ids.len(), self.n_boundary);
+        let mut by_id: Vec<usize> = Vec::with_capacity(ne);
+        let (mut i, mut j) = (0, nb_old);
+        while i < nb_old || j < ne {
+            if j == ne || (i < nb_old && ids[i] < ids[j]) {
+                by_id.push(i);
+                i += 1;
+            } else {
+                by_id.push(j);
+                j += 1;
+            }
+        }
+        if !by_id.windows(2).all(|w| ids[w[0]] < ids[w[1]]) {
+            by_id.sort_by_key(|&i| ids[i]);
+        }
+        let mut order: Vec<usize> = by_id
             .iter()
-            .take_while(|&&i| self.elements[i].nodes.iter().any(|&l| near(l)))
-            .count();
+            .copied()
+            .filter(|&i| touches(&self.elements[i]))
+            .collect();
+        self.n_boundary = order.len();
+        order.extend(
+            by_id
+                .iter()
+                .copied()
+                .filter(|&i| !touches(&self.elements[i])),
+        );
         self.elements = order.iter().map(|&i| self.elements[i]).collect();
         self.elem_ids = order.iter().map(|&i| self.elem_ids[i]).collect();
         self.elem_tref = order.iter().map(|&i| self.elem_tref[i]).collect();
@@ -636,7 +687,8 @@ impl ExplicitDomain {
             self.elem_dt = order.iter().map(|&i| self.elem_dt[i]).collect();
             self.elem_rate = order.iter().map(|&i| self.elem_rate[i]).collect();
         }
-        self.stress = vec![Matrix3::zeros(); self.elements.len()];
+        // Every substep writes every element's stress: no need to permute it.
+        self.stress.resize(self.elements.len(), Matrix3::zeros());
         self.build_assembly(comm, layout);
         self.x_detect = self.x[..self.n_owned].to_vec();
         self.counters.detections += 1;
@@ -667,6 +719,8 @@ impl ExplicitDomain {
         // at an edge or corner overlaps a shallow intruder by O(δ²).
         let bt = &self.boundary.elems;
         let raw: Vec<([f64; 3], [f64; 3])> = bt.iter().map(|&e| tet_bounds(&corners(e))).collect();
+        // Face planes of every boundary tet, for the candidates' pruning.
+        let planes: Vec<[[f64; 4]; 4]> = bt.iter().map(|&e| face_planes(&corners(e))).collect();
         let nb = model.bodies.len();
         let mut body_box = vec![([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]); nb];
         for (i, &e) in bt.iter().enumerate() {
@@ -726,7 +780,11 @@ impl ExplicitDomain {
                     for leaf in tree.intersect_aabb(&grown_aabb(&raw[ia as usize], margin)) {
                         let ib = self.body_bt[bb][leaf as usize] as usize;
                         let (a, b) = (bt[ia as usize], bt[ib]);
-                        if !tets_within(&corners(a), &corners(b), margin) {
+                        if !planes_within(
+                            (&corners(a), &planes[ia as usize]),
+                            (&corners(b), &planes[ib]),
+                            margin,
+                        ) {
                             continue;
                         }
                         let (lo_t, hi_t) = raw[ib];
@@ -944,7 +1002,9 @@ impl ExplicitDomain {
             bucket[w[0] as usize..w[1] as usize].sort_unstable();
         }
         self.gather_slot = bucket.iter().map(|&(_, s)| s).collect();
-        self.contrib = vec![Vector3::zeros(); next];
+        // Reuse the allocation (hundreds of MB in a large packing).
+        self.contrib.clear();
+        self.contrib.resize(next, Vector3::zeros());
     }
 
     fn forward_state(&mut self, comm: &SimpleCommunicator) {
@@ -996,6 +1056,12 @@ impl ExplicitDomain {
         layout: &Layout,
         n: u64,
     ) -> Result<()> {
+        // Linearised pairs depend on when their models were made: starting
+        // every step with fresh candidates (and models) makes a restart,
+        // which detects afresh, repeat the run bitwise.
+        if self.linear_tolerance > 0.0 && n > 0 {
+            self.redetect = true;
+        }
         for i in 0..n {
             if i + 1 == n {
                 self.v_prev.clear();
@@ -1050,23 +1116,34 @@ impl ExplicitDomain {
                 let (lo, hi) = tet_bounds(&x);
                 (x, lo, hi)
             }));
-            self.pair_planes.clear();
-            self.pair_planes
-                .extend(self.pair_geometry.iter().map(|(x, _, _)| TetPlanes::new(x)));
+            self.substep_id += 1;
+            let now = self.substep_id;
+            let tolerance = self.linear_tolerance;
             let geo = &self.pair_geometry;
+            let (planes, stamp) = (&mut self.pair_planes, &mut self.planes_stamp);
+            let (lin_of, linearized) = (&mut self.lin_of, &mut self.linearized);
+            let witness = &mut self.witness;
+            let mut exact = 0u64;
             for (j, c) in self.candidates.iter().enumerate() {
                 let out = &mut self.contrib[pair_base + 8 * j..pair_base + 8 * j + 8];
-                let ((xa, lo_a, hi_a), (xb, lo_b, hi_b)) =
-                    (&geo[c.ta as usize], &geo[c.tb as usize]);
-                // Most candidates are apart: their boxes tell.
-                if (0..3).any(|d| lo_a[d] > hi_b[d] || lo_b[d] > hi_a[d]) {
+                let (ta, tb) = (c.ta as usize, c.tb as usize);
+                let ((xa, lo_a, hi_a), (xb, lo_b, hi_b)) = (&geo[ta], &geo[tb]);
+                let slot = lin_of[j] as usize;
+                // A contacting pair's linearised overlap, while it holds.
+                let lin_volume = linearized
+                    .get(slot)
+                    .and_then(|m| m.volume_at(xa, xb).map(|v| (m, v)));
+                // Most other candidates are apart: their boxes tell, or the
+                // axis that separated them when they were last evaluated.
+                if lin_volume.is_none()
+                    && ((0..3).any(|d| lo_a[d] > hi_b[d] || lo_b[d] > hi_a[d])
+                        || separated_along(xa, xb, witness[j]))
+                {
+                    lin_of[j] = NONE;
                     out.iter_mut().for_each(|f| *f = Vector3::zeros());
                     continue;
                 }
-                let (la, lb) = (
-                    &self.pair_tets[c.ta as usize],
-                    &self.pair_tets[c.tb as usize],
-                );
+                let (la, lb) = (&self.pair_tets[ta], &self.pair_tets[tb]);
                 let va = la.map(|l| self.v[l as usize].into());
                 let vb = lb.map(|l| self.v[l as usize].into());
                 let p = PenaltyParams {
@@ -1075,13 +1152,39 @@ impl ExplicitDomain {
                     time_step: self.dt,
                     ..*params
                 };
-                match tet_tet_penalty_with(
-                    (xa, &self.pair_planes[c.ta as usize]),
-                    (xb, &self.pair_planes[c.tb as usize]),
-                    &va,
-                    &vb,
-                    &p,
-                ) {
+                let result = match lin_volume {
+                    Some((m, v)) => Some(penalty_forces(&m.state, v, &va, &vb, &p)),
+                    None => {
+                        for t in [ta, tb] {
+                            if stamp[t] != now {
+                                planes[t] = TetPlanes::new(&geo[t].0);
+                                stamp[t] = now;
+                            }
+                        }
+                        exact += 1;
+                        match overlap_state((xa, &planes[ta]), (xb, &planes[tb])) {
+                            Some(s) => {
+                                witness[j] = 0;
+                                if tolerance > 0.0 {
+                                    let m = LinearizedOverlap::new(s, xa, xb, tolerance);
+                                    if slot < linearized.len() {
+                                        linearized[slot] = m;
+                                    } else {
+                                        lin_of[j] = linearized.len() as u32;
+                                        linearized.push(m);
+                                    }
+                                }
+                                Some(penalty_forces(&s, s.volume, &va, &vb, &p))
+                            }
+                            None => {
+                                lin_of[j] = NONE;
+                                witness[j] = separating_axis(xa, xb).unwrap_or(0);
+                                None
+                            }
+                        }
+                    }
+                };
+                match result {
                     Some(r) => {
                         for k in 0..4 {
                             out[k] = Vector3::from(r.forces_a[k]);
@@ -1098,6 +1201,7 @@ impl ExplicitDomain {
             }
             self.dissipated += power * self.dt;
             self.counters.pair_updates += self.candidates.len() as u64;
+            self.counters.exact_overlaps += exact;
         }
         // Elements next to the halo, then the interior while messages fly.
         let nb = self.n_boundary;

@@ -218,8 +218,18 @@ pub struct PackSpec {
     pub seed: u64,
     /// The body to fill: its mesh must be of kind `container`.
     pub into: String,
-    /// Clearance between the particles' bounding spheres (m); default a
-    /// tenth of the bounding radius.
+    /// How the particles are placed: `drop` (default: each particle's
+    /// convex hull dropped at the lowest of `trials` random spots onto the
+    /// floor or the particles before it) or `column` (a close-packed
+    /// lattice of bounding spheres, a column two to three times taller).
+    #[serde(default)]
+    pub placement: Placement,
+    /// Random spots tried per particle by the `drop` placement (default 8).
+    #[serde(default = "default_trials")]
+    pub trials: usize,
+    /// Clearance (m) between the particles' convex hulls (`drop`, default a
+    /// twentieth of the bounding radius) or bounding spheres (`column`,
+    /// default a tenth).
     #[serde(default)]
     pub gap: Option<f64>,
     /// Largest solid fraction the container can hold (the capacity check
@@ -235,6 +245,23 @@ pub struct PackSpec {
 
 fn default_max_fraction() -> f64 {
     0.64
+}
+
+fn default_trials() -> usize {
+    8
+}
+
+/// How a pack's particles are placed before they are dropped.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Placement {
+    /// Sequential drop of each particle's convex hull
+    /// (`geometry::placement::drop_sites`).
+    #[default]
+    Drop,
+    /// Close-packed lattice of bounding spheres
+    /// (`geometry::placement::column_sites`).
+    Column,
 }
 
 /// Mesh source of a body.
@@ -579,8 +606,10 @@ pub struct MechanicsSpec {
 }
 
 /// When a deposition has settled: the kinetic energy, checked after every
-/// step (`time.dt`) from `after` on, falls below `kinetic_energy` (J) or
-/// below `relative` × the largest kinetic energy seen so far.
+/// step (`time.dt`) from `after` on, falls below `kinetic_energy` (J),
+/// below `relative` × the largest kinetic energy seen so far, or below
+/// ½ M v² for the free bodies' mass M and `rms_speed` v (the same
+/// criterion for any number of particles).
 #[derive(Debug, Clone, Copy, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SettleSpec {
@@ -590,6 +619,9 @@ pub struct SettleSpec {
     /// Threshold relative to the peak kinetic energy.
     #[serde(default)]
     pub relative: Option<f64>,
+    /// Root-mean-square speed (m/s) of the free bodies' mass.
+    #[serde(default)]
+    pub rms_speed: Option<f64>,
     /// Earliest time to stop (s).
     #[serde(default)]
     pub after: f64,
@@ -648,6 +680,14 @@ pub struct PenaltySpec {
     /// smallest element length.
     #[serde(default)]
     pub margin: Option<f64>,
+    /// Linearised contact (`contact::penalty::LinearizedOverlap`): between
+    /// exact evaluations, a contacting pair's overlap volume follows its
+    /// first-order Taylor model while its nodes move less than this
+    /// fraction of the overlap's depth relative to each other. 0 (default):
+    /// every pair exact every substep. Candidates are then re-detected at
+    /// the start of every step, so a restart repeats the run bitwise.
+    #[serde(default)]
+    pub linear_tolerance: f64,
 }
 
 fn default_slip() -> f64 {
@@ -868,13 +908,19 @@ impl Scenario {
         }
         if let Some(st) = self.mechanics.as_ref().and_then(|m| m.settle) {
             let ok = |v: Option<f64>| v.is_none_or(|x| x.is_finite() && x > 0.0);
-            if st.kinetic_energy.is_none() && st.relative.is_none() {
+            if st.kinetic_energy.is_none() && st.relative.is_none() && st.rms_speed.is_none() {
                 return bad(
                     "mechanics.settle",
-                    "give `kinetic_energy` (J) or `relative` (of the peak)".into(),
+                    "give `kinetic_energy` (J), `relative` (of the peak) or `rms_speed` (m/s)"
+                        .into(),
                 );
             }
-            if !ok(st.kinetic_energy) || !ok(st.relative) || st.after.is_nan() || st.after < 0.0 {
+            if !ok(st.kinetic_energy)
+                || !ok(st.relative)
+                || !ok(st.rms_speed)
+                || st.after.is_nan()
+                || st.after < 0.0
+            {
                 return bad(
                     "mechanics.settle",
                     "thresholds must be positive and `after` >= 0".into(),
@@ -1102,6 +1148,7 @@ impl Scenario {
                 ("friction", c.friction, 0.0),
                 ("damping_ratio", c.damping_ratio, 0.0),
                 ("slip_velocity", c.slip_velocity, f64::MIN_POSITIVE),
+                ("linear_tolerance", c.linear_tolerance, 0.0),
             ] {
                 if !(v.is_finite() && v >= min) {
                     return bad(

@@ -128,3 +128,42 @@ fn free_damping_needs_contact_and_is_non_negative() {
     let s = parse_str(&with_contact("0.0"), p(), &[]).unwrap().scenario;
     assert_eq!(s.mechanics.unwrap().free_damping, Some(0.0));
 }
+
+#[test]
+fn linear_tolerance_and_rms_settle_are_checked() {
+    let mech = |contact: &str, settle: &str| {
+        format!(
+            "{}\n[mechanics]\nsettle = {{ {settle} }}\n[mechanics.contact]\npenalty = 1e6\n{contact}\n",
+            GOOD.replace(
+                "density = 100.0",
+                "density = 100.0\nyoung = 1e6\npoisson = 0.2"
+            )
+        )
+    };
+    let s = parse_str(
+        &mech("linear_tolerance = 0.02", "rms_speed = 0.03"),
+        p(),
+        &[],
+    )
+    .unwrap()
+    .scenario;
+    let m = s.mechanics.unwrap();
+    assert_eq!(m.contact.unwrap().linear_tolerance, 0.02);
+    assert_eq!(m.settle.unwrap().rms_speed, Some(0.03));
+    let e = parse_str(
+        &mech("linear_tolerance = -0.1", "rms_speed = 0.03"),
+        p(),
+        &[],
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("mechanics.contact.linear_tolerance"), "{e}");
+    let e = parse_str(&mech("", "rms_speed = -1.0"), p(), &[])
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("mechanics.settle"), "{e}");
+    let e = parse_str(&mech("", "after = 0.1"), p(), &[])
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("rms_speed"), "{e}");
+}

@@ -127,6 +127,16 @@ pub fn summary_line<'a>(stdout: &'a str, key: &str) -> Option<&'a str> {
     stdout.lines().find(|l| l.trim_start().starts_with(key))
 }
 
+/// The number just before `key` in a summary line (`(` stripped), e.g. the
+/// 42 of "..., 42 pair evaluations".
+pub fn number_before(line: &str, key: &str) -> f64 {
+    let at = line
+        .find(key)
+        .unwrap_or_else(|| panic!("no `{key}` in {line}"));
+    let word = line[..at].split_whitespace().last().unwrap();
+    word.trim_start_matches('(').parse().unwrap()
+}
+
 /// The history CSV of a run: header and rows.
 pub fn history(dir: &Path, stem: &str) -> (Vec<String>, Vec<Vec<f64>>) {
     let text = std::fs::read_to_string(dir.join(format!("{stem}_history.csv"))).unwrap();

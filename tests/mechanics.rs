@@ -291,52 +291,58 @@ fn steel_in_concrete_hoop_stress_matches_eq_40() {
     }
 }
 
+/// Runs `scenarios/collision.toml` on `ranks` ranks with `extra` settings
+/// and checks its history: momentum conserved to round-off, energy within
+/// 1 %, the cubes touched and parted. Returns (header, rows, stdout).
+fn collision(ranks: usize, tag: &str, extra: &[&str]) -> (Vec<String>, Vec<Vec<f64>>, String) {
+    let out = out_dir(tag);
+    let stdout = run_ok(ranks, &root().join("scenarios/collision.toml"), &out, extra);
+    let (h, rows) = history(&out, "collision");
+    let (px, ke, se, ce) = (
+        col(&h, "momentum_x"),
+        col(&h, "kinetic_energy"),
+        col(&h, "strain_energy"),
+        col(&h, "contact_energy"),
+    );
+    let (p0, e0) = (rows[0][px], rows[0][ke]);
+    // m = 1000 kg/m^3 × 0.001 m^3 per cube: p0 = 1·1 − 0.5·1, E0 = ½(1 + 0.25).
+    assert!(
+        (p0 - 0.5).abs() < 1e-12 && (e0 - 0.625).abs() < 1e-12,
+        "{:?}",
+        rows[0]
+    );
+    let mut touched = false;
+    for r in &rows {
+        assert!(
+            (r[px] - p0).abs() < 1e-12 * p0,
+            "{tag}: momentum {} vs {p0}",
+            r[px]
+        );
+        assert!(r[col(&h, "momentum_y")].abs() < 1e-12 && r[col(&h, "momentum_z")].abs() < 1e-12);
+        let e = r[ke] + r[se] + r[ce];
+        assert!(
+            (e / e0 - 1.0).abs() < 0.01,
+            "{tag}, t = {}: energy {e} vs {e0}",
+            r[1]
+        );
+        touched |= r[ce] > 1e-3 * e0;
+    }
+    assert!(touched, "{tag}: the cubes never touched");
+    // After the impact they move apart.
+    let last = rows.last().unwrap();
+    assert!(
+        last[col(&h, "mech_contacts")] == 0.0,
+        "{tag}: still in contact at the end"
+    );
+    (h, rows, stdout)
+}
+
 /// Two elastic cubes colliding head-on, no friction or damping: momentum is
 /// conserved to round-off and energy within 1 %, on one and two ranks.
 #[test]
 fn head_on_collision_conserves_momentum_and_energy() {
     for ranks in [1, 2] {
-        let out = out_dir(&format!("collision-{ranks}"));
-        run_ok(ranks, &root().join("scenarios/collision.toml"), &out, &[]);
-        let (h, rows) = history(&out, "collision");
-        let (px, ke, se, ce) = (
-            col(&h, "momentum_x"),
-            col(&h, "kinetic_energy"),
-            col(&h, "strain_energy"),
-            col(&h, "contact_energy"),
-        );
-        let (p0, e0) = (rows[0][px], rows[0][ke]);
-        // m = 1000 kg/m^3 × 0.001 m^3 per cube: p0 = 1·1 − 0.5·1, E0 = ½(1 + 0.25).
-        assert!(
-            (p0 - 0.5).abs() < 1e-12 && (e0 - 0.625).abs() < 1e-12,
-            "{:?}",
-            rows[0]
-        );
-        let mut touched = false;
-        for r in &rows {
-            assert!(
-                (r[px] - p0).abs() < 1e-12 * p0,
-                "{ranks} rank(s): momentum {} vs {p0}",
-                r[px]
-            );
-            assert!(
-                r[col(&h, "momentum_y")].abs() < 1e-12 && r[col(&h, "momentum_z")].abs() < 1e-12
-            );
-            let e = r[ke] + r[se] + r[ce];
-            assert!(
-                (e / e0 - 1.0).abs() < 0.01,
-                "{ranks} rank(s), t = {}: energy {e} vs {e0}",
-                r[1]
-            );
-            touched |= r[ce] > 1e-3 * e0;
-        }
-        assert!(touched, "the cubes never touched");
-        // After the impact they move apart: the left cube's kinetic share fell.
-        let last = rows.last().unwrap();
-        assert!(
-            last[col(&h, "mech_contacts")] == 0.0,
-            "still in contact at the end"
-        );
+        collision(ranks, &format!("collision-{ranks}"), &[]);
     }
 }
 
@@ -348,49 +354,19 @@ fn head_on_collision_conserves_momentum_and_energy() {
 /// is in slowly deforming beds, see tests/packing.rs.)
 #[test]
 fn linearised_contact_follows_the_exact_collision() {
-    let lin = "mechanics.contact.linear_tolerance=0.02";
-    let exact_dir = out_dir("collision-exact-ref");
-    let exact_out = run_ok(1, &root().join("scenarios/collision.toml"), &exact_dir, &[]);
-    let (h, exact_rows) = history(&exact_dir, "collision");
+    let lin = ["--set", "mechanics.contact.linear_tolerance=0.02"];
+    let (h, exact_rows, exact_out) = collision(1, "collision-exact-ref", &[]);
+    let count = |s: &str| -> (f64, f64) {
+        let l = summary_line(s, "mechanics").unwrap();
+        (
+            number_before(l, " pair evaluations"),
+            number_before(l, " exact overlaps"),
+        )
+    };
     let mut lin_rows = Vec::new();
     for ranks in [1, 2] {
-        let out = out_dir(&format!("collision-linear-{ranks}"));
-        let stdout = run_ok(
-            ranks,
-            &root().join("scenarios/collision.toml"),
-            &out,
-            &["--set", lin],
-        );
-        let (_, rows) = history(&out, "collision");
-        let (px, ke, se, ce) = (
-            col(&h, "momentum_x"),
-            col(&h, "kinetic_energy"),
-            col(&h, "strain_energy"),
-            col(&h, "contact_energy"),
-        );
-        let (p0, e0) = (rows[0][px], rows[0][ke]);
-        for r in &rows {
-            assert!(
-                (r[px] - p0).abs() < 1e-12 * p0,
-                "momentum {} vs {p0}",
-                r[px]
-            );
-            let e = r[ke] + r[se] + r[ce];
-            assert!(
-                (e / e0 - 1.0).abs() < 0.01,
-                "t = {}: energy {e} vs {e0}",
-                r[1]
-            );
-        }
-        let count = |s: &str| -> (f64, f64) {
-            let l = summary_line(s, "mechanics").unwrap();
-            (
-                number_before(l, " pair evaluations"),
-                number_before(l, " exact overlaps"),
-            )
-        };
-        let (pairs, exact) = count(&stdout);
-        let (_, exact_ref) = count(&exact_out);
+        let (_, rows, stdout) = collision(ranks, &format!("collision-linear-{ranks}"), &lin);
+        let ((pairs, exact), (_, exact_ref)) = (count(&stdout), count(&exact_out));
         eprintln!(
             "collision, {ranks} rank(s): {exact} exact overlaps of {pairs} evaluations \
              (exact contact: {exact_ref})"
@@ -407,7 +383,7 @@ fn linearised_contact_follows_the_exact_collision() {
             );
         }
     }
-    // The rebound: the left cube's momentum after the impact.
+    // The rebound: the kinetic energy after the impact.
     let (l, e) = (lin_rows[0].last().unwrap(), exact_rows.last().unwrap());
     let ke = col(&h, "kinetic_energy");
     assert!(

@@ -324,9 +324,8 @@ fn boxes_separated(a: &[[f64; 3]; 4], b: &[[f64; 3]; 4], eps: f64) -> bool {
 /// normals are tested from the distance tables); overlap ≤ `eps` counts as
 /// separated (touching).
 fn edges_separated(a: &[[f64; 3]; 4], b: &[[f64; 3]; 4], eps: f64) -> bool {
-    const EDGES: [(usize, usize); 6] = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)];
-    let ea = EDGES.map(|(i, j)| sub(a[j], a[i]));
-    let eb = EDGES.map(|(i, j)| sub(b[j], b[i]));
+    let ea = TET_EDGES.map(|(i, j)| sub(a[j], a[i]));
+    let eb = TET_EDGES.map(|(i, j)| sub(b[j], b[i]));
     for u in &ea {
         for v in &eb {
             let axis = cross(*u, *v);
@@ -334,17 +333,7 @@ fn edges_separated(a: &[[f64; 3]; 4], b: &[[f64; 3]; 4], eps: f64) -> bool {
             if len2 < 1e-24 * dot(*u, *u) * dot(*v, *v) {
                 continue; // parallel edges: covered by the face normals
             }
-            let (mut amin, mut amax, mut bmin, mut bmax) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
-            for p in a {
-                let x = dot(axis, *p);
-                amin = amin.min(x);
-                amax = amax.max(x);
-            }
-            for p in b {
-                let x = dot(axis, *p);
-                bmin = bmin.min(x);
-                bmax = bmax.max(x);
-            }
+            let ([amin, amax], [bmin, bmax]) = (interval(axis, a), interval(axis, b));
             let e = eps * len2.sqrt();
             if amax <= bmin + e || bmax <= amin + e {
                 return true;
@@ -906,6 +895,15 @@ pub fn planes_within(
 /// The edges of a tet as (node, node).
 const TET_EDGES: [(usize, usize); 6] = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)];
 
+/// [min, max] of the projections x · `dir` of a tet's corners.
+#[inline]
+fn interval(dir: [f64; 3], t: &[[f64; 3]; 4]) -> [f64; 2] {
+    t.iter().fold([f64::MAX, f64::MIN], |[lo, hi], p| {
+        let x = dot(dir, *p);
+        [lo.min(x), hi.max(x)]
+    })
+}
+
 /// Clearance, relative to the larger tet's longest edge, by which
 /// [`separating_axis`] and [`separated_along`] want two tets apart: far
 /// above round-off, so tets they call apart have an empty exact
@@ -936,17 +934,7 @@ pub fn separated_along(a: &[[f64; 3]; 4], b: &[[f64; 3]; 4], axis: u8) -> bool {
         }
         _ => return false,
     };
-    let (mut amin, mut amax, mut bmin, mut bmax) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
-    for p in a {
-        let x = dot(dir, *p);
-        amin = amin.min(x);
-        amax = amax.max(x);
-    }
-    for p in b {
-        let x = dot(dir, *p);
-        bmin = bmin.min(x);
-        bmax = bmax.max(x);
-    }
+    let ([amin, amax], [bmin, bmax]) = (interval(dir, a), interval(dir, b));
     let size2 = a
         .iter()
         .chain(b)

@@ -2,9 +2,9 @@
 //! orientations: either sites in a vertical column above a container floor,
 //! far enough apart that bounding spheres cannot touch ([`column_sites`]),
 //! or a sequential drop of each particle's convex hull onto those placed
-//! before ([`drop_sites`]), which starts the deposition from a bed of about
-//! its final height. Pure functions; the same seed gives the same placement
-//! on every machine and rank count.
+//! before ([`drop_sites`]), a loose bed a little over half as tall as the
+//! column. Pure functions; the same seed gives the same placement on every
+//! machine and rank count.
 
 use nalgebra::{Isometry3, Rotation3, Translation3, UnitQuaternion, Vector3};
 use parry3d_f64::math::Point;
@@ -95,12 +95,13 @@ pub fn column_sites(count: usize, r: f64, gap: f64, col: &Column) -> Result<Vec<
 /// (x, y), uniform over the disc where the turned hull keeps `gap` from the
 /// column's wall, it falls straight down from above everything placed until
 /// its hull comes within `gap` of the floor or of a placed particle's hull
-/// (a shape cast); it stays at the lowest of its trial spots. There is no
-/// rolling: the result is a loose bed with arches, without overlap (hulls
-/// at least `gap` apart, so the particles are too), which gravity then
-/// settles. Lowest-of-several spots fills the hollows a single random drop
-/// leaves, so the bed starts near its settled height instead of in a column
-/// of bounding spheres two to three times as tall.
+/// (a shape cast). From the lowest of its trial spots it then slides
+/// downhill: horizontal moves in eight directions, halving the step from
+/// r/2 to r/20, as long as one lowers its resting height (rolling without
+/// turning: the random orientation is kept). The result is a loose bed
+/// with arches, without overlap (hulls at least `gap` apart, so the
+/// particles are too), which gravity then settles: for 2000 nuts it is
+/// 0.85 m tall against 1.54 m for the column of bounding spheres.
 pub fn drop_sites(
     hull: &[[f64; 3]],
     rotations: &[Rotation3<f64>],

@@ -221,7 +221,7 @@ pub struct PackSpec {
     /// How the particles are placed: `drop` (default: each particle's
     /// convex hull dropped at the lowest of `trials` random spots onto the
     /// floor or the particles before it) or `column` (a close-packed
-    /// lattice of bounding spheres, a column two to three times taller).
+    /// lattice of bounding spheres, a column about twice as tall).
     #[serde(default)]
     pub placement: Placement,
     /// Random spots tried per particle by the `drop` placement (default 8).

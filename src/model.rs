@@ -57,6 +57,14 @@ pub struct Body {
     pub heating: Option<(f64, f64)>,
 }
 
+impl Body {
+    /// Whether the mechanics moves it kinematically (held in place or at a
+    /// prescribed velocity) rather than by its forces.
+    pub fn is_held(&self) -> bool {
+        self.fixed || self.velocity != [0.0; 3]
+    }
+}
+
 /// The explicit mechanics resolved to nodes and faces (original numbering).
 #[derive(Debug, Clone)]
 pub struct MechanicsModel {

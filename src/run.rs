@@ -346,7 +346,7 @@ pub fn run(
             .iter()
             .map(|&b| {
                 let body = &model.bodies[b as usize];
-                if body.fixed || body.velocity != [0.0; 3] {
+                if body.is_held() {
                     1
                 } else {
                     8
@@ -636,10 +636,7 @@ pub fn run(
     let settle = model.mechanics.as_ref().and_then(|m| m.settle);
     // Mass of the free bodies (the settle criterion by rms speed).
     let free_mass: f64 = (0..model.mesh.tets.len())
-        .filter(|&e| {
-            let b = &model.bodies[model.mesh.body[e] as usize];
-            !b.fixed && b.velocity == [0.0; 3]
-        })
+        .filter(|&e| !model.bodies[model.mesh.body[e] as usize].is_held())
         .map(|e| model.material_of(e).density * model.mesh.element_volume(e))
         .sum();
     let mut peak_ke = restart.as_ref().map_or(0.0, |c| c.peak_kinetic);

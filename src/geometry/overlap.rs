@@ -959,9 +959,8 @@ mod within_tests {
     use super::*;
 
     /// The witness axes agree with the exact intersection: an axis is found
-    /// for disjoint pairs apart by more than round-off, never for
-    /// overlapping ones, and the axis found keeps separating the pair
-    /// after a move that does not close the gap.
+    /// for every disjoint pair of the sample, never for an overlapping one,
+    /// and the axis found separates the pair when checked alone.
     #[test]
     fn separating_axes_witness_disjoint_pairs() {
         let mut rng = tests::Rng(5);

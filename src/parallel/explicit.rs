@@ -46,7 +46,7 @@ use crate::mechanics::frequency::{
     body_max_frequency, stable_step, BodyShape, BODY_EIGEN_MAX_NODES,
 };
 use crate::mechanics::{ElasticMaterial, MechElement, Tet4Reference, VelocityBc};
-use crate::model::Model;
+use crate::model::{Body, Model};
 
 const NONE: u32 = u32::MAX;
 
@@ -254,11 +254,7 @@ impl ExplicitDomain {
                 Error::Mechanics(format!("material `{}`: {e}", model.materials[i].name))
             })?;
         }
-        let body_held: Vec<bool> = model
-            .bodies
-            .iter()
-            .map(|b| b.fixed || b.velocity != [0.0; 3])
-            .collect();
+        let body_held: Vec<bool> = model.bodies.iter().map(Body::is_held).collect();
         // Lumped masses of every node from the replicated mesh (no messages).
         let mut global_mass = vec![0.0; nn];
         let mut refs: Vec<Option<Tet4Reference>> = vec![None; mesh.tets.len()];

@@ -184,6 +184,9 @@ echo "$kernel_line" >&2
   echo "${heatup_wall} s on 2 ranks. Issue 5 targets: heat-up of N = 2000 under 60 s on 2 ranks;"
   echo "deposition of N = 2000 under 30 min on 2 ranks; 1 -> 2 rank speed-up at least 1.6 (N = 500"
   echo "deposition rows: ratio of per-substep times; heat-up rows: ratio of stepping times)."
+  echo "The largest N that deposits and heats within an hour is not run here (it takes the hour);"
+  echo "measured by hand on 2 ranks (2026-12-01, README \"Packings: performance\"): N = 3000 in"
+  echo "57.3 min (deposition 3387 s, heat-up 49.0 s); N = 4000 had not settled after 70 min."
   echo
   echo "## Mechanics kernel"
   echo

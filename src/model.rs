@@ -210,6 +210,15 @@ impl Model {
                     )));
                 }
                 let material = material_index(&b.material) as usize;
+                let total =
+                    combined.tets.len() + copies.iter().map(|c| c.1.tets.len()).sum::<usize>();
+                if total > mesh::MAX_ELEMENTS {
+                    return Err(model_err(format!(
+                        "body `{}`: the model would have {total} Tet4, more than fdem's limit of {}",
+                        b.name,
+                        mesh::MAX_ELEMENTS
+                    )));
+                }
                 for (name, mut c) in copies {
                     if let Some(t) = b.translate {
                         translate(&mut c, t);
@@ -346,7 +355,25 @@ impl Model {
                     mat_of_elem[e as usize] = material_index(mat);
                 }
             }
-            // The body itself, its copies on a lattice, or a pack of particles.
+            // The body itself, its copies on a lattice, or a pack of
+            // particles: refused before they are built if the model would
+            // exceed the element limit.
+            let copies = match (&b.pack, &b.lattice) {
+                (Some(p), _) => p.count as u128,
+                (None, Some(l)) => l.count.iter().map(|&c| u128::from(c)).product(),
+                (None, None) => 1,
+            };
+            let total = combined.tets.len() as u128 + copies * m.tets.len() as u128;
+            if total > mesh::MAX_ELEMENTS as u128 {
+                return Err(model_err(format!(
+                    "body `{}`: {copies} cop{} of its {} Tet4 would make the model {total} Tet4, \
+                     more than fdem's limit of {} (the mesh is kept on every rank)",
+                    b.name,
+                    if copies == 1 { "y" } else { "ies" },
+                    m.tets.len(),
+                    mesh::MAX_ELEMENTS
+                )));
+            }
             if let Some(p) = &b.pack {
                 let into = s
                     .bodies

@@ -442,3 +442,28 @@ fn container_too_small_for_the_particles_is_refused() {
     );
     assert_no_output(&out);
 }
+
+/// A mesh beyond `fdem::mesh::MAX_ELEMENTS` is refused before it is built,
+/// whether one body asks for it or its copies on a lattice do.
+#[test]
+fn gigantic_meshes_are_refused_before_they_are_built() {
+    let d = scenario_dir("gigantic");
+    for (tag, edit) in [
+        ("element_size = 0.1", "element_size = 0.001"),
+        (
+            "element_size = 0.1 }",
+            "element_size = 0.1 }\nlattice = { count = [1000, 1000, 1], spacing = [1.0, 1.0, 1.0] }",
+        ),
+    ] {
+        let s = write(&d, "bad.toml", &BASE.replace(tag, edit));
+        let out = d.join("out");
+        let start = std::time::Instant::now();
+        let (_, err) = run_bad(1, &s, &out, &[]);
+        assert!(
+            err.contains("bad.toml") && err.contains("limit of 20000000"),
+            "{edit}: {err}"
+        );
+        assert!(start.elapsed().as_secs() < 20, "{edit}: refused only after {:?}", start.elapsed());
+        assert_no_output(&out);
+    }
+}

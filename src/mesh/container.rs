@@ -182,7 +182,7 @@ fn section(r_in: f64, r_out: f64, m: usize, n_core: usize, n_wall: usize) -> Sec
 ///
 /// Errors: non-finite centre, non-positive or non-finite sizes
 /// ([`MeshError::InvalidParameter`]); more than `u32::MAX` nodes or
-/// elements ([`MeshError::TooLarge`]); degenerate elements for extreme
+/// [`MAX_ELEMENTS`](super::MAX_ELEMENTS) elements ([`MeshError::TooLarge`]); degenerate elements for extreme
 /// aspect ratios (from [`TetMesh::validate`]).
 pub fn container_mesh(
     center: [f64; 3],
@@ -253,6 +253,10 @@ pub fn container_mesh(
             u32::MAX
         )));
     }
+    super::check_element_count(
+        &format!("container mesh with {m} nodes around and {n_f} + {n_h} layers"),
+        num_elems,
+    )?;
 
     let sec = section(inner_radius, r_out, m, n_c, n_w);
     let n2d = sec.points.len();

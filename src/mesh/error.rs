@@ -195,7 +195,8 @@ pub enum MeshError {
         message: String,
     },
 
-    /// The mesh would exceed the `u32` index range.
+    /// The mesh would exceed the `u32` index range or
+    /// [`MAX_ELEMENTS`](super::MAX_ELEMENTS) elements.
     #[error("mesh too large: {0}")]
     TooLarge(String),
 }

@@ -88,8 +88,8 @@ fn cells(len: f64, h: f64) -> Result<usize, MeshError> {
 ///   set `all`.
 ///
 /// Errors: non-finite origin, non-positive or non-finite size or `h`
-/// ([`MeshError::InvalidParameter`]); more than `u32::MAX` nodes or elements
-/// ([`MeshError::TooLarge`]).
+/// ([`MeshError::InvalidParameter`]); more than `u32::MAX` nodes or
+/// [`MAX_ELEMENTS`](super::MAX_ELEMENTS) elements ([`MeshError::TooLarge`]).
 pub fn box_mesh(origin: [f64; 3], size: [f64; 3], h: f64) -> Result<TetMesh, MeshError> {
     if !origin.iter().all(|v| v.is_finite()) {
         return Err(MeshError::InvalidParameter(format!(
@@ -119,6 +119,10 @@ pub fn box_mesh(origin: [f64; 3], size: [f64; 3], h: f64) -> Result<TetMesh, Mes
             u32::MAX
         )));
     }
+    super::check_element_count(
+        &format!("box mesh with {}x{}x{} cells", n[0], n[1], n[2]),
+        num_elems,
+    )?;
     let (sx, sy) = (n[0] + 1, n[1] + 1);
     let id = |i: usize, j: usize, k: usize| (i + sx * (j + sy * k)) as u32;
     let coord = |d: usize, i: usize| origin[d] + size[d] * (i as f64 / n[d] as f64);
@@ -452,8 +456,8 @@ fn extrude(
 ///
 /// Errors: non-finite centre, non-positive or non-finite radius, width or
 /// `h` ([`MeshError::InvalidParameter`]); more than `u32::MAX` nodes or
-/// elements ([`MeshError::TooLarge`]); degenerate elements for extreme
-/// aspect ratios (`width` many orders of magnitude below `h`, from
+/// [`MAX_ELEMENTS`](super::MAX_ELEMENTS) elements ([`MeshError::TooLarge`]);
+/// degenerate elements for extreme aspect ratios (`width` many orders of magnitude below `h`, from
 /// [`TetMesh::validate`]).
 pub fn cylinder_mesh(
     center: [f64; 3],
@@ -496,6 +500,10 @@ pub fn cylinder_mesh(
             u32::MAX
         )));
     }
+    super::check_element_count(
+        &format!("cylinder mesh with {n_b} boundary nodes, {n_r} rings and {n_z} layers"),
+        num_elems,
+    )?;
 
     let disc = disc_triangulation(radius, n_b, n_r, nodes);
     let n2d = disc.points.len();
@@ -687,7 +695,8 @@ fn check_ring_size_bound(
     Ok(())
 }
 
-/// Rejects ring meshes whose exact counts exceed the `u32` index range.
+/// Rejects ring meshes whose exact counts exceed the `u32` index range or
+/// [`MAX_ELEMENTS`](super::MAX_ELEMENTS).
 fn check_ring_counts(what: &str, n2d: u128, n_tri: u128, n_z: usize) -> Result<(), MeshError> {
     let num_nodes = n2d * (n_z as u128 + 1);
     let num_elems = 3 * n_tri * n_z as u128;
@@ -698,7 +707,10 @@ fn check_ring_counts(what: &str, n2d: u128, n_tri: u128, n_z: usize) -> Result<(
             u32::MAX
         )));
     }
-    Ok(())
+    super::check_element_count(
+        &format!("{what} mesh with {n2d} nodes per layer and {n_z} layers"),
+        num_elems,
+    )
 }
 
 /// Builds the extruded mesh (body 0, element set `all`) and its sets:
@@ -796,9 +808,9 @@ fn ring_flags(n2d: usize, ring: RingNodes) -> Vec<bool> {
 ///
 /// Errors: non-finite centre, non-positive or non-finite radii, height or
 /// `h`, `inner_radius >= outer_radius` ([`MeshError::InvalidParameter`]);
-/// more than `u32::MAX` nodes or elements ([`MeshError::TooLarge`]);
-/// degenerate elements for extreme aspect ratios (from
-/// [`TetMesh::validate`]).
+/// more than `u32::MAX` nodes or [`MAX_ELEMENTS`](super::MAX_ELEMENTS)
+/// elements ([`MeshError::TooLarge`]); degenerate elements for extreme
+/// aspect ratios (from [`TetMesh::validate`]).
 pub fn annulus_mesh(
     center: [f64; 3],
     inner_radius: f64,

@@ -478,6 +478,12 @@ impl<'a> Reader<'a> {
             .elements
             .as_ref()
             .map_or(&empty_blocks, |e| &e.element_blocks);
+        let tet_count: usize = blocks
+            .iter()
+            .filter(|b| b.entity_dim == 3)
+            .map(|b| b.elements.len())
+            .sum();
+        super::check_element_count(&format!("'{}'", self.path.display()), tet_count as u128)?;
         for block in blocks {
             let (dim, etag) = (block.entity_dim, block.entity_tag);
             let ptags = phys_of(dim, etag);

@@ -3,7 +3,7 @@
 //!
 //! Self-contained: depends only on std, nalgebra, mshio and thiserror, so it
 //! unit-tests without MPI or PETSc. Node and element indices are `u32`
-//! (a 10-million-tet mesh fits) and 0-based.
+//! and 0-based; a mesh has at most [`MAX_ELEMENTS`] elements.
 //!
 //! Submodules:
 //! - `error`: [`MeshError`], the error type of this module.
@@ -44,6 +44,26 @@ pub use container::container_mesh;
 pub use error::MeshError;
 pub use geometry::{tet_quality, tet_signed_volume, DEGENERATE_REL_TOL};
 pub use nut::{nut_mesh, nut_mesh_default};
+
+/// The most Tet4 elements a generated or imported mesh, and a whole model,
+/// may have: 20 million. fdem keeps the whole mesh on every rank (about
+/// 100 bytes per tet to set a model up, several times that in a run), so a
+/// mistyped element size would otherwise try to allocate tens of gigabytes;
+/// generators and the Gmsh reader refuse larger meshes with
+/// [`MeshError::TooLarge`] before they allocate them.
+pub const MAX_ELEMENTS: usize = 20_000_000;
+
+/// [`MeshError::TooLarge`] if `what`, a mesh of `count` elements, exceeds
+/// [`MAX_ELEMENTS`].
+pub(crate) fn check_element_count(what: &str, count: u128) -> Result<(), MeshError> {
+    if count > MAX_ELEMENTS as u128 {
+        return Err(MeshError::TooLarge(format!(
+            "{what} would have {count} Tet4, more than fdem's limit of {MAX_ELEMENTS} \
+             (the mesh is kept on every rank); increase the element size"
+        )));
+    }
+    Ok(())
+}
 
 /// A Tet4 mesh holding one or more bodies.
 ///

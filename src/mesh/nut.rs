@@ -82,7 +82,8 @@ pub fn nut_mesh_default(center: [f64; 3]) -> Result<TetMesh, MeshError> {
 ///
 /// Errors ([`MeshError::InvalidParameter`]): non-finite centre, a
 /// non-positive or non-finite size, `hole_radius >= across_flats / 2`, a
-/// zero division count; [`MeshError::TooLarge`] beyond the `u32` range.
+/// zero division count; [`MeshError::TooLarge`] beyond the `u32` range or
+/// [`MAX_ELEMENTS`](super::MAX_ELEMENTS) elements.
 pub fn nut_mesh(
     center: [f64; 3],
     across_flats: f64,
@@ -131,6 +132,10 @@ pub fn nut_mesh(
             u32::MAX
         )));
     }
+    super::check_element_count(
+        &format!("nut mesh with per_side {per_side}, radial {radial}, layers {layers}"),
+        8 * n_prisms,
+    )?;
 
     // Section points: hexagon corners C_k = R (cos, sin)((2k - 1) pi / 6),
     // circumradius R = 2 a / sqrt(3) = 2 b, b = a / sqrt(3); written out so

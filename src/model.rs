@@ -147,6 +147,11 @@ pub struct Model {
     pub output_steps: Vec<u64>,
 }
 
+/// The most output steps (field steps in the HDF5/XDMF series) a run may
+/// write: every step repeats the mesh block in the XDMF index, which is
+/// rewritten after each step.
+pub const MAX_OUTPUT_STEPS: u64 = 100_000;
+
 impl Model {
     /// Build the model: load or generate every body's mesh, check it, and
     /// resolve boundary conditions on named sets. Errors name the scenario
@@ -483,6 +488,15 @@ impl Model {
         let dt = s.time.dt;
         let mut output_steps = vec![0, steps];
         if let Some(every) = s.output.every.filter(|&e| e > 0) {
+            // Counted before they are listed: a tiny dt or a long run must
+            // not make the list itself unbounded.
+            let count = steps / every + 1;
+            if count > MAX_OUTPUT_STEPS {
+                return Err(model_err(format!(
+                    "output.every = {every} writes {count} field steps over the run's {steps} \
+                     steps, more than the limit of {MAX_OUTPUT_STEPS}; increase output.every"
+                )));
+            }
             output_steps.extend((0..=steps).step_by(every as usize));
         }
         for &t in &s.output.times {

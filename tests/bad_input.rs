@@ -467,3 +467,21 @@ fn gigantic_meshes_are_refused_before_they_are_built() {
         assert_no_output(&out);
     }
 }
+
+/// Found by tests/fuzz.rs: `time.dt = 5e-324` with `end_time = 4` makes
+/// u64::MAX steps, and `output.every = 10` then listed u64::MAX / 10
+/// output steps (a capacity overflow panic).
+#[test]
+fn too_many_output_steps_are_refused() {
+    let d = scenario_dir("output-steps");
+    let text = BASE.replace("dt = 0.5\nsteps = 4", "dt = 5e-324\nend_time = 4.0")
+        + "\n[output]\nevery = 10\n";
+    let s = write(&d, "bad.toml", &text);
+    let out = d.join("out");
+    let (_, err) = run_bad(1, &s, &out, &[]);
+    assert!(
+        err.contains("output.every") && err.contains("field steps"),
+        "{err}"
+    );
+    assert_no_output(&out);
+}

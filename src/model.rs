@@ -201,7 +201,10 @@ impl Model {
             if let MeshSpec::Checkpoint { file, template } = &b.mesh {
                 let file = sc.resolve(file);
                 if !checkpoints.contains_key(&file) {
-                    let ck = crate::io::checkpoint::Checkpoint::read(&file)?;
+                    // Every rank reads the same file and fails alike: a model
+                    // error, which rank 0 alone prints.
+                    let ck = crate::io::checkpoint::Checkpoint::read(&file)
+                        .map_err(|e| model_err(format!("body `{}`: {e}", b.name)))?;
                     checkpoints.insert(file.clone(), ck);
                 }
                 let copies =

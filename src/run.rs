@@ -982,7 +982,12 @@ fn check_finite(
 
 /// Read a checkpoint and check it belongs to this model (same mesh).
 fn read_restart(path: &Path, model: &Model) -> Result<Checkpoint> {
-    let ck = Checkpoint::read(path)?;
+    // Every rank reads the same file and fails alike: a model error, which
+    // rank 0 alone prints.
+    let ck = Checkpoint::read(path).map_err(|e| Error::Model {
+        path: "--restart".into(),
+        message: e.to_string(),
+    })?;
     let bad = |m: String| Error::Model {
         path: path.display().to_string(),
         message: format!("the checkpoint does not match the scenario: {m}"),

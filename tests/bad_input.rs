@@ -485,3 +485,22 @@ fn too_many_output_steps_are_refused() {
     );
     assert_no_output(&out);
 }
+
+/// Found by tests/fuzz.rs: a missing checkpoint was reported by every rank.
+#[test]
+fn missing_checkpoint_is_reported_once_on_two_ranks() {
+    let d = scenario_dir("missing-checkpoint");
+    let text = BASE.replace(
+        r#"mesh = { kind = "box", size = [1.0, 0.1, 0.1], element_size = 0.1 }"#,
+        r#"mesh = { kind = "checkpoint", file = "none_checkpoint.h5", template = "bar" }"#,
+    );
+    let s = write(&d, "bad.toml", &text);
+    let out = d.join("out");
+    let (_, err) = run_bad(2, &s, &out, &[]);
+    assert!(
+        err.contains("none_checkpoint.h5") && err.contains("checkpoint file not found"),
+        "{err}"
+    );
+    assert_eq!(err.matches("error: ").count(), 1, "printed once: {err}");
+    assert_no_output(&out);
+}

@@ -19,8 +19,8 @@ struct Mech {
     cells: Vec<[usize; 4]>,
     /// Displacement per output step, by node id.
     disp: Vec<Vec<[f64; 3]>>,
-    /// Stress (xx, yy, zz, xy, yz, xz) per output step, in file cell order.
-    stress: Vec<Vec<[f64; 6]>>,
+    /// Cauchy stress (full symmetric 3×3) per output step, in file cell order.
+    stress: Vec<Vec<[[f64; 3]; 3]>>,
     /// Temperature per output step when the thermal problem ran.
     temperature: Vec<Vec<f64>>,
 }
@@ -44,12 +44,13 @@ fn read_mech(dir: &Path, stem: &str) -> Mech {
     let disp = (0..times.len())
         .map(|k| by_id3(fdem::io::read_node_field_step(&h5, "displacement", k).unwrap()))
         .collect();
+    // The file holds XDMF Tensor6 rows: xx, xy, xz, yy, yz, zz.
     let stress = (0..times.len())
         .map(|k| {
             fdem::io::read_cell_field_step(&h5, "stress", k)
                 .unwrap()
                 .chunks_exact(6)
-                .map(|c| [c[0], c[1], c[2], c[3], c[4], c[5]])
+                .map(|c| [[c[0], c[1], c[2]], [c[1], c[3], c[4]], [c[2], c[4], c[5]]])
                 .collect()
         })
         .collect();
@@ -108,8 +109,9 @@ impl Mech {
                 let r = x.hypot(y);
                 let (nx, ny) = (x / r, y / r);
                 let s = self.stress[k][c];
-                let srr = s[0] * nx * nx + 2.0 * s[3] * nx * ny + s[1] * ny * ny;
-                let stt = s[0] * ny * ny - 2.0 * s[3] * nx * ny + s[1] * nx * nx;
+                let (sxx, sxy, syy) = (s[0][0], s[0][1], s[1][1]);
+                let srr = sxx * nx * nx + 2.0 * sxy * nx * ny + syy * ny * ny;
+                let stt = sxx * ny * ny - 2.0 * sxy * nx * ny + syy * nx * nx;
                 (r, srr, stt)
             })
             .collect()
@@ -169,10 +171,11 @@ fn heated_fixed_element_matches_eq_38() {
         for s in &m.stress[k] {
             for d in 0..3 {
                 assert!(
-                    (s[d] / exact - 1.0).abs() < 1e-3,
+                    (s[d][d] / exact - 1.0).abs() < 1e-3,
                     "{ranks} rank(s): sigma = {s:?}, eq 38: {exact}"
                 );
-                assert!(s[3 + d].abs() < 1e-6 * exact.abs(), "shear {s:?}");
+                let shear = s[d][(d + 1) % 3];
+                assert!(shear.abs() < 1e-6 * exact.abs(), "shear {s:?}");
             }
         }
     }
@@ -203,7 +206,7 @@ fn free_cube_expands_without_stress() {
         );
         let smax = m.stress[k]
             .iter()
-            .flat_map(|s| s.iter())
+            .flat_map(|s| s.iter().flatten())
             .fold(0.0f64, |a, x| a.max(x.abs()));
         assert!(
             smax < 0.01 * constrained,
@@ -465,12 +468,16 @@ fn eight_body_drop_same_on_one_and_two_ranks() {
     assert!(dz < -0.04, "largest drop {dz}");
 }
 
-/// A bar on rollers pulled by a traction on its end settles to the uniaxial
-/// state: σ_xx = t everywhere, end displacement t L / E (small strain).
-#[test]
-fn traction_on_a_bar_gives_uniaxial_stress() {
-    let (t, young, len) = (1e6, 1e9, 1.0);
-    let text = format!(
+/// A bar of length `len` along `axis` (0 = x, 1 = y, 2 = z), 0.2 m square
+/// across, on rollers at its three `min` faces and pulled by a traction `t`
+/// on its far end along the axis.
+fn traction_bar(axis: usize, t: f64, young: f64, len: f64) -> String {
+    let mut size = [0.2; 3];
+    size[axis] = len;
+    let mut value = [0.0; 3];
+    value[axis] = t;
+    let end = ["xmax", "ymax", "zmax"][axis];
+    format!(
         r#"
 [time]
 dt = 0.02
@@ -485,7 +492,7 @@ poisson = 0.25
 [[bodies]]
 name = "bar"
 material = "m"
-mesh = {{ kind = "box", size = [{len}, 0.2, 0.2], element_size = 0.1 }}
+mesh = {{ kind = "box", size = {size:?}, element_size = 0.1 }}
 
 [mechanics]
 damping = 600.0
@@ -504,10 +511,18 @@ set = "zmin"
 components = ["z"]
 [[mechanics.bc]]
 kind = "traction"
-set = "xmax"
-value = [{t}, 0.0, 0.0]
+set = "{end}"
+value = {value:?}
 "#
-    );
+    )
+}
+
+/// A bar on rollers pulled by a traction on its end settles to the uniaxial
+/// state: σ_xx = t everywhere, end displacement t L / E (small strain).
+#[test]
+fn traction_on_a_bar_gives_uniaxial_stress() {
+    let (t, young, len) = (1e6, 1e9, 1.0);
+    let text = traction_bar(0, t, young, len);
     for ranks in [1, 2] {
         let out = out_dir(&format!("traction-{ranks}"));
         let scen = out.join("bar.toml");
@@ -517,7 +532,9 @@ value = [{t}, 0.0, 0.0]
         let k = m.times.len() - 1;
         for s in &m.stress[k] {
             assert!(
-                (s[0] / t - 1.0).abs() < 0.01 && s[1].abs() < 0.01 * t && s[2].abs() < 0.01 * t,
+                (s[0][0] / t - 1.0).abs() < 0.01
+                    && s[1][1].abs() < 0.01 * t
+                    && s[2][2].abs() < 0.01 * t,
                 "{ranks} rank(s): stress {s:?}, traction {t}"
             );
         }
@@ -533,6 +550,36 @@ value = [{t}, 0.0, 0.0]
             (tip / exact - 1.0).abs() < 0.01,
             "{ranks} rank(s): end displacement {tip:e}, t L / E = {exact:e}"
         );
+    }
+}
+
+/// The stress rows of the HDF5 file are in XDMF `Tensor6` order (xx, xy,
+/// xz, yy, yz, zz), the order ParaView's XDMF readers expand: a bar pulled
+/// along z carries σ_zz = t, which must be the sixth value of every row
+/// (the third in fdem's old xx, yy, zz, xy, yz, xz order), and a bar pulled
+/// along y σ_yy = t in the fourth. Read raw, without `read_mech`.
+#[test]
+fn uniaxial_stress_lands_in_its_tensor6_component() {
+    let (t, young, len) = (1e6, 1e9, 1.0);
+    for (axis, index) in [(1, 3), (2, 5)] {
+        let out = out_dir(&format!("tensor6-{axis}"));
+        let scen = out.join("bar.toml");
+        std::fs::write(&scen, traction_bar(axis, t, young, len)).unwrap();
+        run_ok(1, &scen, &out, &[]);
+        let h5 = out.join("bar.h5");
+        let k = fdem::io::read_times(&h5).unwrap().len() - 1;
+        let rows = fdem::io::read_cell_field_step(&h5, "stress", k).unwrap();
+        assert!(!rows.is_empty());
+        for row in rows.chunks_exact(6) {
+            for (c, v) in row.iter().enumerate() {
+                let want = if c == index { t } else { 0.0 };
+                assert!(
+                    (v - want).abs() < 0.01 * t,
+                    "pulled along axis {axis}: stress row {row:?}, expected {t:e} at index \
+                     {index} (xx, xy, xz, yy, yz, zz) and ~0 elsewhere"
+                );
+            }
+        }
     }
 }
 

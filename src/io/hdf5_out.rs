@@ -399,7 +399,8 @@ impl TimeSeriesWriter {
     ///
     /// Each entry `(name, components, values)` gives this rank's owned rows, row
     /// major: `values.len() == rows * components`, `components` in {1, 3, 6, 9}
-    /// (scalar, vector, symmetric tensor in XDMF `Tensor6` order, full tensor).
+    /// (scalar, vector, symmetric tensor in XDMF `Tensor6` order xx, xy, xz,
+    /// yy, yz, zz (see [`super::tensor6`]), full tensor).
     /// The first call fixes the set of node and cell fields; later calls must pass
     /// the same names with the same component counts (in any order).
     ///

@@ -18,6 +18,10 @@
 //! | `/fields/node/<name>/<k:06>`  | `[N, c]` | f64  | node field at step `k` (`[N]` if c = 1) |
 //! | `/fields/cell/<name>/<k:06>`  | `[E, c]` | f64  | cell field at step `k` (`[E]` if c = 1) |
 //!
+//! A field of 6 components is a symmetric tensor, its rows in XDMF `Tensor6`
+//! order xx, xy, xz, yy, yz, zz ([`TENSOR6_ORDER`], [`tensor6`]), which the
+//! XDMF file marks `AttributeType="Tensor6"`.
+//!
 //! `/time` is chunked and unlimited; every other dataset is contiguous and
 //! allocated when created. The set of time-dependent fields is fixed by the first
 //! [`TimeSeriesWriter::write_step`] call.
@@ -82,6 +86,19 @@ pub use read::{
     read_cell_field_step, read_mesh, read_node_field_step, read_static_cell_field_i32,
     read_static_node_field_i32, read_times, MeshData,
 };
+
+/// The `(row, column)` of each of the six components of a symmetric tensor in
+/// XDMF `Tensor6` order: xx, xy, xz, yy, yz, zz (the upper triangle row by
+/// row). The XDMF specification defines this order, and ParaView's readers
+/// (the legacy "XDMF Reader" and the Xdmf3 readers) expand a `Tensor6`
+/// attribute in it.
+pub const TENSOR6_ORDER: [(usize, usize); 6] = [(0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2)];
+
+/// A symmetric 3×3 tensor as the six values of an XDMF `Tensor6` attribute,
+/// in [`TENSOR6_ORDER`] (xx, xy, xz, yy, yz, zz); the upper triangle is read.
+pub fn tensor6(s: &nalgebra::Matrix3<f64>) -> [f64; 6] {
+    TENSOR6_ORDER.map(|(i, j)| s[(i, j)])
+}
 
 /// Errors of the output module. Every message names the file concerned.
 #[derive(Debug, thiserror::Error)]
@@ -206,4 +223,20 @@ pub(crate) fn check_name(kind: &str, name: &str) -> Result<(), String> {
         ));
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// XDMF `Tensor6` is xx, xy, xz, yy, yz, zz; a symmetric tensor with a
+    /// distinct value in every place must come out in exactly that order.
+    #[test]
+    fn tensor6_is_in_xdmf_order() {
+        let s = nalgebra::Matrix3::new(11.0, 12.0, 13.0, 12.0, 22.0, 23.0, 13.0, 23.0, 33.0);
+        assert_eq!(tensor6(&s), [11.0, 12.0, 13.0, 22.0, 23.0, 33.0]);
+        // Uniaxial zz: the only non-zero value is the last one.
+        let zz = nalgebra::Matrix3::new(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 5.0);
+        assert_eq!(tensor6(&zz), [0.0, 0.0, 0.0, 0.0, 0.0, 5.0]);
+    }
 }

@@ -1409,8 +1409,9 @@ impl ExplicitDomain {
             .collect()
     }
 
-    /// Cauchy stress of the owned elements in `owned_elems` order, as
-    /// (xx, yy, zz, xy, yz, xz); zero in held bodies.
+    /// Cauchy stress of the owned elements in `owned_elems` order, six
+    /// values per element in XDMF `Tensor6` order (xx, xy, xz, yy, yz, zz,
+    /// [`crate::io::tensor6`]); zero in held bodies.
     pub fn stress_tensor6(&self, owned_elems: &[u32]) -> Vec<f64> {
         let mut pos = std::collections::HashMap::with_capacity(self.elem_ids.len());
         for (i, &e) in self.elem_ids.iter().enumerate() {
@@ -1420,14 +1421,7 @@ impl ExplicitDomain {
             .iter()
             .flat_map(|e| {
                 let s = pos.get(e).map_or(Matrix3::zeros(), |&i| self.stress[i]);
-                [
-                    s[(0, 0)],
-                    s[(1, 1)],
-                    s[(2, 2)],
-                    s[(0, 1)],
-                    s[(1, 2)],
-                    s[(0, 2)],
-                ]
+                crate::io::tensor6(&s)
             })
             .collect()
     }

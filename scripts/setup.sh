@@ -1,7 +1,20 @@
 #!/usr/bin/env bash
 # Install the Debian packages fdem needs to build, run and test.
 # Idempotent: installs only what is missing; safe to rerun.
+#
+# Opt-in: `FDEM_PARAVIEW=1 bash scripts/setup.sh` or `bash scripts/setup.sh
+# --paraview` also installs ParaView (pvbatch), its Python module and Xvfb
+# for scripts/paraview-check.sh. They are large (~1 GB), so the default
+# setup leaves them out and the check skips itself.
 set -euo pipefail
+
+paraview="${FDEM_PARAVIEW:-0}"
+for arg in "$@"; do
+  case "$arg" in
+    --paraview) paraview=1 ;;
+    *) echo "setup: unknown argument $arg (known: --paraview)" >&2; exit 2 ;;
+  esac
+done
 
 PKGS=(
   pkg-config
@@ -17,6 +30,10 @@ PKGS=(
   bc                  # arithmetic in scripts/bench.sh
   fonts-dejavu-core   # DejaVuSans.ttf: text in PNG plots (src/io/plot.rs)
 )
+if [ "$paraview" = 1 ]; then
+  # pvbatch + paraview.simple, and a virtual X server to render under.
+  PKGS+=(paraview python3-paraview xvfb xauth)
+fi
 
 missing=()
 for p in "${PKGS[@]}"; do

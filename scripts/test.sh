@@ -2,7 +2,8 @@
 # Set up if needed, then: cargo fmt --check, clippy -D warnings, and every
 # test. The validation tests run the fdem binary on 1 rank and under
 # `mpirun -n 2` (tests/two_rank.rs, tests/bad_input.rs), so the two-rank
-# tests run here too; the last step runs a two-rank job directly.
+# tests run here too; then a two-rank job runs directly, and ParaView opens
+# the output (scripts/paraview-check.sh, which skips itself without pvbatch).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 source scripts/env.sh
@@ -20,4 +21,6 @@ mpirun -n 2 --oversubscribe target/release/fdem run scenarios/gmsh-block.toml \
   --quiet --output "$out" -ksp_type cg -pc_type gamg -ksp_rtol 1e-12
 h5dump -H "$out/gmsh-block.h5" >/dev/null
 rm -rf "$out"
+echo "== ParaView reads the output (scripts/paraview-check.sh)"
+bash scripts/paraview-check.sh
 echo "== all tests passed"

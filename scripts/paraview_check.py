@@ -1,0 +1,382 @@
+# ParaView as the real client of fdem's output: run by scripts/paraview-check.sh
+# under `xvfb-run -a pvbatch scripts/paraview_check.py OUT_DIR/STEM.xdmf ...`.
+#
+# For every XDMF file given, opens it with the Xdmf3 reader (Xdmf3ReaderS)
+# and the legacy reader (XDMFReader) and checks, against the HDF5 file read
+# independently of fdem and of ParaView (raw values exported by h5dump):
+#   - the point and cell array names (the fields and static fields the file
+#     holds), the numbers of points and cells;
+#   - the number and values of the time steps;
+#   - at every step, every array's values, the temperature range, and the
+#     six stress components: the XDMF Tensor6 order is xx, xy, xz, yy, yz,
+#     zz, so a reader that expands the tensor to 9 components must show
+#     T[i][j] = row[k(i, j)] with that order;
+#   - both readers agree with each other.
+# Physical check of the stress as ParaView shows it (hot block on a floor):
+# the volume mean of the resting block's stress is the weight's, sigma_zz =
+# -rho g h / 2, with the other five components small (the thermal stresses
+# average out); with the old xx, yy, zz, xy, yz, xz rows ParaView would show
+# that mean in XZ instead.
+# Saves a PNG of the temperature at the last step next to each XDMF file
+# (displacement magnitude for a purely mechanical run) and prints its path.
+import os
+import subprocess
+import sys
+import tempfile
+
+import numpy as np
+from paraview import servermanager
+from paraview.simple import (
+    ColorBy,
+    CreateView,
+    Delete,
+    GetColorTransferFunction,
+    ResetSession,
+    SaveScreenshot,
+    Show,
+    XDMFReader,
+    Xdmf3ReaderS,
+)
+from vtkmodules.util.numpy_support import vtk_to_numpy
+
+# XDMF Tensor6: (row, column) of each of the six stored components.
+TENSOR6 = [(0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2)]
+
+failures = []
+
+
+def check(ok, what):
+    if not ok:
+        failures.append(what)
+        print("  FAIL: " + what)
+    return ok
+
+
+# ---------------------------------------------------------------- HDF5 side
+def h5_objects(h5):
+    """Dataset paths of the file, from `h5dump -n`."""
+    out = subprocess.run(
+        ["h5dump", "-n", h5], check=True, capture_output=True, text=True
+    ).stdout
+    return [
+        line.split()[1]
+        for line in out.splitlines()
+        if line.strip().startswith("dataset ")
+    ]
+
+
+def h5_read(h5, dataset, dtype):
+    """Raw values of one dataset, exported by `h5dump -b LE`."""
+    with tempfile.NamedTemporaryFile(suffix=".bin") as tmp:
+        subprocess.run(
+            ["h5dump", "-d", dataset, "-b", "LE", "-o", tmp.name, h5],
+            check=True,
+            capture_output=True,
+        )
+        return np.fromfile(tmp.name, dtype=dtype)
+
+
+class H5:
+    def __init__(self, path):
+        self.path = path
+        objects = h5_objects(path)
+        self.times = h5_read(path, "/time", "<f8")
+        self.coords = h5_read(path, "/mesh/coordinates", "<f8").reshape(-1, 3)
+        self.topology = h5_read(path, "/mesh/topology", "<u4").reshape(-1, 4)
+        self.nodes, self.cells = len(self.coords), len(self.topology)
+        # {center: {name: [dataset per step]}}
+        self.fields = {"node": {}, "cell": {}}
+        self.statics = {"node": [], "cell": []}
+        for o in objects:
+            parts = o.strip("/").split("/")
+            if parts[0] == "fields" and len(parts) == 4:
+                self.fields[parts[1]].setdefault(parts[2], []).append(o)
+            elif parts[0] == "static" and len(parts) == 3:
+                self.statics[parts[1]].append(parts[2])
+        for c in self.fields.values():
+            for steps in c.values():
+                steps.sort()
+
+    def rows(self, center):
+        return self.nodes if center == "node" else self.cells
+
+    def field(self, center, name, k):
+        v = h5_read(self.path, self.fields[center][name][k], "<f8")
+        rows = self.rows(center)
+        return v.reshape(rows, -1) if v.size != rows else v
+
+    def static(self, center, name):
+        return h5_read(self.path, "/static/%s/%s" % (center, name), "<i4")
+
+
+def tensor9(rows6):
+    """Full 3x3 tensors (row-major, 9 values) from XDMF Tensor6 rows."""
+    out = np.empty((len(rows6), 3, 3))
+    for k, (i, j) in enumerate(TENSOR6):
+        out[:, i, j] = rows6[:, k]
+        out[:, j, i] = rows6[:, k]
+    return out.reshape(-1, 9)
+
+
+# ----------------------------------------------------------- ParaView side
+READERS = {
+    "Xdmf3ReaderS": lambda f: Xdmf3ReaderS(FileName=[f]),
+    "XDMFReader": lambda f: XDMFReader(FileNames=[f]),
+}
+
+
+def as_grid(data):
+    """The unstructured grid of a reader's output (the legacy reader may wrap it)."""
+    if data.IsA("vtkMultiBlockDataSet"):
+        it = data.NewIterator()
+        it.InitTraversal()
+        return it.GetCurrentDataObject()
+    return data
+
+
+def arrays(attrs):
+    """Copies of the arrays: the reader reuses its output on the next update."""
+    return {
+        attrs.GetArrayName(i): np.array(vtk_to_numpy(attrs.GetArray(i)))
+        for i in range(attrs.GetNumberOfArrays())
+    }
+
+
+def read_all(reader_name, xdmf, h5):
+    """{step: {center: {name: values}}}, after checking names and times."""
+    print("  %s:" % reader_name)
+    reader = READERS[reader_name](xdmf)
+    reader.UpdatePipelineInformation()
+    times = np.array(reader.TimestepValues, dtype=float).ravel()
+    if len(h5.times) == 1 and times.size == 0:
+        times = h5.times.copy()
+    check(
+        len(times) == len(h5.times),
+        "%s %s: %d time steps, the HDF5 file has %d"
+        % (reader_name, xdmf, len(times), len(h5.times)),
+    )
+    check(
+        len(times) == len(h5.times)
+        and np.allclose(times, h5.times, rtol=1e-14, atol=0.0),
+        "%s %s: time values %s differ from /time %s"
+        % (reader_name, xdmf, times[:5], h5.times[:5]),
+    )
+    print("    %d time steps, t = %g .. %g" % (len(times), times[0], times[-1]))
+    steps = []
+    for k, t in enumerate(h5.times):
+        reader.UpdatePipeline(t)
+        grid = as_grid(servermanager.Fetch(reader))
+        check(
+            grid.GetNumberOfPoints() == h5.nodes
+            and grid.GetNumberOfCells() == h5.cells,
+            "%s step %d: %d points, %d cells; the HDF5 file has %d, %d"
+            % (
+                reader_name,
+                k,
+                grid.GetNumberOfPoints(),
+                grid.GetNumberOfCells(),
+                h5.nodes,
+                h5.cells,
+            ),
+        )
+        steps.append(
+            {"node": arrays(grid.GetPointData()), "cell": arrays(grid.GetCellData())}
+        )
+    for center, label in (("node", "point"), ("cell", "cell")):
+        want = sorted(list(h5.fields[center]) + h5.statics[center])
+        got = sorted(steps[-1][center])
+        check(
+            got == want,
+            "%s: %s arrays %s, the HDF5 file has %s" % (reader_name, label, got, want),
+        )
+        print("    %s arrays: %s" % (label, ", ".join(got)))
+    Delete(reader)
+    return steps
+
+
+def compare_step(reader_name, h5, k, step, stress_components):
+    for center in ("node", "cell"):
+        for name in h5.statics[center]:
+            want = h5.static(center, name)
+            got = step[center].get(name)
+            check(
+                got is not None and np.array_equal(np.ravel(got), want),
+                "%s step %d: static %s field %s differs from the HDF5 file"
+                % (reader_name, k, center, name),
+            )
+        for name in h5.fields[center]:
+            want = h5.field(center, name, k)
+            got = step[center].get(name)
+            if got is None:
+                check(False, "%s step %d: no array %s" % (reader_name, k, name))
+                continue
+            got = np.asarray(got, dtype=float)
+            if name == "stress" or (want.ndim == 2 and want.shape[1] == 6):
+                ncomp = got.shape[1] if got.ndim == 2 else 1
+                stress_components.add(ncomp)
+                if ncomp == 9:
+                    want = tensor9(want)
+                elif ncomp != 6:
+                    check(
+                        False,
+                        "%s step %d: %s has %d components"
+                        % (reader_name, k, name, ncomp),
+                    )
+                    continue
+            check(
+                got.shape == want.shape and np.array_equal(got, want),
+                "%s step %d: %s %s differs from the HDF5 file (max |diff| %s)"
+                % (
+                    reader_name,
+                    k,
+                    center,
+                    name,
+                    np.max(np.abs(got - want)) if got.shape == want.shape else "shape",
+                ),
+            )
+            if name == "temperature":
+                check(
+                    (got.min(), got.max()) == (want.min(), want.max()),
+                    "%s step %d: temperature range (%g, %g), HDF5 (%g, %g)"
+                    % (reader_name, k, got.min(), got.max(), want.min(), want.max()),
+                )
+
+
+def tet_volumes(coords, topo):
+    p = coords[topo]
+    a, b, c = p[:, 1] - p[:, 0], p[:, 2] - p[:, 0], p[:, 3] - p[:, 0]
+    return np.einsum("ij,ij->i", a, np.cross(b, c)) / 6.0
+
+
+def resting_block_check(reader_name, h5, steps, body, density, gravity, height):
+    """Volume mean of the stress ParaView shows in a resting block."""
+    grid = steps[-1]
+    stress = np.asarray(grid["cell"]["stress"], dtype=float)
+    full = stress.reshape(-1, 3, 3) if stress.shape[1] == 9 else tensor9(stress).reshape(-1, 3, 3)
+    in_body = np.asarray(grid["cell"]["body"]).ravel() == body
+    vol = tet_volumes(h5.coords, h5.topology)[in_body]
+    mean = np.einsum("i,ijk->jk", vol, full[in_body]) / vol.sum()
+    weight = -density * gravity * height / 2.0
+    names = ["XX", "XY", "XZ", "YY", "YZ", "ZZ"]
+    shown = ", ".join(
+        "%s %.1f" % (n, mean[i, j]) for n, (i, j) in zip(names, TENSOR6)
+    )
+    print("    mean stress of the block as shown (Pa): %s; weight: ZZ = %.1f" % (shown, weight))
+    check(
+        abs(mean[2, 2] / weight - 1.0) < 0.3,
+        "%s: the block's mean ZZ stress %.1f Pa is not the weight's %.1f Pa"
+        % (reader_name, mean[2, 2], weight),
+    )
+    for n, (i, j) in zip(names, TENSOR6):
+        if (i, j) != (2, 2):
+            check(
+                abs(mean[i, j]) < 0.2 * abs(weight),
+                "%s: the block's mean %s stress %.1f Pa is not small against the weight's %.1f Pa"
+                % (reader_name, n, mean[i, j], weight),
+            )
+
+
+def screenshot(xdmf, h5):
+    png = os.path.splitext(xdmf)[0] + "_last.png"
+    reader = Xdmf3ReaderS(FileName=[xdmf])
+    reader.UpdatePipelineInformation()
+    view = CreateView("RenderView")
+    view.ViewSize = [800, 600]
+    view.ViewTime = float(h5.times[-1])
+    view.OrientationAxesVisibility = 0
+    display = Show(reader, view)
+    if "temperature" in h5.fields["node"]:
+        array, what = "temperature", "temperature"
+    else:
+        array, what = "displacement", "displacement magnitude"
+    ColorBy(display, ("POINTS", array))
+    display.RescaleTransferFunctionToDataRange(False, True)
+    display.SetScalarBarVisibility(view, True)
+    GetColorTransferFunction(array)
+    view.CameraPosition = [1.0, -2.0, 1.2]
+    view.CameraFocalPoint = [0.0, 0.0, 0.0]
+    view.CameraViewUp = [0.0, 0.0, 1.0]
+    view.ResetCamera()
+    SaveScreenshot(png, view, ImageResolution=[800, 600])
+    Delete(display)
+    Delete(view)
+    Delete(reader)
+    print("  PNG (%s at t = %g): %s" % (what, h5.times[-1], png))
+
+
+def main(args):
+    block = None
+    files = []
+    for a in args:
+        if a.startswith("--resting-block="):
+            # body id, density, gravity, height of a block resting on a floor
+            block = [float(x) for x in a.split("=", 1)[1].split(",")]
+        else:
+            files.append((a, block))
+            block = None
+    for xdmf, block in files:
+        print("%s:" % xdmf)
+        h5 = H5(os.path.splitext(xdmf)[0] + ".h5")
+        print(
+            "  HDF5 (h5dump): %d nodes, %d cells, %d steps; fields node %s, cell %s"
+            % (
+                h5.nodes,
+                h5.cells,
+                len(h5.times),
+                sorted(h5.fields["node"]),
+                sorted(h5.fields["cell"]),
+            )
+        )
+        for center, f in h5.fields.items():
+            for name, steps in f.items():
+                check(
+                    len(steps) == len(h5.times),
+                    "%s: %d datasets of %s field %s for %d times"
+                    % (xdmf, len(steps), center, name, len(h5.times)),
+                )
+        per_reader = {}
+        for name in READERS:
+            steps = read_all(name, xdmf, h5)
+            components = set()
+            before = len(failures)
+            for k, step in enumerate(steps):
+                compare_step(name, h5, k, step, components)
+            if components:
+                print(
+                    "    stress: %s components per cell, equal to the HDF5 rows in XDMF "
+                    "Tensor6 order (xx, xy, xz, yy, yz, zz)" % sorted(components)
+                    if len(failures) == before
+                    else "    stress: %s components per cell" % sorted(components)
+                )
+            if "temperature" in h5.fields["node"]:
+                t = np.asarray(steps[-1]["node"]["temperature"])
+                print("    temperature range at the last step: %.6g .. %.6g" % (t.min(), t.max()))
+            if block is not None:
+                resting_block_check(name, h5, steps, int(block[0]), *block[1:])
+            per_reader[name] = steps
+        a, b = per_reader.values()
+        before = len(failures)
+        for k in range(min(len(a), len(b))):
+            for center in ("node", "cell"):
+                for name in a[k][center]:
+                    x = np.asarray(a[k][center][name], dtype=float)
+                    y = np.asarray(b[k][center].get(name, []), dtype=float)
+                    if x.ndim == 2 and y.ndim == 2 and x.shape[1] == 6 and y.shape[1] == 9:
+                        x = tensor9(x)
+                    if y.ndim == 2 and x.ndim == 2 and y.shape[1] == 6 and x.shape[1] == 9:
+                        y = tensor9(y)
+                    check(
+                        x.shape == y.shape and np.array_equal(x, y),
+                        "step %d: the readers disagree on %s field %s" % (k, center, name),
+                    )
+        if len(failures) == before:
+            print("  the two readers agree on every array at every step")
+        screenshot(xdmf, h5)
+        ResetSession()
+    if failures:
+        print("paraview-check: %d failure(s)" % len(failures))
+        sys.exit(1)
+    print("paraview-check: all checks passed (%d files)" % len(files))
+
+
+main(sys.argv[1:])

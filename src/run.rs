@@ -276,7 +276,7 @@ impl BodyStats {
     }
 }
 
-const PAIR_F64S: usize = 12;
+const PAIR_F64S: usize = 20;
 
 /// Collective. Detect contacts: each rank queries its own boundary tets,
 /// then all ranks gather every pair (for preallocation and statistics).
@@ -303,6 +303,8 @@ pub fn find_contacts(
         ]);
         flat.extend_from_slice(&p.surface.w_target);
         flat.extend_from_slice(&p.surface.w_contactor);
+        flat.extend_from_slice(&p.surface.v_target);
+        flat.extend_from_slice(&p.surface.v_contactor);
     }
     let gathered = crate::parallel::all_gather_f64(comm, &flat);
     let mut all: Vec<ContactPair> = gathered
@@ -315,6 +317,8 @@ pub fn find_contacts(
                 s_contactor: c[3],
                 w_target: [c[4], c[5], c[6], c[7]],
                 w_contactor: [c[8], c[9], c[10], c[11]],
+                v_target: [c[12], c[13], c[14], c[15]],
+                v_contactor: [c[16], c[17], c[18], c[19]],
             },
         })
         .collect();

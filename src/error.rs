@@ -41,6 +41,9 @@ pub enum Error {
         /// Original node id.
         node: usize,
     },
+    /// The thermal time step is above a limit of the scheme.
+    #[error("thermal: {0}")]
+    TimeStep(String),
     /// The explicit mechanics failed (inverted element, blow-up, bad step).
     #[error("mechanics: {0}")]
     Mechanics(String),

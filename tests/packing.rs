@@ -160,6 +160,13 @@ fn heatup_agrees_on_one_and_two_ranks_and_balances_heat() {
     let r1 = read_results(&d1, stem);
     let r2 = read_results(&d2, stem);
     assert_same_temperatures(&r1, &r2, 1e-8, "heat-up 1 vs 2 ranks");
+    // Issue 15: nuts at 0 °C heated from a 300 °C container stay within
+    // [0, 300] at every node and output, on 1 and 2 ranks, with the scheme
+    // the scenario ships with (lumped capacity, bounded conduction).
+    for (r, ranks) in [(&r1, 1), (&r2, 2)] {
+        let (lo, hi) = assert_within_bounds(r, 0.0, 300.0, &format!("heat-up, {ranks} rank(s)"));
+        println!("heat-up on {ranks} rank(s): T in [{lo:.4e}, {hi:.6}]");
+    }
     // Contacts: nut–nut and nut–container pairs exist.
     let contacts = summary_line(&s2, "contact").unwrap();
     assert!(!contacts.starts_with("contact     0 pairs"), "{contacts}");

@@ -518,3 +518,42 @@ fn container_too_small_for_the_particles_is_refused() {
     );
     assert_no_output(&out);
 }
+
+#[test]
+fn unknown_petsc_options_are_named_on_one_and_two_ranks() {
+    // Issue 16: a typo and an option no object reads, both used to exit 0.
+    let d = scenario_dir("petsc-options");
+    let s = write(&d, "bad.toml", BASE);
+    for ranks in [1, 2] {
+        for (opts, named) in [
+            (vec!["-ksp_monitr"], "-ksp_monitr"),
+            (vec!["-foo_bar", "3"], "-foo_bar 3"),
+        ] {
+            let out = d.join(format!("out{ranks}"));
+            let (_, err) = run_bad(ranks, &s, &out, &opts);
+            assert!(
+                err.contains("not used by any PETSc object") && err.contains(named),
+                "{ranks} rank(s), {opts:?}: {err}"
+            );
+            assert_eq!(err.matches("error:").count(), 1, "one message: {err}");
+            assert_no_output(&out);
+        }
+    }
+    // Options PETSc objects do read, solve-time viewers included, and the
+    // flag that accepts unused ones on purpose.
+    let ok = d.join("ok");
+    run_ok(
+        1,
+        &s,
+        &ok,
+        &[
+            "-ksp_type",
+            "cg",
+            "-pc_type",
+            "jacobi",
+            "-ksp_converged_reason",
+            "-ksp_view",
+        ],
+    );
+    run_ok(1, &s, &ok, &["-ksp_monitr", "--allow-unused-petsc-options"]);
+}

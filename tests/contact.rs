@@ -488,3 +488,61 @@ fn moving_punch_rebuilds_on_contact_changes() {
         assert_within_bounds(r, 0.0, 100.0, "moving punch");
     }
 }
+
+/// Issue 16: a thermal run restarted in its own output directory continues
+/// the series: the same output times and temperatures as the uninterrupted
+/// run, and the history's cumulative KSP iterations carry on.
+#[test]
+fn restart_in_place_continues_the_thermal_series() {
+    let scen = root().join("scenarios/two-bars.toml");
+    let common = [
+        "--set",
+        "output.every=1000",
+        "--set",
+        "output.times=[]",
+        "--set",
+        "output.checkpoint=true",
+    ];
+    let full = out_dir("inplace-bars-full");
+    run_ok(
+        2,
+        &scen,
+        &full,
+        &[&common[..], &["--set", "time.end_time=10"]].concat(),
+    );
+    let dir = out_dir("inplace-bars");
+    run_ok(
+        2,
+        &scen,
+        &dir,
+        &[&common[..], &["--set", "time.end_time=5"]].concat(),
+    );
+    let ck = dir.join("two-bars_checkpoint.h5");
+    let restart = [
+        "--set",
+        "time.end_time=10",
+        "--restart",
+        ck.to_str().unwrap(),
+    ];
+    run_ok(2, &scen, &dir, &[&common[..], &restart[..]].concat());
+    let a = read_results(&full, "two-bars");
+    let b = read_results(&dir, "two-bars");
+    assert_eq!(a.times, b.times);
+    assert_eq!(a.temperature, b.temperature, "temperatures differ");
+    let (ha, ra) = history(&full, "two-bars");
+    let (hb, rb) = history(&dir, "two-bars");
+    assert_eq!(ha, hb);
+    let its = col(&ha, "ksp_iterations");
+    for (x, y) in ra.iter().zip(&rb) {
+        assert_eq!(x[its], y[its], "cumulative KSP iterations at t = {}", x[1]);
+        for (c, (u, v)) in x.iter().zip(y).enumerate() {
+            assert!(
+                (u - v).abs() <= 1e-12 * u.abs().max(1.0),
+                "column {} at t = {}: {u} vs {v}",
+                ha[c],
+                x[1]
+            );
+        }
+    }
+    assert!(rb.last().unwrap()[its] > rb[rb.len() / 2][its]);
+}

@@ -260,7 +260,7 @@ impl<'p> ThermalSystem<'p> {
 
             let choice = SolverChoice::auto(layout.num_global(), layout.size, symmetric);
             for (k, v) in &choice.defaults {
-                petsc.set_default_option(k, Some(v))?;
+                petsc.set_own_default_option(k, Some(v))?;
             }
             for (k, v) in &solver.options {
                 petsc.set_default_option(k, if v.is_empty() { None } else { Some(v) })?;

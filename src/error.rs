@@ -41,6 +41,13 @@ pub enum Error {
         /// Original node id.
         node: usize,
     },
+    /// PETSc options that nothing reads (a typo, or an option for an
+    /// object the run does not create).
+    #[error("PETSc option(s) not used by any PETSc object: {0}; check the spelling (`-help` lists the options), or pass --allow-unused-petsc-options")]
+    UnusedPetscOptions(String),
+    /// The thermal time step is above a limit of the scheme.
+    #[error("thermal: {0}")]
+    TimeStep(String),
     /// The explicit mechanics failed (inverted element, blow-up, bad step).
     #[error("mechanics: {0}")]
     Mechanics(String),

@@ -46,6 +46,10 @@ enum Command {
         /// (`[output] checkpoint = true`).
         #[arg(long, value_name = "CHECKPOINT.h5")]
         restart: Option<PathBuf>,
+        /// Accept PETSc options that no PETSc object reads (by default an
+        /// error naming them).
+        #[arg(long)]
+        allow_unused_petsc_options: bool,
     },
     /// Validate a scenario and its meshes without running.
     Check {
@@ -172,6 +176,8 @@ fn deterministic(e: &Error) -> bool {
             | Error::Petsc(_)
             | Error::NonFinite { .. }
             | Error::Partition(_)
+            | Error::UnusedPetscOptions(_)
+            | Error::TimeStep(_)
     )
 }
 
@@ -267,12 +273,14 @@ fn dispatch(
             set,
             quiet,
             restart,
+            allow_unused_petsc_options,
         } => {
             let sc = scenario::load(path, set)?;
             let opts = RunOptions {
                 output_dir: output.clone(),
                 progress: !quiet,
                 restart: restart.clone(),
+                allow_unused_petsc_options: *allow_unused_petsc_options,
             };
             let summary = run(petsc, world, &sc, &opts)?;
             if rank == 0 {

@@ -97,6 +97,8 @@ pub struct ThermalProblem {
     pub theta: f64,
     /// Capacity matrix form.
     pub capacity: CapacityKind,
+    /// Conduction operator form.
+    pub conduction: crate::scenario::ConductionKind,
     /// Prescribed temperatures (node, value); last one given wins.
     pub dirichlet: Vec<(u32, f64)>,
     /// Prescribed inward flux on faces (face nodes, W/m²).
@@ -116,6 +118,8 @@ pub struct ContactModel {
     pub resistance: Vec<Vec<f64>>,
     /// How ΔT is taken.
     pub delta_t: DeltaT,
+    /// The local-ΔT block form.
+    pub operator: crate::contact::ContactOperator,
     /// Detection cadence in steps (0: once).
     pub every: u64,
 }
@@ -430,6 +434,7 @@ impl Model {
         let mut thermal = ThermalProblem {
             theta: thermal_spec.theta,
             capacity: thermal_spec.capacity,
+            conduction: thermal_spec.conduction,
             source: vec![0.0; bodies.len()],
             initial: vec![0.0; combined.nodes.len()],
             ..Default::default()
@@ -540,6 +545,7 @@ impl Model {
                 Some(ContactModel {
                     resistance: rc,
                     delta_t: c.delta_t,
+                    operator: c.operator,
                     every: c.every,
                 })
             }

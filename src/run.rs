@@ -33,6 +33,8 @@ pub struct RunOptions {
     pub progress: bool,
     /// Continue from this checkpoint (written by a run of the same scenario).
     pub restart: Option<PathBuf>,
+    /// Accept PETSc options that no PETSc object reads.
+    pub allow_unused_petsc_options: bool,
 }
 
 /// Wall-clock seconds spent per phase (rank 0's view, max over ranks).
@@ -276,7 +278,7 @@ impl BodyStats {
     }
 }
 
-const PAIR_F64S: usize = 12;
+const PAIR_F64S: usize = 20;
 
 /// Collective. Detect contacts: each rank queries its own boundary tets,
 /// then all ranks gather every pair (for preallocation and statistics).
@@ -303,6 +305,8 @@ pub fn find_contacts(
         ]);
         flat.extend_from_slice(&p.surface.w_target);
         flat.extend_from_slice(&p.surface.w_contactor);
+        flat.extend_from_slice(&p.surface.v_target);
+        flat.extend_from_slice(&p.surface.v_contactor);
     }
     let gathered = crate::parallel::all_gather_f64(comm, &flat);
     let mut all: Vec<ContactPair> = gathered
@@ -315,6 +319,8 @@ pub fn find_contacts(
                 s_contactor: c[3],
                 w_target: [c[4], c[5], c[6], c[7]],
                 w_contactor: [c[8], c[9], c[10], c[11]],
+                v_target: [c[12], c[13], c[14], c[15]],
+                v_contactor: [c[16], c[17], c[18], c[19]],
             },
         })
         .collect();
@@ -381,7 +387,13 @@ pub fn run(
                     .into(),
             });
         };
-        m.restore(comm, &model, &layout, x, v, ck.dissipated)?;
+        let saved = crate::parallel::explicit::SavedMotion {
+            positions: x,
+            velocities: v,
+            velocities_prev: ck.velocities_prev.as_deref(),
+            dissipated: ck.dissipated,
+        };
+        m.restore(comm, &model, &layout, saved)?;
     }
     times.mechanics = clock.elapsed().as_secs_f64();
     let mech_setup = times.mechanics;
@@ -421,6 +433,14 @@ pub fn run(
         None
     };
     times.assembly = clock.elapsed().as_secs_f64();
+    // Every PETSc object exists now: an option none of them read is a typo
+    // (the options database is the same on every rank).
+    if !opts.allow_unused_petsc_options {
+        let unknown = petsc.unknown_options()?;
+        if !unknown.is_empty() {
+            return Err(Error::UnusedPetscOptions(unknown.join(", ")));
+        }
+    }
     let detect_every = model.contact.as_ref().map_or(0, |c| c.every);
     if let (Some(ck), Some(s)) = (restart.as_ref(), sys.as_mut()) {
         let Some(t) = &ck.temperature else {
@@ -443,6 +463,7 @@ pub fn run(
             convection_in: h[4],
         };
         s.restore(&owned, account, ck.step)?;
+        s.iterations = ck.ksp_iterations;
     }
     if let (Some((m, _)), Some(s)) = (mech.as_mut(), sys.as_ref()) {
         let t = s.t.to_local_vec()?;
@@ -475,7 +496,20 @@ pub fn run(
         Ok(())
     };
     agree(comm, made)?;
-    let mut writer = open_writer(comm, &model, &layout, &dir, &stem)?;
+    // A restart into the directory of the series it continues keeps that
+    // series up to the checkpoint and appends; anywhere else it starts one.
+    let (h5_path, _) = crate::io::output_paths(&dir, &stem);
+    let continues = restart.is_some() && {
+        let mut exists = i32::from(rank == 0 && h5_path.is_file());
+        comm.process_at_rank(0).broadcast_into(&mut exists);
+        exists == 1
+    };
+    let keep_until = restart.as_ref().map_or(0.0, |c| c.time);
+    let mut writer = if continues {
+        reopen_writer(comm, &model, &layout, &dir, &stem, keep_until)?
+    } else {
+        open_writer(comm, &model, &layout, &dir, &stem)?
+    };
     let history_path = dir.join(format!("{stem}_history.csv"));
     let mut header: Vec<String> = vec!["step".into(), "time".into()];
     if sys.is_some() {
@@ -515,7 +549,11 @@ pub fn run(
         }
     }
     let header_ref: Vec<&str> = header.iter().map(String::as_str).collect();
-    let history = HistoryWriter::create(&history_path, &header_ref);
+    let history = if continues {
+        HistoryWriter::reopen(&history_path, &header_ref, 1, keep_until)
+    } else {
+        HistoryWriter::create(&history_path, &header_ref)
+    };
     let mut history = agree(comm, history.map_err(Error::from))?;
     let stats = BodyStats::new(&model, &layout);
     let write_output = |sys: &mut Option<ThermalSystem>,
@@ -595,14 +633,16 @@ pub fn run(
         history.append(&row)?;
         Ok(())
     };
-    write_output(
-        &mut sys,
-        &mech,
-        &mut writer,
-        &mut history,
-        &contacts,
-        start_step,
-    )?;
+    if !continues {
+        write_output(
+            &mut sys,
+            &mech,
+            &mut writer,
+            &mut history,
+            &contacts,
+            start_step,
+        )?;
+    }
     // Particle statistics (rank 0 keeps them; every rank takes part in the reductions).
     let mut report = sc.scenario.output.particles.as_ref().and_then(|p| {
         sys.as_ref()?;
@@ -906,6 +946,53 @@ pub fn run(
     })
 }
 
+/// This rank's part of the output mesh: owned node coordinates, and cells
+/// in the global (PETSc) node numbering.
+fn mesh_rows(model: &Model, layout: &Layout) -> (Vec<[f64; 3]>, Vec<[u32; 4]>) {
+    let coords = layout
+        .owned_nodes
+        .iter()
+        .map(|&n| model.mesh.nodes[n as usize])
+        .collect();
+    let cells = layout
+        .owned_elems
+        .iter()
+        .map(|&e| model.mesh.tets[e as usize].map(|n| layout.global_of[n as usize]))
+        .collect();
+    (coords, cells)
+}
+
+/// Collective. Reopen the series in `dir` to continue it after the
+/// checkpoint at `keep_until` (same mesh and partition, checked).
+fn reopen_writer(
+    comm: &SimpleCommunicator,
+    model: &Model,
+    layout: &Layout,
+    dir: &Path,
+    stem: &str,
+    keep_until: f64,
+) -> Result<TimeSeriesWriter> {
+    let (coords, cells) = mesh_rows(model, layout);
+    let ncells = cells.len() as u64;
+    let mut cell_offset = 0u64;
+    comm.exclusive_scan_into(&ncells, &mut cell_offset, SystemOperation::sum());
+    if comm.rank() == 0 {
+        cell_offset = 0;
+    }
+    let part = MeshPart {
+        global_nodes: layout.num_global() as u64,
+        node_offset: layout.owned_range().0 as u64,
+        coords: &coords,
+        global_cells: model.mesh.tets.len() as u64,
+        cell_offset,
+        cells: &cells,
+    };
+    let node_id: Vec<i32> = layout.owned_nodes.iter().map(|&n| n as i32).collect();
+    Ok(TimeSeriesWriter::reopen(
+        comm, dir, stem, &part, &node_id, keep_until,
+    )?)
+}
+
 fn open_writer(
     comm: &SimpleCommunicator,
     model: &Model,
@@ -913,16 +1000,7 @@ fn open_writer(
     dir: &Path,
     stem: &str,
 ) -> Result<TimeSeriesWriter> {
-    let coords: Vec<[f64; 3]> = layout
-        .owned_nodes
-        .iter()
-        .map(|&n| model.mesh.nodes[n as usize])
-        .collect();
-    let cells: Vec<[u32; 4]> = layout
-        .owned_elems
-        .iter()
-        .map(|&e| model.mesh.tets[e as usize].map(|n| layout.global_of[n as usize]))
-        .collect();
+    let (coords, cells) = mesh_rows(model, layout);
     let ncells = cells.len() as u64;
     let mut cell_offset = 0u64;
     comm.exclusive_scan_into(&ncells, &mut cell_offset, SystemOperation::sum());
@@ -1054,6 +1132,7 @@ fn save_checkpoint(
         m.gather_positions(comm);
         ck.positions = Some(m.positions().to_vec());
         ck.velocities = Some(m.gather_velocities(comm));
+        ck.velocities_prev = m.gather_velocities_prev(comm);
         ck.dissipated = m.state(comm).dissipated;
         ck.substeps = m.counters.substeps;
     } else if model.has_motion() {
@@ -1069,6 +1148,7 @@ fn save_checkpoint(
                 .map(|n| all[layout.global_of[n] as usize])
                 .collect(),
         );
+        ck.ksp_iterations = s.iterations;
         let e = s.energy()?;
         ck.heat = [
             e.stored,

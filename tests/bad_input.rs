@@ -189,15 +189,91 @@ fn diverging_solver_is_an_error_and_output_stays_readable() {
 }
 
 #[test]
+fn explicit_thermal_step_above_its_stability_limit_is_refused() {
+    // Issue 16: theta = 0 at dt = 0.5 s on the 0.1 m bar (alpha = 0.01
+    // m^2/s) is about 3x the explicit limit; it used to run to 1e97 K and
+    // exit 0. Now it is refused before any output, naming the limit, on 1
+    // and 2 ranks; the same limit for theta = 0.25 is twice as long.
+    let d = scenario_dir("unstable");
+    let s = write(
+        &d,
+        "bad.toml",
+        &BASE.replace("[[thermal.bc]]", "[thermal]\ntheta = 0.0\n\n[[thermal.bc]]"),
+    );
+    let limit = |err: &str| -> f64 {
+        let at = err
+            .find("use time.dt <= ")
+            .unwrap_or_else(|| panic!("{err}"))
+            + 15;
+        err[at..]
+            .split_whitespace()
+            .next()
+            .unwrap()
+            .parse()
+            .unwrap()
+    };
+    let mut limits = Vec::new();
+    for ranks in [1, 2] {
+        let out = d.join(format!("out{ranks}"));
+        let (_, err) = run_bad(ranks, &s, &out, &[]);
+        assert!(
+            err.contains("stability limit") && err.contains("thermal.theta"),
+            "{err}"
+        );
+        assert_no_output(&out);
+        limits.push(limit(&err));
+    }
+    assert!(
+        (limits[0] - limits[1]).abs() <= 1e-3 * limits[0],
+        "{limits:?}"
+    );
+    let (_, err) = run_bad(1, &s, &d.join("out-q"), &["--set", "thermal.theta=0.25"]);
+    assert!((limit(&err) / limits[0] - 2.0).abs() < 1e-2, "{err}");
+    // Just below the limit the explicit run is stable and bounded.
+    let ok = d.join("ok");
+    let dt = format!("time.dt={}", 0.98 * limits[0]);
+    run_ok(1, &s, &ok, &["--set", &dt, "--set", "time.steps=400"]);
+    let r = read_results(&ok, "bad");
+    assert_within_bounds(&r, 0.0, 1.0, "explicit bar just below its limit");
+}
+
+#[test]
+fn bounded_scheme_refuses_a_step_above_its_positivity_limit() {
+    let d = scenario_dir("positivity");
+    let s = write(
+        &d,
+        "bad.toml",
+        &BASE.replace(
+            "[[thermal.bc]]",
+            "[thermal]\ntheta = 0.5\nconduction = \"bounded\"\n\n[[thermal.bc]]",
+        ),
+    );
+    let (_, err) = run_bad(1, &s, &d.join("out"), &[]);
+    assert!(err.contains("keeps the bounded scheme bounded"), "{err}");
+    // With a consistent capacity the bounded scheme is refused outright.
+    let (_, err) = run_bad(
+        1,
+        &s,
+        &d.join("out2"),
+        &["--set", "thermal.capacity=\"consistent\""],
+    );
+    assert!(
+        err.contains("thermal.conduction") && err.contains("lumped"),
+        "{err}"
+    );
+}
+
+#[test]
 fn blow_up_to_nan_is_reported_with_node() {
-    // theta = 0 far above the explicit stability limit.
+    // A stable step, but an insulated bar with a source of 1e307 W/m^3
+    // overflows to infinity.
     let d = scenario_dir("nan");
     let s = write(
         &d,
         "bad.toml",
         &BASE.replace("steps = 4", "steps = 5000").replace(
-            "[[thermal.bc]]",
-            "[thermal]\ntheta = 0.0\ncapacity = \"lumped\"\n\n[[thermal.bc]]",
+            "[[thermal.bc]]\nkind = \"temperature\"\nset = \"bar.xmax\"\nvalue = 1.0",
+            "[[thermal.bc]]\nkind = \"source\"\nbody = \"bar\"\nvalue = 1e307",
         ),
     );
     let (_, err) = run_bad(1, &s, &d.join("out"), &[]);
@@ -503,4 +579,43 @@ fn missing_checkpoint_is_reported_once_on_two_ranks() {
     );
     assert_eq!(err.matches("error: ").count(), 1, "printed once: {err}");
     assert_no_output(&out);
+}
+
+#[test]
+fn unknown_petsc_options_are_named_on_one_and_two_ranks() {
+    // Issue 16: a typo and an option no object reads, both used to exit 0.
+    let d = scenario_dir("petsc-options");
+    let s = write(&d, "bad.toml", BASE);
+    for ranks in [1, 2] {
+        for (opts, named) in [
+            (vec!["-ksp_monitr"], "-ksp_monitr"),
+            (vec!["-foo_bar", "3"], "-foo_bar 3"),
+        ] {
+            let out = d.join(format!("out{ranks}"));
+            let (_, err) = run_bad(ranks, &s, &out, &opts);
+            assert!(
+                err.contains("not used by any PETSc object") && err.contains(named),
+                "{ranks} rank(s), {opts:?}: {err}"
+            );
+            assert_eq!(err.matches("error:").count(), 1, "one message: {err}");
+            assert_no_output(&out);
+        }
+    }
+    // Options PETSc objects do read, solve-time viewers included, and the
+    // flag that accepts unused ones on purpose.
+    let ok = d.join("ok");
+    run_ok(
+        1,
+        &s,
+        &ok,
+        &[
+            "-ksp_type",
+            "cg",
+            "-pc_type",
+            "jacobi",
+            "-ksp_converged_reason",
+            "-ksp_view",
+        ],
+    );
+    run_ok(1, &s, &ok, &["-ksp_monitr", "--allow-unused-petsc-options"]);
 }

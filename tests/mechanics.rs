@@ -621,6 +621,12 @@ fn hot_block_on_floor_conducts_through_its_contact() {
             ((s1 - s0) / s0).abs() < 1e-9,
             "{ranks} rank(s): stored heat {s0} -> {s1}"
         );
+        // Discrete maximum principle (issue 15): the pair starts at 0 and
+        // 100 °C, insulated; as shipped (lumped capacity) no node leaves
+        // [0, 100] (the consistent capacity reached -11.4 and 118.2 °C).
+        let r = read_results(&out, "hot-block-on-floor");
+        let (lo, hi) = assert_within_bounds(&r, 0.0, 100.0, "hot block on floor");
+        println!("hot block, {ranks} rank(s): T in [{lo:.3e}, {hi:.4}]");
         runs.push(read_mech(&out, "hot-block-on-floor"));
     }
     let (a, b) = (&runs[0], &runs[1]);

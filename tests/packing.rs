@@ -152,6 +152,97 @@ fn restart_from_a_checkpoint_continues_bitwise() {
     assert!(err.contains("does not match the scenario"), "{err}");
 }
 
+/// Issue 16: a restart into the output directory it came from continues the
+/// series (h5, xdmf, history) instead of wiping it; the kinetic energy at the
+/// restart step is the uninterrupted run's; a restart in place on another
+/// rank count is refused with a clear error.
+#[test]
+fn restart_in_place_continues_the_series() {
+    let every = ["--set", "output.every=1"];
+    let full = out_dir("packing/inplace-full");
+    deposit(
+        &full,
+        &[&every[..], &["--set", "time.end_time=0.06"]].concat(),
+    );
+    // A run that wrote steps 0..4 but whose last checkpoint is at step 3
+    // (as a run killed after it would leave): the restart keeps steps 0..3,
+    // drops step 4 and continues.
+    let dir = out_dir("packing/inplace");
+    let first = [
+        "--set",
+        "time.end_time=0.04",
+        "--set",
+        "output.checkpoint=false",
+        "--set",
+        "output.checkpoint_every=3",
+    ];
+    deposit(&dir, &[&every[..], &first[..]].concat());
+    let ck = dir.join("nut-packing-deposit_checkpoint.h5");
+    assert_eq!(Checkpoint::read(&ck).unwrap().step, 3);
+    let restart = [
+        "--set",
+        "time.end_time=0.06",
+        "--restart",
+        ck.to_str().unwrap(),
+    ];
+    let out = deposit(&dir, &[&every[..], &restart[..]].concat());
+    assert!(summary_line(&out, "restart").is_some(), "{out}");
+    let stem = "nut-packing-deposit";
+    let (ha, ra) = history(&full, stem);
+    let (hb, rb) = history(&dir, stem);
+    assert_eq!(ha, hb);
+    let t = col(&ha, "time");
+    let times_a: Vec<f64> = ra.iter().map(|r| r[t]).collect();
+    let times_b: Vec<f64> = rb.iter().map(|r| r[t]).collect();
+    assert_eq!(times_a, times_b, "the continued history has the same rows");
+    // Kinetic energy at every row, the restart step (t = 0.03) included,
+    // equal to the uninterrupted run's.
+    let ke = col(&ha, "kinetic_energy");
+    for (a, b) in ra.iter().zip(&rb) {
+        assert_eq!(a[ke], b[ke], "kinetic energy at t = {}", a[t]);
+    }
+    // The HDF5 series: same times, same displacements at every step.
+    let h5a = full.join(format!("{stem}.h5"));
+    let h5b = dir.join(format!("{stem}.h5"));
+    assert_eq!(
+        fdem::io::read_times(&h5a).unwrap(),
+        fdem::io::read_times(&h5b).unwrap()
+    );
+    for k in 0..times_a.len() {
+        assert_eq!(
+            fdem::io::read_node_field_step(&h5a, "displacement", k).unwrap(),
+            fdem::io::read_node_field_step(&h5b, "displacement", k).unwrap(),
+            "step {k}"
+        );
+    }
+    let xdmf = std::fs::read_to_string(dir.join(format!("{stem}.xdmf"))).unwrap();
+    assert_eq!(xdmf.matches("<Time Value").count(), times_a.len(), "{xdmf}");
+    // In place on one rank (another partition): refused, the series kept.
+    let o = fdem(
+        1,
+        &[
+            "run",
+            deposit_scenario().to_str().unwrap(),
+            "--quiet",
+            "--set",
+            N,
+            "--set",
+            "time.end_time=0.06",
+            "--restart",
+            ck.to_str().unwrap(),
+            "--output",
+            dir.to_str().unwrap(),
+        ],
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(
+        err.contains("cannot continue this series in place"),
+        "{err}"
+    );
+    assert_eq!(fdem::io::read_times(&h5b).unwrap(), times_b);
+}
+
 #[test]
 fn heatup_agrees_on_one_and_two_ranks_and_balances_heat() {
     let (d1, _) = heatup(1, "packing/heatup-1", &[]);
@@ -160,6 +251,13 @@ fn heatup_agrees_on_one_and_two_ranks_and_balances_heat() {
     let r1 = read_results(&d1, stem);
     let r2 = read_results(&d2, stem);
     assert_same_temperatures(&r1, &r2, 1e-8, "heat-up 1 vs 2 ranks");
+    // Issue 15: nuts at 0 °C heated from a 300 °C container stay within
+    // [0, 300] at every node and output, on 1 and 2 ranks, with the scheme
+    // the scenario ships with (lumped capacity, bounded conduction).
+    for (r, ranks) in [(&r1, 1), (&r2, 2)] {
+        let (lo, hi) = assert_within_bounds(r, 0.0, 300.0, &format!("heat-up, {ranks} rank(s)"));
+        println!("heat-up on {ranks} rank(s): T in [{lo:.4e}, {hi:.6}]");
+    }
     // Contacts: nut–nut and nut–container pairs exist.
     let contacts = summary_line(&s2, "contact").unwrap();
     assert!(!contacts.starts_with("contact     0 pairs"), "{contacts}");

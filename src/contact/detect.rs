@@ -45,16 +45,24 @@ pub struct BoundaryTets {
     pub elems: Vec<u32>,
     /// Bit i set when local face i (opposite node i) is on the boundary.
     pub face_mask: Vec<u8>,
+    /// Per mesh node: whether it lies on its body's boundary.
+    pub boundary_node: Vec<bool>,
 }
 
 impl BoundaryTets {
     /// Collect from the mesh's boundary faces.
     pub fn new(mesh: &TetMesh) -> BoundaryTets {
         let mut mask = vec![0u8; mesh.tets.len()];
+        let mut bt = BoundaryTets {
+            boundary_node: vec![false; mesh.nodes.len()],
+            ..Default::default()
+        };
         for f in mesh.boundary_faces() {
             mask[f.elem as usize] |= 1 << f.local_face;
+            for n in f.nodes {
+                bt.boundary_node[n as usize] = true;
+            }
         }
-        let mut bt = BoundaryTets::default();
         for (e, &m) in mask.iter().enumerate() {
             if m != 0 {
                 bt.elems.push(e as u32);
@@ -62,6 +70,16 @@ impl BoundaryTets {
             }
         }
         bt
+    }
+
+    /// Bit i set when local node i of element `e` lies on its body's boundary.
+    pub fn node_bits(&self, mesh: &TetMesh, e: u32) -> u8 {
+        mesh.tets[e as usize]
+            .iter()
+            .enumerate()
+            .fold(0, |m, (i, &n)| {
+                m | (u8::from(self.boundary_node[n as usize]) << i)
+            })
     }
 
     /// Local boundary faces of boundary tet `i`.
@@ -161,13 +179,19 @@ pub fn detect_contacts(
                 ContactPair {
                     target: x,
                     contactor: y,
-                    surface: tet_tet_contact_surface(&cx, fx.as_slice(), &cy, fy.as_slice()),
+                    surface: tet_tet_contact_surface(
+                        (&cx, fx.as_slice(), bt.node_bits(mesh, x)),
+                        (&cy, fy.as_slice(), bt.node_bits(mesh, y)),
+                    ),
                 }
             } else {
                 ContactPair {
                     target: y,
                     contactor: x,
-                    surface: tet_tet_contact_surface(&cy, fy.as_slice(), &cx, fx.as_slice()),
+                    surface: tet_tet_contact_surface(
+                        (&cy, fy.as_slice(), bt.node_bits(mesh, y)),
+                        (&cx, fx.as_slice(), bt.node_bits(mesh, x)),
+                    ),
                 }
             };
             if pair.area() > 0.0 {

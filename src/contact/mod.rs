@@ -11,7 +11,7 @@ mod surface;
 
 pub use detect::{detect_contacts, proximity_pairs, BoundaryTets, FaceList};
 pub use penalty::{pair_stiffness, tet_tet_penalty, PenaltyParams, PenaltyResult};
-pub use surface::{tet_tet_contact_surface, ContactSurface};
+pub use surface::{tet_tet_contact_surface, ContactSurface, TetSide};
 
 /// One contact: a boundary tet of one body overlapping a boundary tet of
 /// another. `target < contactor` (element ids) so each pair has one form.
@@ -58,6 +58,21 @@ impl ContactSet {
     }
 }
 
+/// The form of the local-ΔT contact conductance block.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ContactOperator {
+    /// Node-to-node links ([`local_conductance_block`]): no positive
+    /// off-diagonal entry, the discrete maximum principle holds.
+    #[default]
+    Links,
+    /// The rank-one block g v vᵀ ([`rank_one_conductance_block`]): each
+    /// pair's heat follows its face-averaged ΔT; positive entries between
+    /// nodes of one side, so bounds can break where contact dominates
+    /// conduction. Kept for the two-bar validation (seed 000 Table 2).
+    RankOne,
+}
+
 /// How the contact temperature drop is taken.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -69,14 +84,60 @@ pub enum DeltaT {
     Average,
 }
 
-/// Seed 000 eqs 24–30, re-derived: the heat into the target is
-/// q = g (w_conᵀT_con − w_tarᵀT_tar) with g = S/Rc and face-node weights w
-/// (each summing to 1), given to the target nodes by w_tar and taken from
-/// the contactor nodes by w_con. With v = (w_tar, −w_con) over the 8 nodes
-/// (target's 4, then contactor's 4) the conductance block is g v vᵀ:
-/// symmetric, positive semi-definite (rank 1), and its rows sum to zero, so
-/// heat is conserved exactly. Returned row-major 8×8.
+/// Seed 000 eqs 24–30, re-derived as a graph Laplacian of node-to-node
+/// links (issue 15).
+///
+/// Eq 24 gives the flux ΔT/Rc over the contact surface; eq 25 takes the
+/// surface as the mean of the two sides' clipped faces, S = (S_tar +
+/// S_con)/2; eq 30 couples a node only to the nodes of the other side. We
+/// integrate ΔT/Rc over each side's clipped faces with that side's own
+/// face-node shares (eq 24's thirds, area-weighted: S w) against the other
+/// side's temperature interpolated there (its shape functions at the
+/// faces' centroid, v, exact for a linear temperature), and average the
+/// two sides as eq 25 does. Target node i and contactor node j are then
+/// linked by the conductance
+///   c_ij = (S_tar w_tar,i v_con,j + S_con v_tar,i w_con,j) / (2 Rc),
+/// and the heat into target node i is Σ_j c_ij (T_j − T_i). The links sum
+/// to S/Rc, so a uniform ΔT moves the same heat as eq 28; each side's
+/// nodes receive their natural share of the surface (no spreading error
+/// where the faces are flat, as for the two bars); and the block is the
+/// Laplacian of the links: symmetric, positive semi-definite, rows summing
+/// to zero (heat conserved exactly), with no positive off-diagonal entry,
+/// since two nodes of the same side are not linked. With a lumped capacity
+/// and backward Euler the system then stays an M-matrix and the discrete
+/// maximum principle holds even where contact dominates conduction inside
+/// the particles (Table 4: about 500×). (fdem first read eq 28 as the
+/// rank-one block g v vᵀ with v = (w_tar, −w_con): its positive entries
+/// between nodes of one side drove a packing heat-up to −126 °C.)
+/// Returned row-major 8×8 over (target's 4 nodes, contactor's 4 nodes).
 pub fn local_conductance_block(pair: &ContactPair, rc: f64) -> [f64; 64] {
+    let s = &pair.surface;
+    let (at, ac) = (s.s_target / (2.0 * rc), s.s_contactor / (2.0 * rc));
+    let mut b = [0.0; 64];
+    for i in 0..4 {
+        for j in 0..4 {
+            // Link (target i, contactor j), the same value in both triangles.
+            let link =
+                at * s.w_target[i] * s.v_contactor[j] + ac * s.v_target[i] * s.w_contactor[j];
+            b[8 * i + 4 + j] = -link;
+            b[8 * (4 + j) + i] = -link;
+            b[8 * i + i] += link;
+            b[8 * (4 + j) + 4 + j] += link;
+        }
+    }
+    b
+}
+
+/// Seed 000 eqs 26–28 read literally: the heat g (w_conᵀT_con − w_tarᵀT_tar)
+/// (g = S/Rc) enters the target's nodes by w_tar and leaves the
+/// contactor's by w_con, so every node of a pair sees the pair's
+/// face-averaged ΔT. With v = (w_tar, −w_con) the block is g v vᵀ:
+/// symmetric, positive semi-definite, rows summing to zero, but with the
+/// positive entries g w_i w_k between two nodes of one side. On the two
+/// bars of seed 000 sec 4.2 (a 1D problem whose faces should carry a
+/// uniform flux) it is 2–4× more accurate at late times than the links of
+/// [`local_conductance_block`] (docs/validation.md).
+pub fn rank_one_conductance_block(pair: &ContactPair, rc: f64) -> [f64; 64] {
     let g = pair.area() / rc;
     let mut v = [0.0; 8];
     v[..4].copy_from_slice(&pair.surface.w_target);
@@ -104,6 +165,8 @@ mod tests {
             s_contactor: 0.5,
             w_target: [0.2, 0.3, 0.5, 0.0],
             w_contactor: [0.0, 1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0],
+            v_target: [0.25; 4],
+            v_contactor: [0.1, 0.2, 0.3, 0.4],
         };
         let pair = ContactPair {
             target: 1,
@@ -116,9 +179,12 @@ mod tests {
             assert!(row.abs() < 1e-12, "row {i} sums to {row}");
             for j in 0..8 {
                 assert_eq!(b[8 * i + j], b[8 * j + i]);
+                if i != j {
+                    assert!(b[8 * i + j] <= 0.0, "positive entry ({i}, {j})");
+                }
             }
         }
-        // xᵀBx = g (v·x)² ≥ 0; heat between uniform bodies at 1 and 0:
+        // Heat between uniform bodies at 1 and 0 is g (the same as g v vᵀ):
         let mut t = [0.0; 8];
         t[4..].copy_from_slice(&[1.0; 4]);
         let heat_into_target: f64 = -(0..4)
@@ -128,5 +194,74 @@ mod tests {
             (heat_into_target - 0.4 / 0.01).abs() < 1e-9,
             "{heat_into_target}"
         );
+    }
+
+    /// A random tet near the origin with positive volume.
+    fn random_tet(rng: &mut impl rand::Rng, scale: f64) -> [[f64; 3]; 4] {
+        loop {
+            let t: [[f64; 3]; 4] =
+                std::array::from_fn(|_| std::array::from_fn(|_| scale * rng.gen_range(-1.0..1.0)));
+            let v = crate::geometry::dot(
+                crate::geometry::sub(t[1], t[0]),
+                crate::geometry::cross(
+                    crate::geometry::sub(t[2], t[0]),
+                    crate::geometry::sub(t[3], t[0]),
+                ),
+            );
+            if v.abs() > 0.05 * scale.powi(3) {
+                return t;
+            }
+        }
+    }
+
+    #[test]
+    fn random_overlapping_pairs_give_m_matrix_blocks() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(15);
+        let mut tested = 0;
+        while tested < 2000 {
+            let a = random_tet(&mut rng, 1.0);
+            let scale_b = rng.gen_range(0.2..1.5);
+            let b = random_tet(&mut rng, scale_b);
+            if !crate::geometry::tet_tet_overlap(&a, &b) {
+                continue;
+            }
+            // Random subsets of boundary faces (at least one on one side).
+            let fa: Vec<u8> = (0..4).filter(|_| rng.gen_bool(0.5)).collect();
+            let fb: Vec<u8> = (0..4).filter(|_| rng.gen_bool(0.5)).collect();
+            let nodes = |f: &[u8]| f.iter().fold(0u8, |m, &k| m | (0b1111 & !(1 << k)));
+            let surface = tet_tet_contact_surface((&a, &fa, nodes(&fa)), (&b, &fb, nodes(&fb)));
+            if surface.area() == 0.0 {
+                continue;
+            }
+            tested += 1;
+            let pair = ContactPair {
+                target: 0,
+                contactor: 1,
+                surface,
+            };
+            let blk = local_conductance_block(&pair, 0.01);
+            let scale = pair.area() / 0.01;
+            for i in 0..8 {
+                let row: f64 = (0..8).map(|j| blk[8 * i + j]).sum();
+                assert!(row.abs() <= 1e-12 * scale, "row {i} sums to {row}");
+                for j in 0..8 {
+                    assert_eq!(blk[8 * i + j], blk[8 * j + i], "not symmetric");
+                    if i != j {
+                        assert!(
+                            blk[8 * i + j] <= 0.0,
+                            "entry ({i}, {j}) = {}",
+                            blk[8 * i + j]
+                        );
+                    }
+                }
+            }
+            // Same total conductance as the pair's S/Rc.
+            let cross: f64 = (0..4)
+                .flat_map(|i| (4..8).map(move |j| (i, j)))
+                .map(|(i, j)| -blk[8 * i + j])
+                .sum();
+            assert!((cross - scale).abs() <= 1e-12 * scale, "{cross} vs {scale}");
+        }
     }
 }

@@ -15,6 +15,12 @@ pub struct ContactSurface {
     pub w_target: [f64; 4],
     /// Same for the contactor's nodes.
     pub w_contactor: [f64; 4],
+    /// The target's temperature where the contactor's clipped faces lie:
+    /// its shape functions at their centroid, on its surface nodes (sums
+    /// to 1; equal to `w_target` when S_con = 0).
+    pub v_target: [f64; 4],
+    /// The contactor's temperature where the target's clipped faces lie.
+    pub v_contactor: [f64; 4],
 }
 
 impl ContactSurface {
@@ -27,10 +33,22 @@ impl ContactSurface {
 /// Local node indices of face `f` (opposite node f).
 const FACE_NODES: [[usize; 3]; 4] = [[1, 2, 3], [0, 2, 3], [0, 1, 3], [0, 1, 2]];
 
-/// Clip each listed boundary face of `a` by the volume of `b`: the total
-/// area, the node weights (area-weighted thirds, normalised; zero when no
-/// area) and the area-weighted centroid of the clipped polygons.
-fn side(a: &[[f64; 3]; 4], faces_a: &[u8], b: &[[f64; 3]; 4]) -> (f64, [f64; 4], [f64; 3]) {
+/// Bit i set for each local face i in `faces`.
+fn face_mask(faces: &[u8]) -> u8 {
+    faces.iter().fold(0, |m, &f| m | (1 << f))
+}
+
+/// Clip each listed boundary face of `a` by the volume of `b` (whose
+/// boundary faces are `faces_b`): the total area, the node weights
+/// (area-weighted thirds, normalised; zero when no area) and the
+/// area-weighted centroid of the clipped polygons.
+fn side(
+    a: &[[f64; 3]; 4],
+    faces_a: &[u8],
+    b: &[[f64; 3]; 4],
+    faces_b: &[u8],
+) -> (f64, [f64; 4], [f64; 3]) {
+    let mask_b = face_mask(faces_b);
     let mut s = 0.0;
     let mut w = [0.0; 4];
     let mut centroid = [0.0; 3];
@@ -42,7 +60,7 @@ fn side(a: &[[f64; 3]; 4], faces_a: &[u8], b: &[[f64; 3]; 4]) -> (f64, [f64; 4],
         if dot(n, sub(a[f as usize], tri[0])) > 0.0 {
             n = [-n[0], -n[1], -n[2]];
         }
-        let poly = face_tet_clip(&tri, n, b);
+        let poly = face_tet_clip(&tri, n, b, mask_b);
         let area = polygon_area(&poly);
         if area > 0.0 {
             s += area;
@@ -98,32 +116,110 @@ fn barycentric(t: &[[f64; 3]; 4], p: [f64; 3]) -> [f64; 4] {
     n.map(|x| x / s)
 }
 
-/// Seed 000 sec 3.1: the surface between target tet `t` (boundary faces
-/// `faces_t`, local face i opposite node i) and contactor `c`.
+/// One side of a pair: the tet's corners, its boundary faces (local face i
+/// opposite node i), and the bits of its nodes on its body's boundary.
+pub type TetSide<'a> = (&'a [[f64; 3]; 4], &'a [u8], u8);
+
+/// Seed 000 sec 3.1: the surface between target tet `t` and contactor `c`.
 ///
-/// A side whose own faces have no area inside the other tet (an interior
-/// tet, or an edge-on contact) takes its temperature where the other side's
-/// clipped faces lie: the weights are its shape functions at their centroid.
-pub fn tet_tet_contact_surface(
-    t: &[[f64; 3]; 4],
-    faces_t: &[u8],
-    c: &[[f64; 3]; 4],
-    faces_c: &[u8],
-) -> ContactSurface {
-    let (s_target, mut w_target, cen_t) = side(t, faces_t, c);
-    let (s_contactor, mut w_contactor, cen_c) = side(c, faces_c, t);
-    if s_target == 0.0 && s_contactor > 0.0 {
-        w_target = barycentric(t, cen_c);
-    }
-    if s_contactor == 0.0 && s_target > 0.0 {
-        w_contactor = barycentric(c, cen_t);
-    }
+/// A side whose own faces have no area inside the other tet (a tet that
+/// reaches the other body's face only with an edge, a corner or its
+/// interior) takes its temperature where the other side's clipped faces
+/// lie: the weights are its shape functions at their centroid, restricted
+/// to its nodes on the body's boundary (renormalised) when it has any, so
+/// that contact heat enters a body through its surface nodes, not through
+/// a node a whole element deep (with the link-per-node-pair operator of
+/// [`super::local_conductance_block`] such a node would conduct straight
+/// across the contact).
+pub fn tet_tet_contact_surface(t: TetSide, c: TetSide) -> ContactSurface {
+    let (s_target, w_target, cen_t) = side(t.0, t.1, c.0, c.1);
+    let (s_contactor, w_contactor, cen_c) = side(c.0, c.1, t.0, t.1);
+    // Each side's temperature at the other side's clipped faces; exact for
+    // the integral of a linear temperature over them (centroid rule).
+    let v_target = if s_contactor > 0.0 {
+        surface_weights(t, cen_c)
+    } else {
+        w_target
+    };
+    let v_contactor = if s_target > 0.0 {
+        surface_weights(c, cen_t)
+    } else {
+        w_contactor
+    };
     ContactSurface {
         s_target,
         s_contactor,
-        w_target,
-        w_contactor,
+        // A side without clipped faces of its own carries its heat where
+        // the other side's lie.
+        w_target: if s_target > 0.0 { w_target } else { v_target },
+        w_contactor: if s_contactor > 0.0 {
+            w_contactor
+        } else {
+            v_contactor
+        },
+        v_target,
+        v_contactor,
     }
+}
+
+/// The temperature of tet side `t` at point `p` as weights on its nodes,
+/// carried by its surface: with boundary faces, the linear interpolation
+/// on the face nearest to `p` at `p`'s projection onto it (no weight on a
+/// node inside the body); otherwise its shape functions at `p`, restricted
+/// to its nodes on the body's boundary (renormalised) when it has any.
+fn surface_weights(t: TetSide, p: [f64; 3]) -> [f64; 4] {
+    let (x, faces, boundary) = t;
+    let mut best: Option<(f64, [f64; 4])> = None;
+    for &f in faces {
+        let fl = FACE_NODES[f as usize];
+        let (w, dist) = triangle_weights([x[fl[0]], x[fl[1]], x[fl[2]]], p);
+        if best.is_none_or(|(d, _)| dist < d) {
+            let mut out = [0.0; 4];
+            for (k, &node) in fl.iter().enumerate() {
+                out[node] = w[k];
+            }
+            best = Some((dist, out));
+        }
+    }
+    if let Some((_, w)) = best {
+        return w;
+    }
+    let n = barycentric(x, p);
+    let mut w = n;
+    for (i, v) in w.iter_mut().enumerate() {
+        if boundary & (1 << i) == 0 {
+            *v = 0.0;
+        }
+    }
+    let s: f64 = w.iter().sum();
+    if s > 0.0 {
+        w.map(|v| v / s)
+    } else {
+        n
+    }
+}
+
+/// Barycentric weights (clamped to the triangle, summing to 1) of the
+/// projection of `p` onto triangle `tri`, and the distance from `p` to the
+/// clamped point.
+fn triangle_weights(tri: [[f64; 3]; 3], p: [f64; 3]) -> ([f64; 3], f64) {
+    let (e1, e2, d) = (sub(tri[1], tri[0]), sub(tri[2], tri[0]), sub(p, tri[0]));
+    let (a, b, c) = (dot(e1, e1), dot(e1, e2), dot(e2, e2));
+    let (r1, r2) = (dot(d, e1), dot(d, e2));
+    let det = a * c - b * b;
+    let mut u = (c * r1 - b * r2) / det;
+    let mut v = (a * r2 - b * r1) / det;
+    let mut w0 = 1.0 - u - v;
+    // Clamp into the triangle and renormalise (a point beyond an edge
+    // takes the nearest part of the face).
+    u = u.max(0.0);
+    v = v.max(0.0);
+    w0 = w0.max(0.0);
+    let s = u + v + w0;
+    let w = [w0 / s, u / s, v / s];
+    let q = [0, 1, 2].map(|k| tri[0][k] + w[1] * e1[k] + w[2] * e2[k]);
+    let off = sub(p, q);
+    (w, dot(off, off).sqrt())
 }
 
 #[cfg(test)]
@@ -140,8 +236,8 @@ mod tests {
         let a = corner(1.0, [0.0; 3]);
         let b = corner(1.0, [0.2, 0.1, -0.6]);
         let all = [0u8, 1, 2, 3];
-        let ab = tet_tet_contact_surface(&a, &all, &b, &all);
-        let ba = tet_tet_contact_surface(&b, &all, &a, &all);
+        let ab = tet_tet_contact_surface((&a, &all, 0b1111), (&b, &all, 0b1111));
+        let ba = tet_tet_contact_surface((&b, &all, 0b1111), (&a, &all, 0b1111));
         assert_eq!(ab.s_target, ba.s_contactor);
         assert_eq!(ab.w_target, ba.w_contactor);
         assert!((ab.area() - ba.area()).abs() < 1e-15);
@@ -161,7 +257,7 @@ mod tests {
             [0.0, 12.0, 0.01],
             [0.0, 0.0, -5.0],
         ];
-        let s = tet_tet_contact_surface(&t, &[3], &c, &[]);
+        let s = tet_tet_contact_surface((&t, &[3], 0b0111), (&c, &[], 0));
         // The whole face z = 0 (area 1/2) is inside the contactor.
         assert!((s.s_target - 0.5).abs() < 1e-12, "{}", s.s_target);
         assert_eq!(s.s_contactor, 0.0);

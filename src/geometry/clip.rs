@@ -66,24 +66,44 @@ fn tet_size(t: &[[f64; 3]; 4]) -> f64 {
 
 /// The part of triangle `tri` inside tet `tet` (seed 000 sec 3.1, Fig 3).
 ///
-/// `outward` is the unit normal pointing out of the triangle's own body.
-/// A triangle lying in one of the tet's face planes counts as inside when
-/// the two face each other (opposite normals: touching contact) and as
-/// outside when they point the same way (two surfaces side by side, as the
-/// flanks of two overlapping aligned bars), so only facing surfaces make
-/// contact area.
-pub fn face_tet_clip(tri: &[[f64; 3]; 3], outward: [f64; 3], tet: &[[f64; 3]; 4]) -> Polygon {
+/// `outward` is the normal pointing out of the triangle's own body, and bit
+/// i of `tet_boundary` is set when the tet's face i (opposite node i) lies
+/// on the boundary of the tet's body. A triangle lying in one of the tet's
+/// face planes is a tie that the rule below breaks so that every part of a
+/// boundary face counts exactly once over the other body's tets:
+/// - on a boundary face of the other body, it counts when the two face each
+///   other (opposite normals: touching contact) and not when they point the
+///   same way (two surfaces side by side, as the flanks of two overlapping
+///   aligned bars), so only facing surfaces make contact area;
+/// - on an interior face of the other body (shared by two of its tets, one
+///   on each side), it counts in the tet on the triangle's own side (behind
+///   `outward`), the one whose volume overlaps the triangle's tet, and not
+///   in the tet in front of it, which only touches it.
+pub fn face_tet_clip(
+    tri: &[[f64; 3]; 3],
+    outward: [f64; 3],
+    tet: &[[f64; 3]; 4],
+    tet_boundary: u8,
+) -> Polygon {
     let eps = 1e-12 * tet_size(tet);
     let mut poly: Polygon = tri.to_vec();
     let mut next: Polygon = Vec::with_capacity(8);
-    for (n, c) in tet_planes(tet) {
+    for (face, (n, c)) in tet_planes(tet).into_iter().enumerate() {
         if poly.is_empty() {
             break;
         }
         next.clear();
         let d: Vec<f64> = poly.iter().map(|p| dot(n, *p) - c).collect();
-        if d.iter().all(|x| x.abs() <= eps) && dot(n, outward) > 0.0 {
-            return Vec::new();
+        if d.iter().all(|x| x.abs() <= eps) {
+            // In the plane of face i: the tet lies in front of the triangle
+            // (its outward normal opposes `outward`) or behind it.
+            let in_front = dot(n, outward) < 0.0;
+            let on_boundary = tet_boundary & (1 << face) != 0;
+            if in_front != on_boundary {
+                return Vec::new();
+            }
+            // Kept whole by this plane.
+            continue;
         }
         for i in 0..poly.len() {
             let j = (i + 1) % poly.len();
@@ -106,17 +126,21 @@ pub fn face_tet_clip(tri: &[[f64; 3]; 3], outward: [f64; 3], tet: &[[f64; 3]; 4]
     poly
 }
 
-/// Area of the part of `tri` inside `tet`; the triangle's outward normal
-/// follows its vertex order (right-hand rule).
+/// Area of the part of `tri` inside `tet`, a tet whose four faces all lie
+/// on its body's boundary; the triangle's outward normal follows its vertex
+/// order (right-hand rule).
 pub fn triangle_in_tet_area(tri: &[[f64; 3]; 3], tet: &[[f64; 3]; 4]) -> f64 {
     let n = cross(sub(tri[1], tri[0]), sub(tri[2], tri[0]));
-    polygon_area(&face_tet_clip(tri, n, tet))
+    polygon_area(&face_tet_clip(tri, n, tet, 0b1111))
 }
 
 /// Whether two tets' closed volumes overlap by more than touching, by the
 /// separating axis theorem (4 + 4 face normals, 6 × 6 edge cross products).
+/// "Touching" is within 1e-12 of the smaller tet's size, no more than the
+/// coplanarity tolerance of [`face_tet_clip`] for either tet: a face that
+/// the clipping finds inside a tet is never in a pair ruled out here.
 pub fn tet_tet_overlap(a: &[[f64; 3]; 4], b: &[[f64; 3]; 4]) -> bool {
-    let eps = 1e-12 * tet_size(a).max(tet_size(b));
+    let eps = 1e-12 * tet_size(a).min(tet_size(b));
     let separated = |axis: [f64; 3]| {
         let len = dot(axis, axis).sqrt();
         if len < 1e-300 {
@@ -257,6 +281,35 @@ mod tests {
         // Just below the face: nothing.
         let below = tri.map(|p| [p[0], p[1], -1e-9]);
         assert_eq!(triangle_in_tet_area(&below, &tet), 0.0);
+    }
+
+    #[test]
+    fn face_on_a_shared_interior_face_counts_once() {
+        // Two tets of one body share the face z = 0 (face 3 of each); a
+        // triangle of another body lies in it, facing up or down.
+        let above = corner_tet(1.0);
+        let below = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, -1.0],
+        ];
+        let tri = [[0.1, 0.1, 0.0], [0.5, 0.1, 0.0], [0.1, 0.5, 0.0]];
+        let whole = polygon_area(&tri);
+        for outward in [[0.0, 0.0, 1.0], [0.0, 0.0, -1.0]] {
+            let a = polygon_area(&face_tet_clip(&tri, outward, &above, 0));
+            let b = polygon_area(&face_tet_clip(&tri, outward, &below, 0));
+            assert!((a + b - whole).abs() < 1e-15, "{a} + {b}");
+            assert!(a == 0.0 || b == 0.0, "counted twice: {a}, {b}");
+            // It counts in the tet behind the triangle (on its body's side).
+            let behind = if outward[2] > 0.0 { b } else { a };
+            assert!((behind - whole).abs() < 1e-15);
+        }
+        // The same face on the boundary (only `above` exists): facing counts,
+        // side by side does not.
+        let down = polygon_area(&face_tet_clip(&tri, [0.0, 0.0, 1.0], &above, 0b1000));
+        let up = polygon_area(&face_tet_clip(&tri, [0.0, 0.0, -1.0], &above, 0b1000));
+        assert!((down - whole).abs() < 1e-15 && up == 0.0, "{down}, {up}");
     }
 
     #[test]

@@ -50,6 +50,12 @@ pub struct Checkpoint {
     pub positions: Option<Vec<[f64; 3]>>,
     /// Velocities v^{n−½} (mechanics).
     pub velocities: Option<Vec<[f64; 3]>>,
+    /// The velocities of the substep before (mechanics), so that the
+    /// kinetic energy at the checkpoint's step, (v^{n−3/2} + v^{n−½})/2,
+    /// is the uninterrupted run's.
+    pub velocities_prev: Option<Vec<[f64; 3]>>,
+    /// Krylov iterations so far (the history's cumulative counter).
+    pub ksp_iterations: u64,
     /// Nodal temperatures.
     pub temperature: Option<Vec<f64>>,
     /// Heat account: stored, stored change, Dirichlet in, flux in, convection in.
@@ -181,6 +187,10 @@ impl Checkpoint {
         if let Some(v) = &self.velocities {
             put(&file, path, "state/velocities", &flat3(v), 3)?;
         }
+        if let Some(v) = &self.velocities_prev {
+            put(&file, path, "state/velocities_prev", &flat3(v), 3)?;
+        }
+        put(&file, path, "state/counters", &[self.ksp_iterations], 1)?;
         if let Some(t) = &self.temperature {
             put(&file, path, "state/temperature", t, 1)?;
         }
@@ -252,6 +262,15 @@ impl Checkpoint {
             body_elems: rows::<u32, 2>(get(&file, path, "bodies/elems", 2)?),
             positions: opt3("state/positions")?,
             velocities: opt3("state/velocities")?,
+            velocities_prev: opt3("state/velocities_prev")?,
+            ksp_iterations: if file.link_exists("state/counters") {
+                get::<u64>(&file, path, "state/counters", 1)?
+                    .first()
+                    .copied()
+                    .unwrap_or(0)
+            } else {
+                0
+            },
             temperature: if file.link_exists("state/temperature") {
                 Some(get(&file, path, "state/temperature", 1)?)
             } else {
@@ -334,6 +353,8 @@ mod tests {
             body_elems: vec![[0, 1]],
             positions: Some(vec![[0.1, 0.2, 0.3]; 4]),
             velocities: Some(vec![[-1.0, 2.0, 1e-300]; 4]),
+            velocities_prev: Some(vec![[-1.5, 2.5, -0.0]; 4]),
+            ksp_iterations: 123_456,
             temperature: Some(vec![1.0, 2.0, 3.0, f64::MIN_POSITIVE]),
             heat: [1.0, 2.0, 3.0, 4.0, 5.0],
             dissipated: 0.5,

@@ -361,6 +361,188 @@ impl TimeSeriesWriter {
         }
     }
 
+    /// Collective. Reopens the series `<dir>/<stem>.h5` of an earlier run to
+    /// continue it (a restart in place): keeps the steps with times up to
+    /// `keep_until` (the checkpoint's time), removes the later ones and
+    /// returns a writer that appends after them. The file must hold the same
+    /// mesh in the same row order (`mesh` and this rank's original node ids
+    /// `node_ids` are compared with the file's rows): a series written with
+    /// another partition, for example on another number of ranks, is an
+    /// error saying so. Static fields are kept as they are.
+    pub fn reopen(
+        comm: &SimpleCommunicator,
+        dir: &Path,
+        stem: &str,
+        mesh: &MeshPart,
+        node_ids: &[i32],
+        keep_until: f64,
+    ) -> Result<Self, IoError> {
+        let comm = comm.duplicate();
+        let rank = comm.rank();
+        let (h5_path, xdmf_path) = output_paths(dir, stem);
+        let nodes = Rows {
+            global: mesh.global_nodes,
+            offset: mesh.node_offset,
+            count: mesh.coords.len() as u64,
+        };
+        let cells = Rows {
+            global: mesh.global_cells,
+            offset: mesh.cell_offset,
+            count: mesh.cells.len() as u64,
+        };
+        let path = h5_path.clone();
+        let h5err = |what: &str| {
+            let what = what.to_string();
+            let path = path.clone();
+            move |e| IoError::hdf5(&path, what, e)
+        };
+        let opened = File::with_options()
+            .with_fapl(|p| p.mpio(comm.as_raw(), None))
+            .open_rw(&h5_path)
+            .map_err(h5err("reopening the series to continue it"));
+        let file = agree(&comm, &h5_path, "reopening the series", opened)?;
+        // Same mesh, same rows: this rank's block of node ids and cells.
+        let check = (|| -> Result<Option<String>, IoError> {
+            let coords = file
+                .dataset("mesh/coordinates")
+                .map_err(h5err("opening /mesh/coordinates"))?;
+            let topo = file
+                .dataset("mesh/topology")
+                .map_err(h5err("opening /mesh/topology"))?;
+            if coords.shape() != [nodes.global as usize, 3]
+                || topo.shape() != [cells.global as usize, 4]
+            {
+                return Ok(Some(format!(
+                    "it holds a mesh of {:?} nodes and {:?} cells, this run {} and {}",
+                    coords.shape(),
+                    topo.shape(),
+                    nodes.global,
+                    cells.global
+                )));
+            }
+            let ids = file
+                .dataset("static/node/node_id")
+                .and_then(|d| {
+                    d.read_slice_1d::<i32, _>(
+                        nodes.offset as usize..(nodes.offset + nodes.count) as usize,
+                    )
+                })
+                .map_err(h5err("reading /static/node/node_id"))?;
+            let t = topo
+                .read_slice_2d::<u32, _>((
+                    cells.offset as usize..(cells.offset + cells.count) as usize,
+                    ..,
+                ))
+                .map_err(h5err("reading /mesh/topology"))?;
+            let same_cells = t.as_slice().is_some_and(|v| v == mesh.cells.as_flattened());
+            if ids.as_slice() != Some(node_ids) || !same_cells {
+                return Ok(Some(
+                    "its rows are in another order (another partition, or another number of ranks)"
+                        .into(),
+                ));
+            }
+            Ok(None)
+        })();
+        let check = agree(&comm, &h5_path, "checking the series to continue", check)?;
+        let mismatch = i32::from(check.is_some());
+        let mut any = 0;
+        comm.all_reduce_into(&mismatch, &mut any, SystemOperation::max());
+        if any != 0 {
+            return Err(IoError::invalid(
+                &h5_path,
+                format!(
+                    "cannot continue this series in place: {}; restart into another output \
+                     directory (--output), or on the rank count that wrote it",
+                    check.unwrap_or_else(|| "another rank's rows differ".into())
+                ),
+            ));
+        }
+        let built = (|| -> Result<Inner, IoError> {
+            let time_ds = file.dataset("time").map_err(h5err("opening /time"))?;
+            let times: Vec<f64> = time_ds.read_raw().map_err(h5err("reading /time"))?;
+            let tol = 1e-9 * keep_until.abs().max(1.0);
+            let keep = times.iter().take_while(|&&t| t <= keep_until + tol).count();
+            let group = |name: &str| file.group(name).map_err(h5err(&format!("opening /{name}")));
+            let static_groups = [group("static/node")?, group("static/cell")?];
+            let field_groups = [group("fields/node")?, group("fields/cell")?];
+            let mut statics = Vec::new();
+            for (g, center) in static_groups.iter().zip([Center::Node, Center::Cell]) {
+                for name in g.member_names().map_err(h5err("listing static fields"))? {
+                    statics.push((name, center));
+                }
+            }
+            let mut slots = Vec::new();
+            for (g, center) in field_groups.iter().zip([Center::Node, Center::Cell]) {
+                for name in g.member_names().map_err(h5err("listing fields"))? {
+                    let fg = g
+                        .group(&name)
+                        .map_err(h5err(&format!("opening field {name}")))?;
+                    let first = fg
+                        .dataset(&xdmf::step_name(0))
+                        .map_err(h5err(&format!("opening field {name}, step 0")))?;
+                    let shape = first.shape();
+                    let components = if shape.len() == 1 { 1 } else { shape[1] };
+                    // Drop the steps after the checkpoint.
+                    for k in keep..times.len() {
+                        let step = xdmf::step_name(k);
+                        if fg.link_exists(&step) {
+                            fg.unlink(&step)
+                                .map_err(h5err(&format!("removing field {name} step {k}")))?;
+                        }
+                    }
+                    slots.push(FieldSlot {
+                        desc: FieldDesc {
+                            name,
+                            center,
+                            components,
+                        },
+                        group: fg,
+                    });
+                }
+            }
+            time_ds.resize(keep).map_err(h5err("truncating /time"))?;
+            let xfer = CollectiveXfer::new().map_err(|call| IoError::Hdf5Call {
+                path: h5_path.clone(),
+                call,
+                what: "creating a transfer property list".into(),
+            })?;
+            let fields = (!slots.is_empty()).then_some(slots);
+            Ok(Inner {
+                rank,
+                xdmf_path: xdmf_path.clone(),
+                nodes,
+                cells,
+                xfer,
+                model: XdmfModel {
+                    h5_name: format!("{stem}.h5"),
+                    nodes: nodes.global,
+                    cells: cells.global,
+                    statics,
+                    fields: fields.as_ref().map_or(Vec::new(), |f: &Vec<FieldSlot>| {
+                        f.iter().map(|s| s.desc.clone()).collect()
+                    }),
+                    times: times[..keep].to_vec(),
+                },
+                fields,
+                time_ds,
+                static_groups,
+                field_groups,
+                file: file.clone(),
+                usable: true,
+                h5_path: h5_path.clone(),
+                comm: comm.duplicate(),
+            })
+        })();
+        let mut inner = agree(
+            &comm,
+            &h5_path,
+            "truncating the series to the checkpoint",
+            built,
+        )?;
+        inner.publish("continuing the series")?;
+        Ok(Self { inner: Some(inner) })
+    }
+
     fn inner(&mut self) -> Result<&mut Inner, IoError> {
         match self.inner.as_mut() {
             Some(inner) if inner.usable => Ok(inner),

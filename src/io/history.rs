@@ -80,6 +80,73 @@ impl HistoryWriter {
         })
     }
 
+    /// Continues the CSV file at `path` written by an earlier run with the
+    /// same `header`: keeps its rows whose time (the column `time_column`)
+    /// is at most `keep_until`, drops the later ones (the file is rewritten
+    /// atomically), and appends after them. A different header is an error.
+    /// Not collective; only world rank 0 touches the file.
+    pub fn reopen(
+        path: &Path,
+        header: &[&str],
+        time_column: usize,
+        keep_until: f64,
+    ) -> Result<Self, IoError> {
+        let line: String = header
+            .iter()
+            .map(|h| csv_cell(h))
+            .collect::<Vec<_>>()
+            .join(",");
+        let file = if world_rank() == 0 {
+            let text = std::fs::read_to_string(path)
+                .map_err(|e| IoError::io(path, "reading the history to continue it", e))?;
+            let mut lines = text.lines();
+            if lines.next() != Some(line.as_str()) {
+                return Err(IoError::invalid(
+                    path,
+                    "cannot continue this history: its columns differ from this run's",
+                ));
+            }
+            let tol = 1e-9 * keep_until.abs().max(1.0);
+            let mut kept = format!("{line}\n");
+            for row in lines {
+                let cells: Vec<&str> = row.split(',').collect();
+                let whole =
+                    cells.len() == header.len() && cells.iter().all(|c| c.parse::<f64>().is_ok());
+                let t: Option<f64> = cells
+                    .get(time_column)
+                    .filter(|_| whole)
+                    .and_then(|v| v.parse().ok());
+                match t {
+                    Some(t) if t <= keep_until + tol => {
+                        kept.push_str(row);
+                        kept.push('\n');
+                    }
+                    // A later row, or a row cut short by a kill: dropped.
+                    _ => {}
+                }
+            }
+            let mut tmp = path.as_os_str().to_owned();
+            tmp.push(".tmp");
+            let tmp = PathBuf::from(tmp);
+            std::fs::write(&tmp, kept)
+                .and_then(|()| std::fs::rename(&tmp, path))
+                .map_err(|e| IoError::io(path, "rewriting the history up to the checkpoint", e))?;
+            Some(
+                std::fs::OpenOptions::new()
+                    .append(true)
+                    .open(path)
+                    .map_err(|e| IoError::io(path, "opening the history to append", e))?,
+            )
+        } else {
+            None
+        };
+        Ok(Self {
+            path: path.to_path_buf(),
+            columns: header.len(),
+            file,
+        })
+    }
+
     /// Appends one row; `values.len()` must equal the number of header columns.
     pub fn append(&mut self, values: &[f64]) -> Result<(), IoError> {
         if values.len() != self.columns {

@@ -123,9 +123,9 @@ pub enum MeshError {
     /// An element has negative signed volume (nodes 2 and 3 swapped, or a
     /// mesher using the opposite orientation convention).
     #[error(
-        "element {elem}{} is inverted: signed volume {volume:.3e} m^3 (nodes {})",
+        "element {elem}{} is inverted: signed volume {volume:.3e} m^3 ({})",
         tag_note(.gmsh_tag),
-        list_nodes(.nodes)
+        list_nodes(.nodes, .gmsh_nodes)
     )]
     Inverted {
         /// 0-based element index.
@@ -136,13 +136,15 @@ pub enum MeshError {
         volume: f64,
         /// Node indices of the element.
         nodes: [u32; 4],
+        /// Gmsh node tags of the element, when imported.
+        gmsh_nodes: Option<[u64; 4]>,
     },
 
     /// An element has (nearly) zero volume: |V| <= 1e-12 * (longest edge)^3.
     #[error(
-        "element {elem}{} is degenerate: volume {volume:.3e} m^3, longest edge {longest_edge:.3e} m (nodes {})",
+        "element {elem}{} is degenerate: volume {volume:.3e} m^3, longest edge {longest_edge:.3e} m ({})",
         tag_note(.gmsh_tag),
-        list_nodes(.nodes)
+        list_nodes(.nodes, .gmsh_nodes)
     )]
     Degenerate {
         /// 0-based element index.
@@ -155,6 +157,8 @@ pub enum MeshError {
         longest_edge: f64,
         /// Node indices of the element.
         nodes: [u32; 4],
+        /// Gmsh node tags of the element, when imported.
+        gmsh_nodes: Option<[u64; 4]>,
     },
 
     /// `body.len() != tets.len()`.
@@ -215,6 +219,11 @@ fn tag_note(tag: &Option<u64>) -> String {
     }
 }
 
-fn list_nodes(nodes: &[u32; 4]) -> String {
-    format!("{},{},{},{}", nodes[0], nodes[1], nodes[2], nodes[3])
+/// The element's nodes: Gmsh node tags for an imported mesh (the numbers
+/// the user's file shows), else 0-based node indices.
+fn list_nodes(nodes: &[u32; 4], gmsh: &Option<[u64; 4]>) -> String {
+    match gmsh {
+        Some(t) => format!("gmsh node tags {},{},{},{}", t[0], t[1], t[2], t[3]),
+        None => format!("nodes {},{},{},{}", nodes[0], nodes[1], nodes[2], nodes[3]),
+    }
 }

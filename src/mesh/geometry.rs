@@ -145,7 +145,9 @@ impl TetMesh {
 
     /// [`TetMesh::validate`] with optional Gmsh element tags (indexed like
     /// `tets`) to be named in element errors.
-    pub(crate) fn validate_impl(&self, gmsh_tags: Option<&[u64]>) -> Result<(), MeshError> {
+    /// `gmsh`: the Gmsh element tags and node tags of an imported mesh, so
+    /// that errors name the element and its nodes as the file does.
+    pub(crate) fn validate_impl(&self, gmsh: Option<(&[u64], &[u64])>) -> Result<(), MeshError> {
         if self.body.len() != self.tets.len() {
             return Err(MeshError::BodyLength {
                 body_len: self.body.len(),
@@ -164,7 +166,16 @@ impl TetMesh {
             });
         }
         let n = self.nodes.len();
-        let tag = |e: usize| gmsh_tags.and_then(|t| t.get(e).copied());
+        let tag = |e: usize| gmsh.and_then(|(t, _)| t.get(e).copied());
+        let node_tags = |t: &[u32; 4]| {
+            gmsh.and_then(|(_, nt)| {
+                let mut out = [0u64; 4];
+                for (o, &v) in out.iter_mut().zip(t) {
+                    *o = *nt.get(v as usize)?;
+                }
+                Some(out)
+            })
+        };
         for (e, t) in self.tets.iter().enumerate() {
             if let Some(&bad) = t.iter().find(|&&v| v as usize >= n) {
                 return Err(MeshError::NodeOutOfRange {
@@ -187,6 +198,7 @@ impl TetMesh {
                     volume: v,
                     longest_edge: lmax,
                     nodes: *t,
+                    gmsh_nodes: node_tags(t),
                 });
             }
             if v < 0.0 {
@@ -195,6 +207,7 @@ impl TetMesh {
                     gmsh_tag: tag(e),
                     volume: v,
                     nodes: *t,
+                    gmsh_nodes: node_tags(t),
                 });
             }
         }
@@ -332,9 +345,13 @@ mod tests {
         let msg = err.to_string();
         assert!(msg.contains("element 0 is inverted"), "{msg}");
         assert!(msg.contains("-1.667e-1"), "{msg}");
-        let tagged = m.validate_impl(Some(&[123])).unwrap_err().to_string();
+        let tagged = m
+            .validate_impl(Some((&[123], &[11, 12, 13, 14])))
+            .unwrap_err()
+            .to_string();
         assert!(
-            tagged.contains("element 0 (gmsh tag 123) is inverted"),
+            tagged.contains("element 0 (gmsh tag 123) is inverted")
+                && tagged.contains("gmsh node tags 11,12,14,13"),
             "{tagged}"
         );
         assert_eq!(m.fix_orientation(), 1);

@@ -634,6 +634,7 @@ impl<'a> Reader<'a> {
         }
         let mut new_id = vec![u32::MAX; all.len()];
         let mut nodes = Vec::new();
+        let mut node_tags = Vec::new();
         for (i, id) in new_id.iter_mut().enumerate() {
             if used[i] {
                 let (tag, x) = all[i];
@@ -646,6 +647,7 @@ impl<'a> Reader<'a> {
                 *id = u32::try_from(nodes.len())
                     .map_err(|_| MeshError::TooLarge(format!("more than {} nodes", u32::MAX)))?;
                 nodes.push(x);
+                node_tags.push(tag);
             }
         }
         let tets: Vec<[u32; 4]> = raw_tets
@@ -664,7 +666,7 @@ impl<'a> Reader<'a> {
         if opts.fix_orientation {
             mesh.fix_orientation();
         }
-        mesh.validate_impl(Some(&tet_tags))
+        mesh.validate_impl(Some((&tet_tags, &node_tags)))
             .map_err(|e| MeshError::InFile {
                 path: self.path.to_path_buf(),
                 source: Box::new(e),

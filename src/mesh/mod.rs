@@ -18,8 +18,8 @@
 //! - [`gmsh`]: MSH 4.1 import (ASCII and binary, [`gmsh::read_msh`]) and
 //!   ASCII export ([`gmsh::write_msh_ascii`]).
 //! - [`nut`]: structured hexagonal-nut particle ([`nut::nut_mesh`], the
-//!   192-tet default of seed 000 sec 6 [`nut::nut_mesh_default`]; template
-//!   file `scenarios/meshes/nut-192.msh`).
+//!   144-tet default for seed 000 sec 6 [`nut::nut_mesh_default`]; template
+//!   file `scenarios/meshes/nut-144.msh`).
 //! - [`container`]: open-top cylindrical cup ([`container::container_mesh`]).
 //! - `closed`: [`TetMesh::check_closed_volume`], the single closed solid
 //!   check for particle templates.

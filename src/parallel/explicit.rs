@@ -86,6 +86,19 @@ struct Candidate {
     reduced_mass: f64,
 }
 
+/// The motion a checkpoint saves, every node in the original numbering.
+#[derive(Debug, Clone, Copy)]
+pub struct SavedMotion<'a> {
+    /// Positions x^n.
+    pub positions: &'a [[f64; 3]],
+    /// Velocities of the last substep.
+    pub velocities: &'a [[f64; 3]],
+    /// Velocities of the substep before, when saved.
+    pub velocities_prev: Option<&'a [[f64; 3]]>,
+    /// Energy dissipated so far (J).
+    pub dissipated: f64,
+}
+
 /// Energies and momentum summed over the ranks.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct MechanicsState {
@@ -1445,6 +1458,28 @@ impl ExplicitDomain {
         }
     }
 
+    /// Collective. The velocities of the substep before the last (original
+    /// numbering), `None` before the first substep (or right after a
+    /// restore that had none).
+    pub fn gather_velocities_prev(&self, comm: &SimpleCommunicator) -> Option<Vec<[f64; 3]>> {
+        let mut have = i32::from(self.v_prev.len() >= self.n_owned);
+        let mine = have;
+        comm.all_reduce_into(&mine, &mut have, SystemOperation::min());
+        if have == 0 {
+            return None;
+        }
+        let owned: Vec<f64> = self.v_prev[..self.n_owned]
+            .iter()
+            .flat_map(|v| [v.x, v.y, v.z])
+            .collect();
+        let all = super::all_gather_f64(comm, &owned);
+        let mut out = vec![[0.0; 3]; self.x_all.len()];
+        for (g, c) in all.chunks_exact(3).enumerate() {
+            out[self.orig_of_global[g] as usize] = [c[0], c[1], c[2]];
+        }
+        Some(out)
+    }
+
     /// Collective. Velocities of every node (original numbering).
     pub fn gather_velocities(&self, comm: &SimpleCommunicator) -> Vec<[f64; 3]> {
         let owned = self.velocity();
@@ -1456,7 +1491,7 @@ impl ExplicitDomain {
         out
     }
 
-    /// Collective. Continue from a saved state: positions and velocities
+    /// Collective. Continue from a saved state ([`SavedMotion`]): positions and velocities
     /// of every node (original numbering) and the energy dissipated so
     /// far. Contact candidates are detected afresh; forces depend only on
     /// the overlapping pairs and are summed in a fixed order, so the
@@ -1466,10 +1501,14 @@ impl ExplicitDomain {
         comm: &SimpleCommunicator,
         model: &Model,
         layout: &Layout,
-        positions: &[[f64; 3]],
-        velocities: &[[f64; 3]],
-        dissipated: f64,
+        saved: SavedMotion,
     ) -> Result<()> {
+        let SavedMotion {
+            positions,
+            velocities,
+            velocities_prev,
+            dissipated,
+        } = saved;
         self.x_all.copy_from_slice(positions);
         for (i, &n) in self.node_of_local.iter().enumerate() {
             self.x[i] = Vector3::from(positions[n as usize]);
@@ -1477,6 +1516,13 @@ impl ExplicitDomain {
         }
         self.dissipated = if comm.rank() == 0 { dissipated } else { 0.0 };
         self.v_prev.clear();
+        if let Some(vp) = velocities_prev {
+            self.v_prev.extend(
+                self.node_of_local[..self.n_owned]
+                    .iter()
+                    .map(|&n| Vector3::from(vp[n as usize])),
+            );
+        }
         self.detect(comm, model, layout)?;
         self.redetect = false;
         Ok(())

@@ -172,6 +172,89 @@ impl<'p> Matrix<'p> {
         petsc_call!(MatGetRowSum(self.raw, v.as_raw()))
     }
 
+    /// Global rows `[start, end)` owned by this rank.
+    pub fn ownership_range(&self) -> Result<(PetscInt, PetscInt)> {
+        let (mut lo, mut hi) = (0, 0);
+        petsc_call!(MatGetOwnershipRange(self.raw, &mut lo, &mut hi))?;
+        Ok((lo, hi))
+    }
+
+    /// Collective. The diagonal into `v`.
+    pub fn diagonal(&self, v: &mut Vector) -> Result<()> {
+        petsc_call!(MatGetDiagonal(self.raw, v.as_raw()))
+    }
+
+    /// Collective. The transpose, as a new matrix.
+    pub fn transpose(&self) -> Result<Self> {
+        let mut raw: ffi::Mat = std::ptr::null_mut();
+        petsc_call!(MatTranspose(
+            self.raw,
+            ffi::MatReuse::MAT_INITIAL_MATRIX,
+            &mut raw
+        ))?;
+        Ok(Matrix {
+            raw,
+            _petsc: PhantomData,
+        })
+    }
+
+    /// The stored columns (global) and values of owned row `r`, copied out.
+    fn row(&self, r: PetscInt) -> Result<(Vec<PetscInt>, Vec<f64>)> {
+        let mut n: PetscInt = 0;
+        let mut cols: *const PetscInt = std::ptr::null();
+        let mut vals: *const f64 = std::ptr::null();
+        petsc_call!(MatGetRow(self.raw, r, &mut n, &mut cols, &mut vals))?;
+        // SAFETY: MatGetRow returned n valid entries in both arrays,
+        // readable until MatRestoreRow; they are copied out before that.
+        let out = unsafe {
+            (
+                std::slice::from_raw_parts(cols, n as usize).to_vec(),
+                std::slice::from_raw_parts(vals, n as usize).to_vec(),
+            )
+        };
+        petsc_call!(MatRestoreRow(self.raw, r, &mut n, &mut cols, &mut vals))?;
+        Ok(out)
+    }
+
+    /// Collective. Rewrite the stored entries of every owned row: `f(row,
+    /// cols, vals, other)` sees the row's stored columns (global, ascending)
+    /// and values, and `other`'s values of the same row at those columns
+    /// (0 where `other` stores none), and may change `vals` in place; the
+    /// pattern stays. The matrix is reassembled afterwards.
+    pub fn update_owned_rows(
+        &mut self,
+        other: &Matrix,
+        mut f: impl FnMut(PetscInt, &[PetscInt], &mut [f64], &[f64]),
+    ) -> Result<()> {
+        let (lo, hi) = self.ownership_range()?;
+        let mut changed: Vec<(PetscInt, Vec<PetscInt>, Vec<f64>)> = Vec::new();
+        for r in lo..hi {
+            let (c, v) = self.row(r)?;
+            let (oc, ov) = other.row(r)?;
+            let aligned: Vec<f64> = c
+                .iter()
+                .map(|col| oc.binary_search(col).map_or(0.0, |k| ov[k]))
+                .collect();
+            let mut v2 = v.clone();
+            f(r, &c, &mut v2, &aligned);
+            if v2 != v {
+                changed.push((r, c, v2));
+            }
+        }
+        for (r, c, v) in &changed {
+            petsc_call!(MatSetValues(
+                self.raw,
+                1,
+                r,
+                c.len() as PetscInt,
+                c.as_ptr(),
+                v.as_ptr(),
+                ffi::InsertMode::INSERT_VALUES
+            ))?;
+        }
+        self.assemble()
+    }
+
     /// Collective. Zero the given rows (global indices owned by this rank)
     /// and put `diag` on their diagonal.
     pub fn zero_rows(&mut self, rows: &[PetscInt], diag: f64) -> Result<()> {

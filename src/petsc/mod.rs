@@ -44,6 +44,9 @@ pub type Result<T> = std::result::Result<T, PetscError>;
 /// `PetscFinalize` (which prints `-log_view` and `-malloc_dump` reports).
 pub struct Petsc {
     comm: ffi::MPI_Comm,
+    /// Options fdem put into the database as its own defaults (not the
+    /// user's): not reported by [`Petsc::unknown_options`] when unused.
+    own_defaults: std::cell::RefCell<Vec<String>>,
     // Not Send/Sync: PETSc is used from the thread that initialised it.
     _not_send: PhantomData<*const ()>,
 }
@@ -93,6 +96,7 @@ impl Petsc {
         ))?;
         Ok(Petsc {
             comm: world.as_raw(),
+            own_defaults: Default::default(),
             _not_send: PhantomData,
         })
     }
@@ -110,6 +114,71 @@ impl Petsc {
         Ok(unsafe { CStr::from_ptr(buf.as_ptr()) }
             .to_string_lossy()
             .into_owned())
+    }
+
+    /// The options in the global database that no PETSc object has read
+    /// so far (PETSc's `-options_left` list): `(name without the dash,
+    /// value)`.
+    pub fn unused_options(&self) -> Result<Vec<(String, Option<String>)>> {
+        let mut n: PetscInt = 0;
+        let mut names: *mut *mut c_char = std::ptr::null_mut();
+        let mut values: *mut *mut c_char = std::ptr::null_mut();
+        petsc_call!(PetscOptionsLeftGet(
+            std::ptr::null_mut(),
+            &mut n,
+            &mut names,
+            &mut values
+        ))?;
+        let mut out = Vec::with_capacity(n as usize);
+        for i in 0..n as usize {
+            // SAFETY: PetscOptionsLeftGet returned n names and n values
+            // (a value may be null), valid until PetscOptionsLeftRestore.
+            let (name, value) = unsafe {
+                let name = CStr::from_ptr(*names.add(i)).to_string_lossy().into_owned();
+                let v = *values.add(i);
+                let value =
+                    (!v.is_null()).then(|| CStr::from_ptr(v).to_string_lossy().into_owned());
+                (name, value)
+            };
+            out.push((name.trim_start_matches('-').to_string(), value));
+        }
+        petsc_call!(PetscOptionsLeftRestore(
+            std::ptr::null_mut(),
+            &mut n,
+            &mut names,
+            &mut values
+        ))?;
+        Ok(out)
+    }
+
+    /// Collective. The options no PETSc object will read, by name: those
+    /// [`Petsc::unused_options`] lists after set-up, less the ones a
+    /// `KSPSolve` reads only when it runs (`-ksp_view*`,
+    /// `-ksp_converged_*`, `-ksp_compute_*`, `-ksp_plot_*`).
+    pub fn unknown_options(&self) -> Result<Vec<String>> {
+        let read_by_solve = |n: &str| {
+            ["ksp_view", "ksp_converged_", "ksp_compute_", "ksp_plot_"]
+                .iter()
+                .any(|p| n.starts_with(p))
+        };
+        Ok(self
+            .unused_options()?
+            .into_iter()
+            .filter(|(n, _)| !read_by_solve(n) && !self.own_defaults.borrow().contains(n))
+            .map(|(n, v)| match v {
+                Some(v) => format!("-{n} {v}"),
+                None => format!("-{n}"),
+            })
+            .collect())
+    }
+
+    /// [`Petsc::set_default_option`] for a default of fdem's own (a solver
+    /// choice's), which may go unused when the user picks another solver.
+    pub fn set_own_default_option(&self, name: &str, value: Option<&str>) -> Result<()> {
+        self.own_defaults
+            .borrow_mut()
+            .push(name.trim_start_matches('-').to_string());
+        self.set_default_option(name, value)
     }
 
     /// Set an option in the global options database unless the command line

@@ -125,6 +125,13 @@ impl<'p> Vector<'p> {
         Ok(s)
     }
 
+    /// Collective. The smallest entry.
+    pub fn min(&self) -> Result<f64> {
+        let mut v = 0.0;
+        petsc_call!(VecMin(self.raw, std::ptr::null_mut(), &mut v))?;
+        Ok(v)
+    }
+
     /// Collective. Max-abs norm.
     pub fn norm_inf(&self) -> Result<f64> {
         let mut s = 0.0;

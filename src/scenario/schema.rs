@@ -51,6 +51,9 @@ pub struct ContactSpec {
     /// Temperature drop: `local` (contact faces, default) or `average` (bodies' means).
     #[serde(default)]
     pub delta_t: crate::contact::DeltaT,
+    /// Local-ΔT block form: `links` (default, bounded) or `rank_one`.
+    #[serde(default)]
+    pub operator: crate::contact::ContactOperator,
     /// Re-run detection every N steps (0: once, at the start).
     #[serde(default)]
     pub every: u64,
@@ -326,7 +329,7 @@ pub enum MeshSpec {
     },
     /// A hexagonal nut with a round hole, axis along z, centred on
     /// `center` (named sets outer, hole, zmin, zmax). The defaults are the
-    /// 192-tet nut of seed 000 Fig 17 (see `mesh::nut`).
+    /// 144-tet nut for seed 000 Fig 17 (see `mesh::nut`).
     Nut {
         /// Centroid (m).
         #[serde(default)]
@@ -404,11 +407,27 @@ fn default_one() -> usize {
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum CapacityKind {
-    /// Consistent mass matrix (seed 000 eq 15).
-    #[default]
+    /// Consistent mass matrix (seed 000 eq 15): undershoots where a step
+    /// is short against h²/α (README, "Bounds").
     Consistent,
-    /// Row-sum lumped (diagonal).
+    /// Row-sum lumped (diagonal), the default: with θ = 1 and a mesh
+    /// without obtuse couplings (or `conduction = "bounded"`) every
+    /// temperature stays within its initial and boundary values.
+    #[default]
     Lumped,
+}
+
+/// How the conduction (and convection) operator is formed.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ConductionKind {
+    /// The Galerkin matrices as assembled (seed 000 eqs 16–17).
+    #[default]
+    Galerkin,
+    /// Positive couplings of the assembled operator moved to its diagonal
+    /// (discrete upwinding): the discrete maximum principle holds on any
+    /// mesh with lumped capacity (`thermal::monotone`).
+    Bounded,
 }
 
 /// The thermal problem.
@@ -421,6 +440,9 @@ pub struct ThermalSpec {
     /// Capacity matrix form.
     #[serde(default)]
     pub capacity: CapacityKind,
+    /// Conduction operator form.
+    #[serde(default)]
+    pub conduction: ConductionKind,
     /// Boundary conditions and sources.
     #[serde(default)]
     pub bc: Vec<ThermalBcSpec>,
@@ -438,6 +460,7 @@ impl Default for ThermalSpec {
         ThermalSpec {
             theta: default_theta(),
             capacity: CapacityKind::default(),
+            conduction: ConductionKind::default(),
             bc: Vec::new(),
             initial: Vec::new(),
         }
@@ -738,6 +761,16 @@ impl Scenario {
         let th = thermal.theta;
         if !(0.0..=1.0).contains(&th) {
             return bad("thermal.theta", format!("must be in [0, 1], got {th}"));
+        }
+        if thermal.conduction == ConductionKind::Bounded
+            && thermal.capacity == CapacityKind::Consistent
+        {
+            return bad(
+                "thermal.conduction",
+                "\"bounded\" needs thermal.capacity = \"lumped\" (a consistent capacity \
+                 couples neighbouring nodes positively and cannot keep the bounds)"
+                    .into(),
+            );
         }
         if self.materials.is_empty() {
             return bad("materials", "at least one material is needed".into());

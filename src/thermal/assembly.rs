@@ -2,11 +2,13 @@
 //! element blocks of its owned elements (and the face terms of faces whose
 //! first node it owns) into PETSc matrices with global (PETSc) numbering.
 
-use crate::contact::{local_conductance_block, ContactSet, DeltaT};
+use crate::contact::{
+    local_conductance_block, rank_one_conductance_block, ContactOperator, ContactSet, DeltaT,
+};
 use crate::model::Model;
 use crate::parallel::Layout;
 use crate::petsc::{Matrix, Petsc, Result, Vector};
-use crate::scenario::CapacityKind;
+use crate::scenario::{CapacityKind, ConductionKind};
 
 use super::element;
 
@@ -85,6 +87,10 @@ pub fn assemble<'p>(
     contacts: &ContactSet,
 ) -> Result<Operators<'p>> {
     let mode = model.contact.as_ref().map_or(DeltaT::Local, |c| c.delta_t);
+    let block = match model.contact.as_ref().map(|c| c.operator) {
+        Some(ContactOperator::RankOne) => rank_one_conductance_block,
+        _ => local_conductance_block,
+    };
     let extra = contact_couplings(model, contacts, mode);
     let (d_nnz, o_nnz) = layout.preallocation(&model.mesh, &extra);
     let owned = layout.num_owned();
@@ -145,7 +151,7 @@ pub fn assemble<'p>(
                     idx[i] = g(model.mesh.tets[t][i]);
                     idx[4 + i] = g(model.mesh.tets[c][i]);
                 }
-                stiffness.add_values(&idx, &idx, &local_conductance_block(p, rc))?;
+                stiffness.add_values(&idx, &idx, &block(p, rc))?;
                 capacity.add_values(&idx, &idx, &[0.0; 64])?;
             }
         }
@@ -180,12 +186,22 @@ pub fn assemble<'p>(
                     let vals: Vec<f64> = a.iter().map(|x| w * x).collect();
                     stiffness.add_values(&[g(n)], &gcols, &vals)?;
                     capacity.add_values(&[g(n)], &gcols, &zeros)?;
+                    // Explicit zeros at the transposed places: one symmetric
+                    // pattern for every operator (and for the bounded form).
+                    stiffness.add_values(&gcols, &[g(n)], &zeros)?;
+                    capacity.add_values(&gcols, &[g(n)], &zeros)?;
                 }
             }
         }
     }
     capacity.assemble()?;
     stiffness.assemble()?;
+    if model.thermal.conduction == ConductionKind::Bounded {
+        let transposed = stiffness.transpose()?;
+        stiffness.update_owned_rows(&transposed, |r, c, v, t| {
+            super::monotone::upwind_row(r, c, v, t);
+        })?;
+    }
     load_flux.assemble()?;
     load_convection.assemble()?;
     let mut load = load_flux.duplicate()?;

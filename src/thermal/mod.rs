@@ -3,6 +3,8 @@
 
 pub mod assembly;
 pub mod element;
+pub mod limits;
+pub mod monotone;
 pub mod system;
 
 pub use system::{SolverChoice, StepStats, ThermalSystem};

@@ -21,10 +21,11 @@
 //! and the stored heat from M, so the two agree to solver tolerance.
 
 use crate::contact::{ContactSet, DeltaT};
+use crate::error::Error;
 use crate::model::Model;
 use crate::parallel::Layout;
 use crate::petsc::{Ksp, Matrix, Petsc, Result, Vector};
-use crate::scenario::{CapacityKind, SolverSpec};
+use crate::scenario::{CapacityKind, ConductionKind, SolverSpec};
 
 use super::assembly::{assemble, Operators};
 
@@ -166,7 +167,7 @@ impl<'p> ThermalSystem<'p> {
         layout: &Layout,
         solver: &SolverSpec,
         contacts: &ContactSet,
-    ) -> Result<Self> {
+    ) -> crate::error::Result<Self> {
         let ops = assemble(petsc, model, layout, contacts)?;
         let symmetric = model
             .contact
@@ -207,6 +208,8 @@ impl<'p> ThermalSystem<'p> {
         xd.pointwise_mult(&t, &dmask)?;
         let mut f_free = t.duplicate()?;
         f_free.pointwise_mult(&ops.load, &free_mask)?;
+
+        check_time_step(petsc, model, &ops, &free_mask)?;
 
         let explicit = theta == 0.0 && model.thermal.capacity == CapacityKind::Lumped;
         let mut warm_start = false;
@@ -257,7 +260,7 @@ impl<'p> ThermalSystem<'p> {
 
             let choice = SolverChoice::auto(layout.num_global(), layout.size, symmetric);
             for (k, v) in &choice.defaults {
-                petsc.set_default_option(k, Some(v))?;
+                petsc.set_own_default_option(k, Some(v))?;
             }
             for (k, v) in &solver.options {
                 petsc.set_default_option(k, if v.is_empty() { None } else { Some(v) })?;
@@ -398,7 +401,7 @@ impl<'p> ThermalSystem<'p> {
         layout: &Layout,
         solver: &SolverSpec,
         contacts: &ContactSet,
-    ) -> Result<()> {
+    ) -> crate::error::Result<()> {
         let account = self.energy()?;
         let mut next = ThermalSystem::new(petsc, model, layout, solver, contacts)?;
         next.t.copy_from(&self.t)?;
@@ -438,4 +441,109 @@ impl<'p> ThermalSystem<'p> {
             v.iter().position(|x| !x.is_finite()).unwrap_or(usize::MAX),
         ))
     }
+}
+
+/// Collective. λ_max of M⁻¹K over the free rows, by power iteration from a
+/// node-alternating start (the highest modes), as the Rayleigh quotient
+/// xᵀKx / xᵀMx: it converges from below, so a step refused with it is
+/// certainly unstable. Lumped M divides, a consistent M is solved (CG).
+fn largest_eigenvalue(petsc: &Petsc, model: &Model, ops: &Operators, free: &Vector) -> Result<f64> {
+    let mut x = free.duplicate()?;
+    {
+        let (lo, _) = x.ownership_range();
+        let f = free.view()?;
+        let mut v = x.view_mut()?;
+        for i in 0..v.len() {
+            let g = (lo + i) as f64;
+            let sign = if (lo + i) % 2 == 0 { 1.0 } else { -1.0 };
+            v[i] = f[i] * sign * (1.0 + 0.25 * (g * 0.618_033_988_75).fract());
+        }
+    }
+    let mut kx = x.duplicate()?;
+    let mut mx = x.duplicate()?;
+    let mut mass = None;
+    if model.thermal.capacity == CapacityKind::Consistent {
+        let mut ksp = Ksp::new(petsc)?;
+        ksp.set_operator(&ops.capacity)?;
+        ksp.set_types("cg", "jacobi")?;
+        ksp.set_tolerances(1e-10, 1e-300, 1000)?;
+        mass = Some(ksp);
+    }
+    let mut lambda = 0.0;
+    for k in 0..1000 {
+        let norm = x.norm2()?;
+        if norm == 0.0 {
+            return Ok(0.0);
+        }
+        x.scale(1.0 / norm)?;
+        ops.stiffness.mult(&x, &mut kx)?;
+        kx.pointwise_mult(&kx.duplicate_from()?, free)?;
+        ops.capacity.mult(&x, &mut mx)?;
+        let rq = x.dot(&kx)? / x.dot(&mx)?;
+        match mass.as_mut() {
+            Some(ksp) => {
+                ksp.solve(&kx, &mut x)?;
+            }
+            None => {
+                let m = ops.capacity_rowsum.view()?;
+                let y = kx.view()?;
+                let mut v = x.view_mut()?;
+                for i in 0..v.len() {
+                    v[i] = y[i] / m[i];
+                }
+            }
+        }
+        x.pointwise_mult(&x.duplicate_from()?, free)?;
+        if k > 10 && (rq - lambda).abs() <= 1e-6 * rq.abs() {
+            return Ok(rq);
+        }
+        lambda = rq;
+    }
+    Ok(lambda)
+}
+
+/// Collective. Refuse a time step above the theta method's stability limit
+/// (θ < 1/2) or, for the bounded scheme with θ < 1, above its positivity
+/// limit (`thermal::limits`), naming the limit.
+fn check_time_step(
+    petsc: &Petsc,
+    model: &Model,
+    ops: &Operators,
+    free: &Vector,
+) -> crate::error::Result<()> {
+    let (theta, dt) = (model.thermal.theta, model.dt);
+    if theta < 0.5 {
+        let lambda = largest_eigenvalue(petsc, model, ops, free)?;
+        if let Some(limit) = super::limits::stability_limit(theta, lambda) {
+            if dt > limit {
+                return Err(Error::TimeStep(format!(
+                    "time.dt = {dt:e} s is above the stability limit of thermal.theta = {theta} \
+                     (dt <= 2/((1 - 2 theta) lambda_max) = {limit:.4e} s, with lambda_max = \
+                     {lambda:.4e} 1/s the largest eigenvalue of M^-1 K): use time.dt <= {limit:.3e} \
+                     or thermal.theta >= 0.5"
+                )));
+            }
+        }
+    }
+    if model.thermal.conduction == ConductionKind::Bounded && theta < 1.0 {
+        let mut ratio = free.duplicate()?;
+        ops.stiffness.diagonal(&mut ratio)?;
+        {
+            let (m, f) = (ops.capacity_rowsum.view()?, free.view()?);
+            let mut v = ratio.view_mut()?;
+            for i in 0..v.len() {
+                let node = super::limits::node_positivity_limit(theta, m[i], v[i]);
+                v[i] = node.filter(|_| f[i] > 0.0).unwrap_or(f64::MAX);
+            }
+        }
+        let limit = ratio.min()?;
+        if dt > limit {
+            return Err(Error::TimeStep(format!(
+                "time.dt = {dt:e} s is above the step that keeps the bounded scheme bounded at \
+                 thermal.theta = {theta} (dt <= m_i / ((1 - theta) K_ii) = {limit:.4e} s): use \
+                 time.dt <= {limit:.3e} or thermal.theta = 1"
+            )));
+        }
+    }
+    Ok(())
 }

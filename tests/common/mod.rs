@@ -168,3 +168,23 @@ pub fn assert_same_temperatures(r1: &Results, r2: &Results, tol: f64, what: &str
         );
     }
 }
+
+/// Assert every temperature at every output of `r` lies in `[lo, hi]` (the
+/// range of the initial and boundary values: the discrete maximum
+/// principle), to round-off of the range. Returns the (min, max) seen.
+pub fn assert_within_bounds(r: &Results, lo: f64, hi: f64, what: &str) -> (f64, f64) {
+    let tol = 1e-9 * (hi - lo).abs().max(1.0);
+    let (mut tmin, mut tmax) = (f64::INFINITY, f64::NEG_INFINITY);
+    for (k, t) in r.temperature.iter().enumerate() {
+        for (n, &x) in t.iter().enumerate() {
+            assert!(
+                x >= lo - tol && x <= hi + tol,
+                "{what}: node {n} at t = {} has T = {x}, outside [{lo}, {hi}]",
+                r.times[k]
+            );
+            tmin = tmin.min(x);
+            tmax = tmax.max(x);
+        }
+    }
+    (tmin, tmax)
+}

@@ -341,6 +341,8 @@ fn inverted_tet_names_gmsh_tag() {
     let msg = e.to_string();
     assert!(msg.contains("inv.msh"), "{msg}");
     assert!(msg.contains("element 3 (gmsh tag 4) is inverted"), "{msg}");
+    // The nodes are named by the file's tags, not by 0-based indices.
+    assert!(msg.contains("gmsh node tags 10,30,80,70"), "{msg}");
     let MeshError::InFile { source, .. } = e else {
         panic!("expected InFile, got {e:?}")
     };

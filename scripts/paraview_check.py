@@ -27,6 +27,7 @@ import tempfile
 import numpy as np
 from paraview import servermanager
 from paraview.simple import (
+    Clip,
     ColorBy,
     CreateView,
     Delete,
@@ -34,6 +35,7 @@ from paraview.simple import (
     ResetSession,
     SaveScreenshot,
     Show,
+    WarpByVector,
     XDMFReader,
     Xdmf3ReaderS,
 )
@@ -284,7 +286,19 @@ def screenshot(xdmf, h5):
     view.ViewSize = [800, 600]
     view.ViewTime = float(h5.times[-1])
     view.OrientationAxesVisibility = 0
-    display = Show(reader, view)
+    # As a user looks at it: the deformed shape (Warp By Vector on the
+    # displacement), cut in half through the middle (whole cells, the near
+    # half removed) so that a container does not hide its particles.
+    shown = reader
+    if "displacement" in h5.fields["node"]:
+        shown = WarpByVector(Input=shown, Vectors=["POINTS", "displacement"])
+    shown.UpdatePipeline(float(h5.times[-1]))
+    b = shown.GetDataInformation().GetBounds()
+    clip = Clip(Input=shown, ClipType="Plane", Crinkleclip=1)
+    clip.ClipType.Origin = [0.5 * (b[0] + b[1]), 0.5 * (b[2] + b[3]), 0.5 * (b[4] + b[5])]
+    clip.ClipType.Normal = [0.0, -1.0, 0.0]
+    clip.Invert = 1
+    display = Show(clip, view)
     if "temperature" in h5.fields["node"]:
         array, what = "temperature", "temperature"
     else:
@@ -300,8 +314,11 @@ def screenshot(xdmf, h5):
     SaveScreenshot(png, view, ImageResolution=[800, 600])
     Delete(display)
     Delete(view)
+    Delete(clip)
+    if shown is not reader:
+        Delete(shown)
     Delete(reader)
-    print("  PNG (%s at t = %g): %s" % (what, h5.times[-1], png))
+    print("  PNG (%s at t = %g, near half cut away): %s" % (what, h5.times[-1], png))
 
 
 def main(args):

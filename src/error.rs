@@ -57,6 +57,14 @@ pub enum Error {
     /// Partitioning failure.
     #[error("partitioning failed: {0}")]
     Partition(String),
+    /// The output directory cannot be used (an existing file, no permission).
+    #[error("output directory {path}: {message}")]
+    OutputDir {
+        /// The directory as given (`--output` or `output.directory`).
+        path: String,
+        /// What is wrong.
+        message: String,
+    },
     /// Plain I/O failure (directories, summary files).
     #[error("{path}: {source}")]
     File {

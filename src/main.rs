@@ -36,9 +36,13 @@ enum Command {
         /// Output directory (default: the scenario's, or output/<stem>).
         #[arg(long)]
         output: Option<PathBuf>,
-        /// Override a scenario value by dotted path, e.g. --set bodies.bar.mesh.element_size=0.05
+        /// Override a scenario value by dotted path, e.g. --set bodies.bar.mesh.element_size=0.05; VALUE none removes the key (--set time.end_time=none)
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<String>,
+        /// Read bodies of mesh kind "checkpoint" from this directory (an
+        /// earlier stage's --output) by their file name, or from this .h5 file.
+        #[arg(long, value_name = "DIR")]
+        from: Option<PathBuf>,
         /// No progress bar.
         #[arg(long)]
         quiet: bool,
@@ -58,6 +62,10 @@ enum Command {
         /// Override a scenario value by dotted path.
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<String>,
+        /// Read bodies of mesh kind "checkpoint" from this directory (an
+        /// earlier stage's --output) by their file name, or from this .h5 file.
+        #[arg(long, value_name = "DIR")]
+        from: Option<PathBuf>,
     },
     /// Print the PETSc, MPI and HDF5 versions in use.
     Info,
@@ -240,30 +248,40 @@ fn dispatch(
         Command::Check {
             scenario: path,
             set,
+            from,
         } => {
-            let sc = scenario::load(path, set)?;
+            let mut sc = scenario::load(path, set)?;
+            if let Some(d) = from {
+                sc.take_checkpoints_from(d)?;
+            }
             let model = Model::from_scenario(&sc)?;
             if rank == 0 {
                 let q = model.mesh.min_quality();
                 println!("{}: ok", path.display());
+                let scheme = if model.thermal_active {
+                    format!("theta = {}", model.thermal.theta)
+                } else {
+                    "mechanics only, no heat conduction".to_string()
+                };
                 println!(
-                    "  {} bodies, {} nodes, {} Tet4, {} steps of {} s (theta = {})",
+                    "  {} bodies, {} nodes, {} Tet4, {} steps of {} s ({scheme})",
                     model.bodies.len(),
                     model.mesh.nodes.len(),
                     model.mesh.tets.len(),
                     model.steps,
                     model.dt,
-                    model.thermal.theta
                 );
                 if let Some((q, e)) = q {
                     println!("  worst element quality {q:.3} (element {e})");
                 }
-                println!(
-                    "  {} prescribed-temperature nodes, {} flux faces, {} convection faces",
-                    model.thermal.dirichlet.len(),
-                    model.thermal.flux.len(),
-                    model.thermal.convection.len()
-                );
+                if model.thermal_active {
+                    println!(
+                        "  {} prescribed-temperature nodes, {} flux faces, {} convection faces",
+                        model.thermal.dirichlet.len(),
+                        model.thermal.flux.len(),
+                        model.thermal.convection.len()
+                    );
+                }
             }
             Ok(())
         }
@@ -274,8 +292,12 @@ fn dispatch(
             quiet,
             restart,
             allow_unused_petsc_options,
+            from,
         } => {
-            let sc = scenario::load(path, set)?;
+            let mut sc = scenario::load(path, set)?;
+            if let Some(d) = from {
+                sc.take_checkpoints_from(d)?;
+            }
             let opts = RunOptions {
                 output_dir: output.clone(),
                 progress: !quiet,

@@ -117,6 +117,48 @@ fn missing_mesh_file_is_named() {
     let (_, err) = run_bad(1, &s, &d.join("out"), &[]);
     assert!(err.contains("nowhere.msh") && err.contains("bar"), "{err}");
     assert_no_output(&d.join("out"));
+    // Issue 16: named by the path the run looked for, not relative to the
+    // scenario, even when the scenario is given relative to the working
+    // directory and the mesh path climbs out of the scenario's directory.
+    let text = text.replace("nowhere.msh", "../bad-missing-mesh/nowhere.msh");
+    write(&d, "bad.toml", &text);
+    let looked_for = d.canonicalize().unwrap().join("nowhere.msh");
+    for ranks in [1, 2] {
+        let (_, err) = run_bad(
+            ranks,
+            Path::new("target/test-output/bad-missing-mesh/bad.toml"),
+            &d.join("out"),
+            &[],
+        );
+        assert!(
+            err.contains(&format!("'{}'", looked_for.display())),
+            "{ranks} rank(s): should name {}: {err}",
+            looked_for.display()
+        );
+        assert_no_output(&d.join("out"));
+    }
+}
+
+#[test]
+fn output_path_that_is_a_file_names_the_output_directory() {
+    let d = scenario_dir("output-file");
+    let s = write(&d, "ok.toml", BASE);
+    let file = write(&d, "afile", "not a directory\n");
+    for (out, says) in [
+        (file.clone(), "is an existing file, not a directory"),
+        (file.join("sub"), "is a file, not a directory"),
+    ] {
+        for ranks in [1, 2] {
+            let (_, err) = run_bad(ranks, &s, &out, &[]);
+            assert!(
+                err.contains(&format!("output directory {}", out.display())) && err.contains(says),
+                "{ranks} rank(s), {}: {err}",
+                out.display()
+            );
+            assert_eq!(err.matches("error: ").count(), 1, "one message: {err}");
+        }
+    }
+    assert_eq!(std::fs::read_to_string(&file).unwrap(), "not a directory\n");
 }
 
 #[test]

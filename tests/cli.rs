@@ -93,3 +93,110 @@ value = 1.0
     .unwrap();
     run_ok(1, &scen, &d.join("out"), &[]);
 }
+
+/// Issue 16: a mechanics-only run (no heat conduction) neither shows a theta
+/// in `fdem check` nor a heat balance in its summary; a thermal run shows both.
+#[test]
+fn mechanics_only_runs_do_not_report_heat() {
+    let mech = root().join("scenarios/collision.toml");
+    let o = fdem(1, &["check", mech.to_str().unwrap()]);
+    let s = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        s.contains("mechanics only")
+            && !s.contains("theta")
+            && !s.contains("prescribed-temperature"),
+        "{s}"
+    );
+    let out = out_dir("cli-mech-only");
+    let stdout = run_ok(1, &mech, &out, &["--set", "time.steps=8"]);
+    assert!(summary_line(&stdout, "heat").is_none(), "{stdout}");
+    assert!(summary_line(&stdout, "mechanics").is_some(), "{stdout}");
+
+    let heat = root().join("scenarios/slab-1d.toml");
+    let o = fdem(1, &["check", heat.to_str().unwrap()]);
+    let s = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        s.contains("theta = ") && !s.contains("mechanics only"),
+        "{s}"
+    );
+    let out = out_dir("cli-heat");
+    let stdout = run_ok(1, &heat, &out, &[]);
+    assert!(summary_line(&stdout, "heat").is_some(), "{stdout}");
+}
+
+/// Issue 16: `--set KEY=none` removes a key, so a step count can replace a
+/// file's end time (both together are an error).
+#[test]
+fn set_none_unsets_a_key() {
+    let p = root().join("scenarios/slab-1d.toml");
+    let p = p.to_str().unwrap();
+    let both = fdem(1, &["check", p, "--set", "time.steps=10"]);
+    assert!(
+        !both.status.success(),
+        "steps and end_time together must be refused"
+    );
+    let o = fdem(
+        1,
+        &[
+            "check",
+            p,
+            "--set",
+            "time.end_time=none",
+            "--set",
+            "time.steps=10",
+            "--set",
+            "output.times=none",
+        ],
+    );
+    let s = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(s.contains(" 10 steps of "), "{s}");
+    let o = fdem(1, &["check", p, "--set", "time.nothing=none"]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && e.contains("`time.nothing` is not set"),
+        "{e}"
+    );
+}
+
+/// Issue 16: `--from DIR` makes a later stage read its checkpoint bodies
+/// from an earlier stage's output directory (the packing tests run the
+/// heat-up this way); the path it looked for is named when it is missing.
+#[test]
+fn from_names_the_earlier_stage_output() {
+    let heat = root().join("scenarios/nut-packing-heatup.toml");
+    let d = out_dir("cli-from");
+    let o = fdem(
+        1,
+        &[
+            "check",
+            heat.to_str().unwrap(),
+            "--from",
+            d.to_str().unwrap(),
+        ],
+    );
+    let e = String::from_utf8_lossy(&o.stderr);
+    let want = d.join("nut-packing-deposit_checkpoint.h5");
+    assert!(
+        !o.status.success()
+            && e.contains(&format!("{}", want.display()))
+            && e.contains("checkpoint file not found"),
+        "{e}"
+    );
+    let slab = root().join("scenarios/slab-1d.toml");
+    let o = fdem(
+        1,
+        &[
+            "check",
+            slab.to_str().unwrap(),
+            "--from",
+            d.to_str().unwrap(),
+        ],
+    );
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && e.contains("no body with mesh kind"),
+        "{e}"
+    );
+}

@@ -45,8 +45,9 @@ fn packing() -> &'static (PathBuf, String) {
 fn heatup(ranks: usize, name: &str, extra: &[&str]) -> (PathBuf, String) {
     let (ck, _) = packing();
     let dir = out_dir(name);
-    let file = format!("bodies.1.mesh.file={}", ck.display());
-    let mut args = vec!["--set", file.as_str()];
+    // The deposit ran with --output: the heat-up is told where (issue 16).
+    let from = ck.parent().unwrap().to_str().unwrap();
+    let mut args = vec!["--from", from];
     args.extend_from_slice(extra);
     let stdout = run_ok(ranks, &heatup_scenario(), &dir, &args);
     (dir, stdout)

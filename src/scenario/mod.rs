@@ -64,13 +64,67 @@ pub struct LoadedScenario {
 
 impl LoadedScenario {
     /// Resolve a path given in the scenario relative to the scenario's directory.
+    /// The result is absolute, so that messages name the file the run
+    /// looked for whatever the working directory: the scenario's directory
+    /// is canonicalised and the path's leading `..` steps are taken on it
+    /// (exact, as a canonical path has no symbolic links).
     pub fn resolve(&self, p: &str) -> PathBuf {
         let p = Path::new(p);
         if p.is_absolute() {
-            p.to_path_buf()
-        } else {
-            self.base_dir.join(p)
+            return p.to_path_buf();
         }
+        let mut out = std::fs::canonicalize(&self.base_dir)
+            .or_else(|_| std::path::absolute(&self.base_dir))
+            .unwrap_or_else(|_| self.base_dir.clone());
+        let mut leading = true;
+        for c in p.components() {
+            match c {
+                std::path::Component::CurDir => {}
+                std::path::Component::ParentDir if leading && out.parent().is_some() => {
+                    out.pop();
+                }
+                other => {
+                    leading = false;
+                    out.push(other);
+                }
+            }
+        }
+        out
+    }
+
+    /// `--from DIR`: bodies of `kind = "checkpoint"` are read from DIR (an
+    /// earlier stage's output directory, relative to the working directory)
+    /// by their file name, or from DIR itself when it names an `.h5` file.
+    pub fn take_checkpoints_from(&mut self, dir: &Path) -> Result<(), ScenarioError> {
+        let err = |message: String| ScenarioError::Invalid {
+            path: self.path.clone(),
+            key: "--from".into(),
+            message,
+        };
+        let dir = std::path::absolute(dir).map_err(|e| err(format!("{}: {e}", dir.display())))?;
+        let mut n = 0;
+        for b in &mut self.scenario.bodies {
+            if let schema::MeshSpec::Checkpoint { file, .. } = &mut b.mesh {
+                let name = Path::new(file.as_str())
+                    .file_name()
+                    .map(PathBuf::from)
+                    .unwrap_or_default();
+                let p = if dir.extension().is_some_and(|e| e == "h5") && !dir.is_dir() {
+                    dir.clone()
+                } else {
+                    dir.join(name)
+                };
+                *file = p.to_string_lossy().into_owned();
+                n += 1;
+            }
+        }
+        if n == 0 {
+            return Err(err(
+                "the scenario has no body with mesh kind = \"checkpoint\" to take from there"
+                    .into(),
+            ));
+        }
+        Ok(())
     }
 
     /// Name of the output stem: `output.stem` or the file stem.

@@ -28,6 +28,8 @@ PKGS=(
   libhdf5-openmpi-dev
   hdf5-tools          # h5dump, used by tests to check output files
   bc                  # arithmetic in scripts/bench.sh
+  python3             # scripts/fault_check.py (standard library only)
+  procps              # pgrep: scripts/fault_check.py finds the ranks to kill
   fonts-dejavu-core   # DejaVuSans.ttf: text in PNG plots (src/io/plot.rs)
 )
 if [ "$paraview" = 1 ]; then

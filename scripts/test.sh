@@ -23,4 +23,6 @@ h5dump -H "$out/gmsh-block.h5" >/dev/null
 rm -rf "$out"
 echo "== ParaView reads the output (scripts/paraview-check.sh)"
 bash scripts/paraview-check.sh
+echo "== SIGKILL of either rank, restart in place, bitwise (scripts/fault-check.sh)"
+bash scripts/fault-check.sh
 echo "== all tests passed"

@@ -127,6 +127,8 @@ pub struct RunSummary {
     pub checkpoint: Option<PathBuf>,
     /// Particle statistics files written.
     pub particle_files: Vec<PathBuf>,
+    /// Whether heat conduction was solved (else the heat line is left out).
+    pub heat: bool,
 }
 
 impl std::fmt::Display for RunSummary {
@@ -184,13 +186,15 @@ impl std::fmt::Display for RunSummary {
                 m.exact_overlaps
             )?;
         }
-        writeln!(
-            f,
-            "  heat        stored change {:.6e}, boundary in {:.6e} (balance {:.2e})",
-            self.energy.stored_change,
-            self.energy.boundary_in(),
-            self.energy.stored_change - self.energy.boundary_in()
-        )?;
+        if self.heat {
+            writeln!(
+                f,
+                "  heat        stored change {:.6e}, boundary in {:.6e} (balance {:.2e})",
+                self.energy.stored_change,
+                self.energy.boundary_in(),
+                self.energy.stored_change - self.energy.boundary_in()
+            )?;
+        }
         writeln!(
             f,
             "  memory      peak {:.1} MiB per rank",
@@ -392,8 +396,10 @@ pub fn run(
             velocities: v,
             velocities_prev: ck.velocities_prev.as_deref(),
             dissipated: ck.dissipated,
+            dissipated_per_rank: ck.dissipated_per_rank.as_deref(),
         };
         m.restore(comm, &model, &layout, saved)?;
+        m.counters.substeps = ck.substeps;
     }
     times.mechanics = clock.elapsed().as_secs_f64();
     let mech_setup = times.mechanics;
@@ -462,7 +468,28 @@ pub fn run(
             flux_in: h[3],
             convection_in: h[4],
         };
-        s.restore(&owned, account, ck.step)?;
+        match &ck.account {
+            Some(a) => {
+                let owned_of = |v: &[f64]| -> Vec<f64> {
+                    layout.owned_nodes.iter().map(|&n| v[n as usize]).collect()
+                };
+                let b = a.base;
+                let state = crate::thermal::system::AccountState {
+                    base: EnergyAccount {
+                        stored: b[0],
+                        stored_change: b[1],
+                        dirichlet_in: b[2],
+                        flux_in: b[3],
+                        convection_in: b[4],
+                    },
+                    t0: owned_of(&a.t0),
+                    t_sum: owned_of(&a.t_sum),
+                    steps: a.steps,
+                };
+                s.restore_exact(&owned, &state, ck.step)?;
+            }
+            None => s.restore(&owned, account, ck.step)?,
+        }
         s.iterations = ck.ksp_iterations;
     }
     if let (Some((m, _)), Some(s)) = (mech.as_mut(), sys.as_ref()) {
@@ -488,10 +515,7 @@ pub fn run(
         .or_else(|| sc.scenario.output.directory.as_ref().map(|d| sc.resolve(d)))
         .unwrap_or_else(|| PathBuf::from("output").join(&stem));
     let made = if rank == 0 {
-        std::fs::create_dir_all(&dir).map_err(|source| Error::File {
-            path: dir.display().to_string(),
-            source,
-        })
+        create_output_dir(&dir)
     } else {
         Ok(())
     };
@@ -680,7 +704,10 @@ pub fn run(
         .map(|e| model.material_of(e).density * model.mesh.element_volume(e))
         .sum();
     let mut peak_ke = restart.as_ref().map_or(0.0, |c| c.peak_kinetic);
-    let mut settled = None;
+    // A restart from a settled run's checkpoint is already done.
+    let mut settled = restart
+        .as_ref()
+        .and_then(|c| c.settled.map(|ke| (c.step, c.time, ke)));
     let ck_every = sc.scenario.output.checkpoint_every;
     let ck_path = dir.join(format!("{stem}_checkpoint.h5"));
     let mut checkpoint = None;
@@ -715,7 +742,7 @@ pub fn run(
     let mut mech_time = 0.0;
     let mut step = start_step;
     let every_step = report.is_some() || settle.is_some();
-    while step < model.steps {
+    while step < model.steps && settled.is_none() {
         // Run uninterrupted until the next output, check or progress tick.
         let next_detect = step
             .checked_div(detect_every)
@@ -820,7 +847,8 @@ pub fn run(
         }
         if ck_every > 0 && step.is_multiple_of(ck_every) && settled.is_none() {
             save_checkpoint(
-                comm, &model, &layout, &mut sys, &mut mech, step, peak_ke, &contacts, &ck_path,
+                comm, &model, &layout, &mut sys, &mut mech, step, peak_ke, &contacts, None,
+                &ck_path,
             )?;
             checkpoint = Some(ck_path.clone());
         }
@@ -832,7 +860,16 @@ pub fn run(
     if sc.scenario.output.checkpoint || settled.is_some() && ck_every > 0 {
         let clock = Instant::now();
         save_checkpoint(
-            comm, &model, &layout, &mut sys, &mut mech, step, peak_ke, &contacts, &ck_path,
+            comm,
+            &model,
+            &layout,
+            &mut sys,
+            &mut mech,
+            step,
+            peak_ke,
+            &contacts,
+            settled.map(|s| s.2),
+            &ck_path,
         )?;
         checkpoint = Some(ck_path.clone());
         times.output += clock.elapsed().as_secs_f64();
@@ -927,6 +964,7 @@ pub fn run(
         settled,
         checkpoint,
         particle_files,
+        heat: sys.is_some(),
         solver: sys
             .as_ref()
             .map_or("none (no thermal problem)".into(), |s| {
@@ -1104,9 +1142,11 @@ fn save_checkpoint(
     step: u64,
     peak_kinetic: f64,
     contacts: &ContactSet,
+    settled: Option<f64>,
     path: &Path,
 ) -> Result<()> {
     let mut ck = Checkpoint {
+        settled,
         step,
         time: step as f64 * model.dt,
         reference: model.mesh.nodes.clone(),
@@ -1135,6 +1175,7 @@ fn save_checkpoint(
         ck.velocities_prev = m.gather_velocities_prev(comm);
         ck.dissipated = m.state(comm).dissipated;
         ck.substeps = m.counters.substeps;
+        ck.dissipated_per_rank = Some(m.gather_dissipated(comm));
     } else if model.has_motion() {
         let mut x = model.mesh.nodes.clone();
         model.positions_at(ck.time, &mut x);
@@ -1149,6 +1190,25 @@ fn save_checkpoint(
                 .collect(),
         );
         ck.ksp_iterations = s.iterations;
+        let a = s.account_state()?;
+        let per_node = |owned: &[f64]| -> Vec<f64> {
+            let all = crate::parallel::all_gather_f64(comm, owned);
+            (0..model.mesh.nodes.len())
+                .map(|n| all[layout.global_of[n] as usize])
+                .collect()
+        };
+        ck.account = Some(crate::io::checkpoint::SavedAccount {
+            base: [
+                a.base.stored,
+                a.base.stored_change,
+                a.base.dirichlet_in,
+                a.base.flux_in,
+                a.base.convection_in,
+            ],
+            steps: a.steps,
+            t0: per_node(&a.t0),
+            t_sum: per_node(&a.t_sum),
+        });
         let e = s.energy()?;
         ck.heat = [
             e.stored,
@@ -1285,4 +1345,26 @@ fn write_body_contacts(model: &Model, contacts: &ContactSet, path: &Path) -> Res
         path: path.display().to_string(),
         source,
     })
+}
+
+/// Create the output directory (and its parents), saying that the directory
+/// is the problem when a file stands in its place or in a parent's.
+fn create_output_dir(dir: &Path) -> Result<()> {
+    let bad = |message: String| Error::OutputDir {
+        path: dir.display().to_string(),
+        message,
+    };
+    if dir.exists() && !dir.is_dir() {
+        return Err(bad(
+            "is an existing file, not a directory; name a directory with --output or output.directory"
+                .into(),
+        ));
+    }
+    if let Some(file) = dir.ancestors().skip(1).find(|a| a.is_file()) {
+        return Err(bad(format!(
+            "cannot be created: {} is a file, not a directory",
+            file.display()
+        )));
+    }
+    std::fs::create_dir_all(dir).map_err(|e| bad(format!("cannot be created: {e}")))
 }

@@ -23,6 +23,19 @@ const FORMAT: &str = "fdem-checkpoint";
 const VERSION: u32 = 1;
 const SCALARS: usize = 12;
 
+/// The heat account's running state as saved.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct SavedAccount {
+    /// Base account: stored, stored change, Dirichlet in, flux in, convection in.
+    pub base: [f64; 5],
+    /// Steps since the last assembly.
+    pub steps: u64,
+    /// Temperatures at the last assembly, per node.
+    pub t0: Vec<f64>,
+    /// Sum of the step temperatures since then, per node.
+    pub t_sum: Vec<f64>,
+}
+
 /// Everything needed to continue a run, or to start another from its state.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Checkpoint {
@@ -66,6 +79,17 @@ pub struct Checkpoint {
     pub peak_kinetic: f64,
     /// Thermal contact pairs at the checkpoint (information).
     pub thermal_contacts: u64,
+    /// Each rank's share of `dissipated` (same-rank-count restarts
+    /// continue the sum bitwise).
+    pub dissipated_per_rank: Option<Vec<f64>>,
+    /// The heat account's running state (see
+    /// [`crate::thermal::system::AccountState`]), node vectors in the
+    /// original numbering; older checkpoints lack it (then the account
+    /// continues to round-off only).
+    pub account: Option<SavedAccount>,
+    /// The kinetic energy (J) at which the run settled, when this is the
+    /// checkpoint of a settled run: a restart from it takes no more steps.
+    pub settled: Option<f64>,
 }
 
 fn tmp_path(path: &Path) -> PathBuf {
@@ -191,6 +215,18 @@ impl Checkpoint {
             put(&file, path, "state/velocities_prev", &flat3(v), 3)?;
         }
         put(&file, path, "state/counters", &[self.ksp_iterations], 1)?;
+        if let Some(d) = &self.dissipated_per_rank {
+            put(&file, path, "state/dissipated_per_rank", d, 1)?;
+        }
+        if let Some(a) = &self.account {
+            put(&file, path, "state/account_base", &a.base, 1)?;
+            put(&file, path, "state/account_steps", &[a.steps], 1)?;
+            put(&file, path, "state/account_t0", &a.t0, 1)?;
+            put(&file, path, "state/account_t_sum", &a.t_sum, 1)?;
+        }
+        if let Some(ke) = self.settled {
+            put(&file, path, "state/settled", &[ke], 1)?;
+        }
         if let Some(t) = &self.temperature {
             put(&file, path, "state/temperature", t, 1)?;
         }
@@ -280,6 +316,36 @@ impl Checkpoint {
             dissipated: sc[8],
             peak_kinetic: sc[9],
             thermal_contacts: sc[10] as u64,
+            dissipated_per_rank: if file.link_exists("state/dissipated_per_rank") {
+                Some(get(&file, path, "state/dissipated_per_rank", 1)?)
+            } else {
+                None
+            },
+            account: if file.link_exists("state/account_base") {
+                let base = get::<f64>(&file, path, "state/account_base", 1)?;
+                let steps = get::<u64>(&file, path, "state/account_steps", 1)?;
+                let (Ok(base), Some(&steps)) = (<[f64; 5]>::try_from(base), steps.first()) else {
+                    return Err(IoError::invalid(
+                        path,
+                        "state/account_base or state/account_steps has the wrong length",
+                    ));
+                };
+                Some(SavedAccount {
+                    base,
+                    steps,
+                    t0: get(&file, path, "state/account_t0", 1)?,
+                    t_sum: get(&file, path, "state/account_t_sum", 1)?,
+                })
+            } else {
+                None
+            },
+            settled: if file.link_exists("state/settled") {
+                get::<f64>(&file, path, "state/settled", 1)?
+                    .first()
+                    .copied()
+            } else {
+                None
+            },
         };
         c.check(path)?;
         Ok(c)
@@ -316,6 +382,14 @@ impl Checkpoint {
             ("state/positions", self.positions.as_ref().map(Vec::len)),
             ("state/velocities", self.velocities.as_ref().map(Vec::len)),
             ("state/temperature", self.temperature.as_ref().map(Vec::len)),
+            (
+                "state/account_t0",
+                self.account.as_ref().map(|a| a.t0.len()),
+            ),
+            (
+                "state/account_t_sum",
+                self.account.as_ref().map(|a| a.t_sum.len()),
+            ),
         ] {
             if len.is_some_and(|l| l != nn) {
                 return bad(format!(
@@ -359,6 +433,14 @@ mod tests {
             heat: [1.0, 2.0, 3.0, 4.0, 5.0],
             dissipated: 0.5,
             peak_kinetic: 2.5,
+            settled: Some(1e-3),
+            dissipated_per_rank: Some(vec![0.25, 0.5]),
+            account: Some(SavedAccount {
+                base: [1.0, 2.0, 3.0, 4.0, 5.0],
+                steps: 17,
+                t0: vec![0.5; 4],
+                t_sum: vec![8.5; 4],
+            }),
             thermal_contacts: 3,
         }
     }

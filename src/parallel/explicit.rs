@@ -97,6 +97,9 @@ pub struct SavedMotion<'a> {
     pub velocities_prev: Option<&'a [[f64; 3]]>,
     /// Energy dissipated so far (J).
     pub dissipated: f64,
+    /// Each rank's share of it, when saved by a run on as many ranks as
+    /// this one: the sum then continues bitwise.
+    pub dissipated_per_rank: Option<&'a [f64]>,
 }
 
 /// Energies and momentum summed over the ranks.
@@ -1508,13 +1511,18 @@ impl ExplicitDomain {
             velocities,
             velocities_prev,
             dissipated,
+            dissipated_per_rank,
         } = saved;
         self.x_all.copy_from_slice(positions);
         for (i, &n) in self.node_of_local.iter().enumerate() {
             self.x[i] = Vector3::from(positions[n as usize]);
             self.v[i] = Vector3::from(velocities[n as usize]);
         }
-        self.dissipated = if comm.rank() == 0 { dissipated } else { 0.0 };
+        self.dissipated = match dissipated_per_rank {
+            Some(d) if d.len() == comm.size() as usize => d[comm.rank() as usize],
+            _ if comm.rank() == 0 => dissipated,
+            _ => 0.0,
+        };
         self.v_prev.clear();
         if let Some(vp) = velocities_prev {
             self.v_prev.extend(
@@ -1526,6 +1534,11 @@ impl ExplicitDomain {
         self.detect(comm, model, layout)?;
         self.redetect = false;
         Ok(())
+    }
+
+    /// Collective. Each rank's share of the dissipated energy, by rank.
+    pub fn gather_dissipated(&self, comm: &SimpleCommunicator) -> Vec<f64> {
+        crate::parallel::all_gather_f64(comm, &[self.dissipated])
     }
 
     /// Smallest search margin of the contact candidates (m), used at rest

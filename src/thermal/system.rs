@@ -118,6 +118,21 @@ impl EnergyAccount {
     }
 }
 
+/// The heat account's running state since the last assembly (owned rows,
+/// PETSc order): a checkpoint saves it so that a restart continues the
+/// account exactly, not only to round-off.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct AccountState {
+    /// The account carried over from before the last assembly.
+    pub base: EnergyAccount,
+    /// Temperatures at the last assembly.
+    pub t0: Vec<f64>,
+    /// Sum of the temperatures of the steps since then.
+    pub t_sum: Vec<f64>,
+    /// Steps since then.
+    pub steps: u64,
+}
+
 enum Scheme<'p> {
     Explicit {
         e: Matrix<'p>,
@@ -426,6 +441,28 @@ impl<'p> ThermalSystem<'p> {
         self.base = account;
         // energy() adds the change since t0 to the base: keep `stored` as saved.
         self.base.stored = stored;
+        Ok(())
+    }
+
+    /// The heat account's running state (this rank's rows).
+    pub fn account_state(&self) -> Result<AccountState> {
+        Ok(AccountState {
+            base: self.base,
+            t0: self.t0.to_local_vec()?,
+            t_sum: self.t_sum.to_local_vec()?,
+            steps: self.steps,
+        })
+    }
+
+    /// [`ThermalSystem::restore`], with the account's running state as
+    /// saved: the account then continues bitwise as in the uninterrupted run.
+    pub fn restore_exact(&mut self, owned: &[f64], state: &AccountState, steps: u64) -> Result<()> {
+        self.t.copy_from_slice(owned)?;
+        self.t0.copy_from_slice(&state.t0)?;
+        self.t_sum.copy_from_slice(&state.t_sum)?;
+        self.steps = state.steps;
+        self.steps_total = steps;
+        self.base = state.base;
         Ok(())
     }
 

@@ -166,8 +166,9 @@ pub struct BodySpec {
     /// Replicate this body on a regular grid: bodies `<name>_i_j_k`.
     #[serde(default)]
     pub lattice: Option<LatticeSpec>,
-    /// Replicate this body (a particle template) `count` times in a column
-    /// above a container, randomly oriented: bodies `<name>_<i>`.
+    /// Replicate this body (a particle template) `count` times above a
+    /// container, randomly oriented (dropped onto the heap by default, or
+    /// stacked in a column): bodies `<name>_<i>`.
     #[serde(default)]
     pub pack: Option<PackSpec>,
     /// Mechanics: hold every node of the body in place (a container, a floor).
@@ -300,7 +301,7 @@ pub enum MeshSpec {
     },
     /// A hollow cylinder, axis along z (named sets inner, outer, zmin, zmax).
     Annulus {
-        /// Centre of the bottom face (m).
+        /// Centre (m): the body spans z = center.z ± width / 2.
         #[serde(default)]
         center: [f64; 3],
         /// Inner radius (m).
@@ -315,7 +316,7 @@ pub enum MeshSpec {
     /// A solid core bonded inside a ring, one conforming mesh, axis along z
     /// (element sets core, ring; node/face sets outer, interface, zmin, zmax).
     Concentric {
-        /// Centre of the bottom face (m).
+        /// Centre (m): the body spans z = center.z ± width / 2.
         #[serde(default)]
         center: [f64; 3],
         /// Core radius (m).
@@ -344,13 +345,13 @@ pub enum MeshSpec {
         #[serde(default = "default_nut_thickness")]
         thickness: f64,
         /// Segments per hexagon side.
-        #[serde(default = "default_two")]
+        #[serde(default = "default_nut_per_side")]
         per_side: usize,
         /// Element layers between hole and flats.
-        #[serde(default = "default_one")]
+        #[serde(default = "default_nut_radial")]
         radial: usize,
         /// Element layers through the thickness.
-        #[serde(default = "default_one")]
+        #[serde(default = "default_nut_layers")]
         layers: usize,
     },
     /// An open cylindrical container with a floor, axis along z, the
@@ -396,11 +397,15 @@ fn default_nut_hole() -> f64 {
 fn default_nut_thickness() -> f64 {
     crate::mesh::nut::NUT_THICKNESS
 }
-fn default_two() -> usize {
-    2
+// The nut's divisions default to the generator's (`mesh::nut::NUT_DIVISIONS`).
+fn default_nut_per_side() -> usize {
+    crate::mesh::nut::NUT_DIVISIONS.0
 }
-fn default_one() -> usize {
-    1
+fn default_nut_radial() -> usize {
+    crate::mesh::nut::NUT_DIVISIONS.1
+}
+fn default_nut_layers() -> usize {
+    crate::mesh::nut::NUT_DIVISIONS.2
 }
 
 /// Capacity matrix form.
@@ -613,8 +618,9 @@ pub struct MechanicsSpec {
     pub damping: f64,
     /// Mass-proportional damping (1/s) of a body that touches no other
     /// body in the substep (free flight). Absent: `damping` everywhere. A
-    /// packing stage sets 0 so particles fall freely and are damped once
-    /// they land; needs `contact`.
+    /// packing stage sets it below `damping` (the deposit: 5 against 10) so
+    /// particles fall nearly freely and are damped once they land; needs
+    /// `contact`.
     #[serde(default)]
     pub free_damping: Option<f64>,
     /// Boundary conditions on named sets.

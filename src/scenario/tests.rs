@@ -167,3 +167,24 @@ fn linear_tolerance_and_rms_settle_are_checked() {
         .to_string();
     assert!(e.contains("rms_speed"), "{e}");
 }
+
+/// A scenario's `kind = "nut"` is the generator's default nut (the 144-tet
+/// nut of `mesh::nut`); it was a 72-tet one (one layer) before.
+#[test]
+fn nut_mesh_defaults_are_the_generators() {
+    let text = GOOD.replace(
+        r#"mesh = { kind = "box", size = [1.0, 0.1, 0.1], element_size = 0.1 }"#,
+        r#"mesh = { kind = "nut" }"#,
+    );
+    let sc = parse_str(&text, p(), &[]).unwrap();
+    let MeshSpec::Nut {
+        per_side,
+        radial,
+        layers,
+        ..
+    } = &sc.scenario.bodies[0].mesh
+    else {
+        panic!("not a nut")
+    };
+    assert_eq!((*per_side, *radial, *layers), crate::mesh::nut::NUT_DIVISIONS);
+}

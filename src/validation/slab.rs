@@ -3,7 +3,7 @@
 //!
 //! The seed writes the diffusivity as α = c/k (eq 31); the physical
 //! diffusivity is α = k/(ρc), which is what is used here (see
-//! `../shared/seeds/README.md`).
+//! "Decisions on the seeds' inconsistencies" in `docs/guide.md`).
 
 /// The slab of seed 000 sec 4.1.
 #[derive(Debug, Clone, Copy)]

@@ -48,6 +48,9 @@ mod state;
 mod substep;
 mod time_step;
 
+#[cfg(test)]
+mod tests;
+
 pub use domain::ExplicitDomain;
 pub use state::{MechanicsCounters, MechanicsState, SavedMotion};
 

@@ -5,9 +5,10 @@
 //! - [`geometry`]: convex clipping (triangle ∩ tet), polygon area, tet overlap.
 //! - [`contact`]: contact detection (BVH broad phase, clipping narrow phase), contact surfaces and conductances.
 //! - [`mesh`]: Tet4 meshes, boundary faces, quality checks, Gmsh import, generators.
-//! - [`mechanics`]: finite-strain Tet4 stress/forces with thermal expansion (seed 004 eqs 1–38), explicit integrator.
+//! - [`mechanics`]: finite-strain Tet4 stress/forces with thermal expansion (seed 004 eqs 1–38), explicit kernels.
+//! - [`dynamics`]: the per-rank explicit dynamics (subdomain, substeps, contact candidates, ordered force sums).
 //! - [`thermal`]: element matrices and loads (seed 000 eqs 14–20), theta integrator (eq 22).
-//! - [`parallel`]: METIS partition, owned/ghost numbering matching PETSc ownership.
+//! - [`parallel`]: METIS partition, owned/ghost numbering matching PETSc ownership, halos, collectives.
 //! - [`petsc`]: safe RAII layer over `petsc-sys`.
 //! - [`io`]: HDF5 + XDMF output, CSV histories.
 //! - [`scenario`]: TOML schema with validation and clear errors.
@@ -20,6 +21,7 @@
 #![allow(clippy::macro_metavars_in_unsafe)]
 
 pub mod contact;
+pub mod dynamics;
 pub mod error;
 pub mod geometry;
 pub mod io;

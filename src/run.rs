@@ -12,12 +12,12 @@ use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
 
 use crate::contact::{detect_contacts, BoundaryTets, ContactPair, ContactSet, ContactSurface};
+use crate::dynamics::ExplicitDomain;
 use crate::error::{Error, Result};
 use crate::io::checkpoint::Checkpoint;
 use crate::io::particles::ParticleReport;
 use crate::io::{HistoryWriter, MeshPart, TimeSeriesWriter};
 use crate::model::Model;
-use crate::parallel::ExplicitDomain;
 use crate::parallel::{agree, Layout};
 use crate::petsc::Petsc;
 use crate::scenario::LoadedScenario;
@@ -391,7 +391,7 @@ pub fn run(
                     .into(),
             });
         };
-        let saved = crate::parallel::explicit::SavedMotion {
+        let saved = crate::dynamics::SavedMotion {
             positions: x,
             velocities: v,
             velocities_prev: ck.velocities_prev.as_deref(),

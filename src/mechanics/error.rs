@@ -1,9 +1,9 @@
 //! Error type of the mechanics module ([`MechanicsError`]).
 //!
 //! Element indices in these errors are positions in the element slice the
-//! failing function was given (the global element index for the serial
-//! [`ExplicitSolver`](super::ExplicitSolver), a rank-local index when the
-//! kernels run on a part of the mesh). Errors raised by a single-element
+//! failing function was given (the global element index when the kernels
+//! run on the whole mesh, a rank-local index when they run on a part of
+//! it). Errors raised by a single-element
 //! kernel carry `elem: None`; the loops over elements fill it in.
 
 /// Errors of the finite-strain mechanics kernels and the explicit integrator.
@@ -50,23 +50,6 @@ pub enum MechanicsError {
         what: &'static str,
         /// Its value.
         value: f64,
-    },
-
-    /// The requested time step exceeds the stable limit times the safety factor.
-    #[error(
-        "time step {dt:.3e} s exceeds the stable limit: safety {safety} x critical {critical:.3e} s \
-         = {limit:.3e} s (limited by element {elem}); reduce dt",
-        limit = .safety * .critical
-    )]
-    TimeStepTooLarge {
-        /// Requested step.
-        dt: f64,
-        /// Critical step estimate of [`critical_dt`](super::critical_dt).
-        critical: f64,
-        /// Safety factor.
-        safety: f64,
-        /// Element that limits the step.
-        elem: usize,
     },
 
     /// Two inputs that must have matching lengths do not, or an index is out of range.

@@ -11,7 +11,8 @@
 //! - [`material`]: [`ElasticMaterial`] (E, ν, ρ, α, η) and its Lamé constants.
 //! - [`explicit`]: lumped mass, central-difference update with gravity,
 //!   mass-proportional damping and velocity boundary conditions, stable
-//!   time step, and the serial [`ExplicitSolver`] (sec 3.2 free expansion).
+//!   time step; the loop over them (one rank or many) is
+//!   [`crate::dynamics::ExplicitDomain`].
 //! - [`frequency`]: the highest natural frequency of a whole small body
 //!   (its exact explicit step limit) and congruence of template copies.
 //! - `error`: [`MechanicsError`].
@@ -28,8 +29,5 @@ pub mod material;
 
 pub use element::{element_response, ElementResponse, Kinematics, Tet4Reference, ThermalState};
 pub use error::MechanicsError;
-pub use explicit::{
-    critical_dt, CriticalDt, Energies, ExplicitConfig, ExplicitSolver, MechElement, ThermalLoad,
-    VelocityBc,
-};
+pub use explicit::{critical_dt, CriticalDt, MechElement, ThermalLoad, VelocityBc};
 pub use material::ElasticMaterial;

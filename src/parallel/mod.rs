@@ -8,12 +8,10 @@
 //! part among the elements that touch it; rank r's owned nodes get the
 //! consecutive global numbers [start_r, end_r), sorted by original id.
 
-pub mod explicit;
 mod halo;
 mod layout;
 mod partition;
 
-pub use explicit::{ExplicitDomain, MechanicsState};
 pub use halo::Halo;
 pub use layout::Layout;
 pub use partition::{dual_graph, dual_graph_with, partition_elements, partition_elements_weighted};

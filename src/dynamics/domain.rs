@@ -1,0 +1,443 @@
+//! The domain state of one rank and its set-up: local numbering, masses,
+//! boundary conditions, initial motion, element temperatures (seed 004
+//! sec 2: the element reference data and the thermal split ΔT).
+
+use mpi::topology::SimpleCommunicator;
+use nalgebra::{Matrix3, Vector3};
+use parry3d_f64::partitioning::Bvh;
+
+use super::candidates::Candidate;
+use super::state::MechanicsCounters;
+use super::substep::TetGeometry;
+use super::time_step::time_step;
+use super::NONE;
+use crate::contact::penalty::{LinearizedOverlap, PenaltyParams};
+use crate::contact::BoundaryTets;
+use crate::error::{Error, Result};
+use crate::geometry::TetPlanes;
+use crate::mechanics::{ElasticMaterial, MechElement, Tet4Reference, VelocityBc};
+use crate::model::{Body, Model};
+use crate::parallel::{Halo, Layout};
+
+/// One rank's part of the explicit mechanics.
+pub struct ExplicitDomain {
+    pub(super) rank: u32,
+    pub(super) n_owned: usize,
+    /// Original node id of every local node.
+    pub(super) node_of_local: Vec<u32>,
+    pub(super) n_elem_ghosts: usize,
+    /// Local index of every original node (NONE if not local).
+    pub(super) local_of: Vec<u32>,
+    pub(super) halo: Halo,
+    pub(super) elements: Vec<MechElement>,
+    pub(super) elem_ids: Vec<u32>,
+    pub(super) elem_tref: Vec<f64>,
+    pub(super) n_boundary: usize,
+    pub(super) materials: Vec<ElasticMaterial>,
+    pub(super) global_mass: Vec<f64>,
+    pub(super) global_bc: Vec<VelocityBc>,
+    pub(super) mass: Vec<f64>,
+    pub(super) x: Vec<Vector3<f64>>,
+    pub(super) v: Vec<Vector3<f64>>,
+    pub(super) x0: Vec<Vector3<f64>>,
+    pub(super) bc: Vec<VelocityBc>,
+    pub(super) ext: Vec<Vector3<f64>>,
+    pub(super) f: Vec<Vector3<f64>>,
+    pub(super) stress: Vec<Matrix3<f64>>,
+    pub(super) node_t: Vec<f64>,
+    pub(super) elem_dt: Vec<f64>,
+    pub(super) elem_rate: Vec<f64>,
+    /// Positions of every node, refreshed at each detection.
+    pub(super) x_all: Vec<[f64; 3]>,
+    pub(super) orig_of_global: Vec<u32>,
+    /// Whole bodies held (fixed or kinematic).
+    pub(super) body_held: Vec<bool>,
+    pub(super) boundary: BoundaryTets,
+    /// Per body, its boundary tets (indices into `boundary.elems`), and
+    /// those of them this rank owns.
+    pub(super) body_bt: Vec<Vec<u32>>,
+    pub(super) my_body_bt: Vec<Vec<u32>>,
+    /// Trees of the fixed bodies' boundary tets (they never move).
+    pub(super) fixed_trees: Vec<Option<Bvh>>,
+    /// Per element, its index in `pair_tets` while the lists are built
+    /// (NONE otherwise).
+    pub(super) tet_slot: Vec<u32>,
+    pub(super) penalty: Option<(PenaltyParams, f64)>,
+    /// Search margin (m) of the current candidates, between `margin_min`
+    /// and [`MARGIN_GROWTH`] × `margin_min`, chosen at each detection.
+    pub(super) margin: f64,
+    pub(super) margin_min: f64,
+    pub(super) candidates: Vec<Candidate>,
+    /// Local nodes of the tets of the candidate pairs, each tet once.
+    pub(super) pair_tets: Vec<[u32; 4]>,
+    /// Per substep: corners and bounding box of each of `pair_tets`.
+    pub(super) pair_geometry: Vec<TetGeometry>,
+    /// Planes of each of `pair_tets`, built when an exact evaluation
+    /// needs them, at most once per substep (`planes_stamp`).
+    pub(super) pair_planes: Vec<TetPlanes>,
+    pub(super) planes_stamp: Vec<u64>,
+    /// Substeps since set-up (stamps `pair_planes`).
+    pub(super) substep_id: u64,
+    /// `mechanics.contact.linear_tolerance` (0: every pair exact).
+    pub(super) linear_tolerance: f64,
+    /// Per candidate, its slot in `linearized` (NONE: none valid).
+    pub(super) lin_of: Vec<u32>,
+    pub(super) linearized: Vec<LinearizedOverlap>,
+    /// Per candidate, a separating axis found when it last did not
+    /// overlap (`geometry::separating_axis`; 0: none).
+    pub(super) witness: Vec<u8>,
+    pub(super) x_detect: Vec<Vector3<f64>>,
+    /// Force contributions: 4 per element, 8 per candidate pair, then those
+    /// received from neighbours for shared nodes.
+    pub(super) contrib: Vec<Vector3<f64>>,
+    /// Per owned node, its contribution slots in (global) key order.
+    pub(super) gather_off: Vec<u32>,
+    pub(super) gather_slot: Vec<u32>,
+    /// Per halo neighbour: slots sent to it, and where its slots land.
+    pub(super) send_slots: Vec<Vec<u32>>,
+    pub(super) recv_at: Vec<(usize, usize)>,
+    /// Owned velocities before the last substep (v^{n−½}), for energies at t_n.
+    pub(super) v_prev: Vec<Vector3<f64>>,
+    /// Time step (s).
+    pub dt: f64,
+    pub(super) gravity: Vector3<f64>,
+    pub(super) damping: f64,
+    /// Damping of bodies that touch nothing (None: `damping` everywhere).
+    pub(super) free_damping: Option<f64>,
+    /// Body of each owned node.
+    pub(super) owned_body: Vec<u32>,
+    /// Per body, this substep: 1 if some pair of it overlaps (any rank).
+    pub(super) touching: Vec<u8>,
+    pub(super) strain_energy: f64,
+    pub(super) contact_energy: f64,
+    pub(super) dissipated: f64,
+    pub(super) active_pairs: u64,
+    pub(super) redetect: bool,
+    /// Counters.
+    pub counters: MechanicsCounters,
+}
+
+impl ExplicitDomain {
+    /// Collective. Set up this rank's subdomain at rest (free bodies at
+    /// their initial velocity) in the reference configuration, choose the
+    /// time step (the scenario's, checked against the critical one, or
+    /// safety × critical), and detect the first contact candidates.
+    /// `coupling_dt` is the thermal step the substeps must fill when the
+    /// clocks are coupled.
+    pub fn new(
+        comm: &SimpleCommunicator,
+        model: &Model,
+        layout: &Layout,
+        coupling_dt: f64,
+    ) -> Result<(ExplicitDomain, u64)> {
+        let mm = model.mechanics.as_ref().expect("mechanics model");
+        let mesh = &model.mesh;
+        let nn = mesh.nodes.len();
+        let materials: Vec<ElasticMaterial> = model
+            .materials
+            .iter()
+            .map(|m| {
+                m.elastic.unwrap_or(ElasticMaterial {
+                    young: 1.0,
+                    poisson: 0.0,
+                    density: m.density,
+                    expansion: 0.0,
+                    viscosity: 0.0,
+                })
+            })
+            .collect();
+        for (i, m) in materials.iter().enumerate() {
+            m.validate().map_err(|e| {
+                Error::Mechanics(format!("material `{}`: {e}", model.materials[i].name))
+            })?;
+        }
+        let body_held: Vec<bool> = model.bodies.iter().map(Body::is_held).collect();
+        // Lumped masses of every node from the replicated mesh (no messages).
+        let mut global_mass = vec![0.0; nn];
+        let mut refs: Vec<Option<Tet4Reference>> = vec![None; mesh.tets.len()];
+        let mut local_error = None;
+        for &e in &layout.owned_elems {
+            let e = e as usize;
+            match Tet4Reference::from_coords(&mesh.element_coords(e)) {
+                Ok(r) => refs[e] = Some(r),
+                Err(err) => {
+                    local_error.get_or_insert(Error::Mechanics(format!("element {e}: {err}")));
+                }
+            }
+        }
+        crate::parallel::agree(comm, local_error.map_or(Ok(()), Err))?;
+        for (e, t) in mesh.tets.iter().enumerate() {
+            // Not numbered in the seeds: row-sum lumped mass ρ V0/4 per node of a Tet4.
+            let share = model.material_of(e).density * mesh.element_volume(e) / 4.0;
+            for &n in t {
+                global_mass[n as usize] += share;
+            }
+        }
+        let rank = layout.rank as u32;
+        let mut elem_ids = Vec::new();
+        for &e in &layout.owned_elems {
+            if !body_held[mesh.body[e as usize] as usize] {
+                elem_ids.push(e);
+            }
+        }
+        let mut orig_of_global = vec![0u32; nn];
+        for (n, &g) in layout.global_of.iter().enumerate() {
+            orig_of_global[g as usize] = n as u32;
+        }
+        let x_all = mesh.nodes.clone();
+        let penalty = mm.contact.as_ref().map(|c| {
+            (
+                PenaltyParams {
+                    stiffness: 0.0,
+                    damping_ratio: c.damping_ratio,
+                    reduced_mass: 0.0,
+                    friction: c.friction,
+                    slip_velocity: c.slip_velocity,
+                    time_step: 0.0,
+                },
+                c.penalty,
+            )
+        });
+        let pn = penalty.as_ref().map(|(_, pn)| *pn);
+        let (dt, substeps, min_len_all) =
+            time_step(comm, model, &materials, &elem_ids, pn, coupling_dt)?;
+        let margin = mm
+            .contact
+            .as_ref()
+            .and_then(|c| c.margin)
+            .unwrap_or(0.5 * min_len_all);
+        let global_bc = mm.bc.clone();
+        let mut dom = ExplicitDomain {
+            rank,
+            n_owned: layout.owned_nodes.len(),
+            node_of_local: Vec::new(),
+            n_elem_ghosts: 0,
+            local_of: vec![NONE; nn],
+            halo: Halo::default(),
+            elements: Vec::new(),
+            elem_ids,
+            elem_tref: Vec::new(),
+            n_boundary: 0,
+            materials,
+            global_mass,
+            global_bc,
+            mass: Vec::new(),
+            x: Vec::new(),
+            v: Vec::new(),
+            x0: Vec::new(),
+            bc: Vec::new(),
+            ext: Vec::new(),
+            f: Vec::new(),
+            stress: Vec::new(),
+            node_t: Vec::new(),
+            elem_dt: Vec::new(),
+            elem_rate: Vec::new(),
+            x_all,
+            orig_of_global,
+            body_held,
+            boundary: BoundaryTets::new(mesh),
+            body_bt: Vec::new(),
+            my_body_bt: Vec::new(),
+            fixed_trees: (0..model.bodies.len()).map(|_| None).collect(),
+            tet_slot: vec![NONE; mesh.tets.len()],
+            penalty,
+            margin,
+            margin_min: margin,
+            candidates: Vec::new(),
+            pair_tets: Vec::new(),
+            pair_geometry: Vec::new(),
+            pair_planes: Vec::new(),
+            planes_stamp: Vec::new(),
+            substep_id: 0,
+            linear_tolerance: mm.contact.as_ref().map_or(0.0, |c| c.linear_tolerance),
+            lin_of: Vec::new(),
+            linearized: Vec::new(),
+            witness: Vec::new(),
+            x_detect: Vec::new(),
+            v_prev: Vec::new(),
+            contrib: Vec::new(),
+            gather_off: Vec::new(),
+            gather_slot: Vec::new(),
+            send_slots: Vec::new(),
+            recv_at: Vec::new(),
+            dt,
+            gravity: Vector3::from(mm.gravity),
+            damping: mm.damping,
+            free_damping: mm.free_damping,
+            owned_body: layout
+                .owned_nodes
+                .iter()
+                .map(|&n| model.body_of_node(n) as u32)
+                .collect(),
+            touching: vec![0; model.bodies.len()],
+            strain_energy: 0.0,
+            contact_energy: 0.0,
+            dissipated: 0.0,
+            active_pairs: 0,
+            redetect: false,
+            counters: MechanicsCounters::default(),
+        };
+        // Owned nodes, then the ghosts of the owned elements.
+        dom.node_of_local = layout.owned_nodes.clone();
+        for (i, &n) in layout.owned_nodes.iter().enumerate() {
+            dom.local_of[n as usize] = i as u32;
+        }
+        let mut ghosts: Vec<u32> = dom
+            .elem_ids
+            .iter()
+            .flat_map(|&e| mesh.tets[e as usize])
+            .filter(|&n| layout.node_owner[n as usize] != rank)
+            .collect();
+        ghosts.sort_unstable();
+        ghosts.dedup();
+        for &n in &ghosts {
+            dom.local_of[n as usize] = dom.node_of_local.len() as u32;
+            dom.node_of_local.push(n);
+        }
+        dom.n_elem_ghosts = ghosts.len();
+        let nl = dom.node_of_local.len();
+        dom.x = dom
+            .node_of_local
+            .iter()
+            .map(|&n| Vector3::from(mesh.nodes[n as usize]))
+            .collect();
+        dom.x0 = dom.x.clone();
+        dom.v = dom
+            .node_of_local
+            .iter()
+            .map(|&n| {
+                let b = &model.bodies[model.body_of_node(n)];
+                if b.velocity != [0.0; 3] {
+                    Vector3::from(b.velocity)
+                } else {
+                    Vector3::from(b.initial_velocity)
+                }
+            })
+            .collect();
+        dom.ext = (0..nl)
+            .map(|i| {
+                if i < dom.n_owned {
+                    Vector3::from(mm.traction[dom.node_of_local[i] as usize])
+                } else {
+                    Vector3::zeros()
+                }
+            })
+            .collect();
+        dom.node_t = dom
+            .node_of_local
+            .iter()
+            .map(|&n| model.thermal.initial[n as usize])
+            .collect();
+        dom.elem_tref = dom
+            .elem_ids
+            .iter()
+            .map(|&e| model.bodies[mesh.body[e as usize] as usize].reference_temperature)
+            .collect();
+        dom.elements = dom
+            .elem_ids
+            .iter()
+            .map(|&e| MechElement {
+                nodes: mesh.tets[e as usize].map(|n| dom.local_of[n as usize]),
+                reference: refs[e as usize].expect("owned element"),
+                material: model.elem_material[e as usize],
+            })
+            .collect();
+        dom.body_bt = vec![Vec::new(); model.bodies.len()];
+        dom.my_body_bt = vec![Vec::new(); model.bodies.len()];
+        for (i, &e) in dom.boundary.elems.iter().enumerate() {
+            let b = mesh.body[e as usize] as usize;
+            dom.body_bt[b].push(i as u32);
+            if layout.elem_part[e as usize] == rank {
+                dom.my_body_bt[b].push(i as u32);
+            }
+        }
+        dom.refresh_local_arrays();
+        dom.detect(comm, model, layout)?;
+        dom.update_element_temperatures(None);
+        Ok((dom, substeps))
+    }
+
+    /// Arrays sized by the local node count, after the numbering changed.
+    pub(super) fn refresh_local_arrays(&mut self) {
+        let nl = self.node_of_local.len();
+        self.mass = self
+            .node_of_local
+            .iter()
+            .map(|&n| self.global_mass[n as usize])
+            .collect();
+        self.bc = self
+            .node_of_local
+            .iter()
+            .map(|&n| self.global_bc[n as usize])
+            .collect();
+        self.f.resize(nl, Vector3::zeros());
+        self.ext.resize(nl, Vector3::zeros());
+        let old = self.x.len();
+        for i in old..nl {
+            let p = self.x_all[self.node_of_local[i] as usize];
+            self.x.push(Vector3::from(p));
+            self.v.push(Vector3::zeros());
+            self.x0.push(Vector3::zeros());
+            self.node_t.push(0.0);
+        }
+        self.x.truncate(nl);
+        self.v.truncate(nl);
+        self.x0.truncate(nl);
+        self.node_t.truncate(nl);
+    }
+
+    pub(super) fn forward_state(&mut self, comm: &SimpleCommunicator) {
+        let (x, v) = (flat_mut(&mut self.x), flat_mut(&mut self.v));
+        self.halo.forward(comm, &mut [x, v], 3);
+    }
+
+    /// Collective. New nodal temperatures of the owned nodes (layout
+    /// order), reached over `dt` seconds (for the temperature rate in the
+    /// viscous stress; `None`: no rate).
+    pub fn set_temperatures(&mut self, comm: &SimpleCommunicator, owned: &[f64], dt: Option<f64>) {
+        self.node_t[..self.n_owned].copy_from_slice(owned);
+        let t = &mut self.node_t[..];
+        self.halo.forward(comm, &mut [t], 1);
+        self.update_element_temperatures(dt);
+    }
+
+    fn update_element_temperatures(&mut self, dt: Option<f64>) {
+        let new: Vec<f64> = self
+            .elements
+            .iter()
+            .zip(&self.elem_tref)
+            .map(|(el, &tref)| {
+                // Not numbered in the seeds: element ΔT = mean of its four nodal temperatures − the stress-free temperature.
+                el.nodes
+                    .iter()
+                    .map(|&l| self.node_t[l as usize])
+                    .sum::<f64>()
+                    / 4.0
+                    - tref
+            })
+            .collect();
+        self.elem_rate = match (dt, self.elem_dt.len() == new.len()) {
+            (Some(dt), true) => new
+                .iter()
+                .zip(&self.elem_dt)
+                .map(|(a, b)| (a - b) / dt)
+                .collect(),
+            _ => vec![0.0; new.len()],
+        };
+        self.elem_dt = new;
+    }
+
+    /// Number of elements this rank integrates.
+    pub fn num_elements(&self) -> usize {
+        self.elements.len()
+    }
+}
+
+/// The coordinates of a slice of 3-vectors as one flat slice.
+fn flat_mut(v: &mut [Vector3<f64>]) -> &mut [f64] {
+    const _: () = assert!(std::mem::size_of::<Vector3<f64>>() == 3 * std::mem::size_of::<f64>());
+    // SAFETY: Vector3<f64> is a #[repr(C)] matrix over an array storage of
+    // exactly three f64 (size asserted above, alignment that of f64), so a
+    // slice of them is 3 × len contiguous f64 with no padding.
+    unsafe { std::slice::from_raw_parts_mut(v.as_mut_ptr() as *mut f64, v.len() * 3) }
+}

@@ -1,0 +1,58 @@
+//! Per-rank explicit dynamics: the subdomain of one rank (its METIS
+//! elements, owned nodes and ghost nodes), halo exchange each substep, and
+//! penalty-contact candidate lists (seed 004 sec 2 for the element
+//! kinematics and stress; seed 000 sec 3.4 for the place of the mechanics
+//! in the step; the contact potential in `contact::penalty`). The twin of
+//! the thermal integrator [`crate::thermal::ThermalSystem`]; on one rank
+//! it is the serial solver. The element and node kernels it calls
+//! (seed 004 eqs 1–35, central differences) are in
+//! [`crate::mechanics::explicit`]; ownership, halos and collectives in
+//! [`crate::parallel`].
+//!
+//! One substep (collective over neighbours, one small all-reduce):
+//! 1. contact forces of this rank's candidate pairs (they may touch ghost
+//!    nodes), internal forces of the elements next to the halo;
+//! 2. ghost forces sent to their owners (non-blocking) while the interior
+//!    elements' forces are computed; owners add what they receive;
+//! 3. owners advance their nodes (central differences);
+//! 4. new positions and velocities copied to the ghosts;
+//! 5. one all-reduce agrees on errors and on whether any node moved far
+//!    enough (half the search margin) to redo contact detection.
+//!
+//! Local numbering: owned nodes first, in the layout's (PETSc) order, then
+//! the ghosts of the owned elements, then the ghosts that only contacts
+//! need. A contact pair joins two boundary tets of different bodies and is
+//! found by the rank owning one of them, `a` (the free body's tet against
+//! a held body, else the lower body's), so every pair is counted once over
+//! the ranks; the found pairs are then shared out so every rank has about
+//! the same contact work (`balance_pairs`). With `free_damping`, step 3
+//! first agrees (one all-reduce over the bodies) on which bodies touch.
+//!
+//! Files, one job each (all `impl ExplicitDomain`):
+//! - `domain`: the domain state and its set-up ([`ExplicitDomain::new`]),
+//!   nodal temperatures;
+//! - `time_step`: the explicit step from the bodies' highest frequencies
+//!   and the contact penalty;
+//! - `substep`: [`ExplicitDomain::advance`], one substep (contact and
+//!   element forces, halo exchange, central differences);
+//! - `candidates`: contact detection (broad phase candidate lists, the
+//!   ghost list and halo) and `balance_pairs`;
+//! - `force_sum`: the global-order force summation that makes the
+//!   trajectories bitwise the same on any number of ranks;
+//! - `state`: energies, output fields, checkpoint save and restore.
+
+mod candidates;
+mod domain;
+mod force_sum;
+mod state;
+mod substep;
+mod time_step;
+
+#[cfg(test)]
+mod tests;
+
+pub use domain::ExplicitDomain;
+pub use state::{MechanicsCounters, MechanicsState, SavedMotion};
+
+/// Marks an absent local index or slot.
+const NONE: u32 = u32::MAX;

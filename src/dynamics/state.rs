@@ -1,0 +1,245 @@
+//! What the domain reports and restores: energies and momentum over the
+//! ranks, the owned fields for output, every node's motion for
+//! checkpoints, and the continuation from a saved motion.
+
+use mpi::collective::SystemOperation;
+use mpi::topology::SimpleCommunicator;
+use mpi::traits::*;
+use nalgebra::{Matrix3, Vector3};
+
+use super::ExplicitDomain;
+use crate::error::Result;
+use crate::model::Model;
+use crate::parallel::Layout;
+
+/// The motion a checkpoint saves, every node in the original numbering.
+#[derive(Debug, Clone, Copy)]
+pub struct SavedMotion<'a> {
+    /// Positions x^n.
+    pub positions: &'a [[f64; 3]],
+    /// Velocities of the last substep.
+    pub velocities: &'a [[f64; 3]],
+    /// Velocities of the substep before, when saved.
+    pub velocities_prev: Option<&'a [[f64; 3]]>,
+    /// Energy dissipated so far (J).
+    pub dissipated: f64,
+    /// Each rank's share of it, when saved by a run on as many ranks as
+    /// this one: the sum then continues bitwise.
+    pub dissipated_per_rank: Option<&'a [f64]>,
+}
+
+/// Energies and momentum summed over the ranks.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct MechanicsState {
+    /// Kinetic energy (J), at the half step.
+    pub kinetic: f64,
+    /// Stored elastic energy (J).
+    pub strain: f64,
+    /// Penalty contact energy (J).
+    pub contact: f64,
+    /// Energy dissipated by contact friction and damping so far (J).
+    pub dissipated: f64,
+    /// Linear momentum (kg m/s).
+    pub momentum: [f64; 3],
+    /// Contact pairs with overlap in the last substep.
+    pub active_pairs: u64,
+    /// Candidate pairs.
+    pub candidate_pairs: u64,
+}
+
+/// Counters for the run summary.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct MechanicsCounters {
+    /// Substeps taken.
+    pub substeps: u64,
+    /// Element updates (sum over ranks is the caller's business).
+    pub element_updates: u64,
+    /// Pair evaluations.
+    pub pair_updates: u64,
+    /// Exact overlap evaluations (the rest were boxes apart or linearised).
+    pub exact_overlaps: u64,
+    /// Contact detections.
+    pub detections: u64,
+    /// Seconds in contact detection and halo rebuilds.
+    pub detect_time: f64,
+}
+
+impl ExplicitDomain {
+    /// Collective. Energies and momentum over all ranks, at the time
+    /// level of the last substep's force evaluation (t_n: potentials at
+    /// x^n, velocity (v^{n−½} + v^{n+½})/2).
+    pub fn state(&self, comm: &SimpleCommunicator) -> MechanicsState {
+        let no = self.n_owned;
+        let mut kin = 0.0;
+        let mut mom = [0.0; 3];
+        for i in 0..no {
+            let m = self.mass[i];
+            let v = match self.v_prev.get(i) {
+                Some(vp) => 0.5 * (vp + self.v[i]),
+                None => self.v[i],
+            };
+            kin += 0.5 * m * v.norm_squared();
+            for d in 0..3 {
+                mom[d] += m * v[d];
+            }
+        }
+        let local = [
+            kin,
+            self.strain_energy,
+            self.contact_energy,
+            self.dissipated,
+            mom[0],
+            mom[1],
+            mom[2],
+            self.active_pairs as f64,
+            self.candidates.len() as f64,
+        ];
+        let mut sum = [0.0; 9];
+        comm.all_reduce_into(&local[..], &mut sum[..], SystemOperation::sum());
+        MechanicsState {
+            kinetic: sum[0],
+            strain: sum[1],
+            contact: sum[2],
+            dissipated: sum[3],
+            momentum: [sum[4], sum[5], sum[6]],
+            active_pairs: sum[7] as u64,
+            candidate_pairs: sum[8] as u64,
+        }
+    }
+
+    /// Displacement x − X of the owned nodes (layout order), flat.
+    pub fn displacement(&self) -> Vec<f64> {
+        self.x[..self.n_owned]
+            .iter()
+            .zip(&self.x0)
+            .flat_map(|(x, x0)| {
+                let u = x - x0;
+                [u.x, u.y, u.z]
+            })
+            .collect()
+    }
+
+    /// Velocity of the owned nodes (layout order), flat.
+    pub fn velocity(&self) -> Vec<f64> {
+        self.v[..self.n_owned]
+            .iter()
+            .flat_map(|v| [v.x, v.y, v.z])
+            .collect()
+    }
+
+    /// Cauchy stress of the owned elements in `owned_elems` order, six
+    /// values per element in XDMF `Tensor6` order (xx, xy, xz, yy, yz, zz,
+    /// [`crate::io::tensor6`]); zero in held bodies.
+    pub fn stress_tensor6(&self, owned_elems: &[u32]) -> Vec<f64> {
+        let mut pos = std::collections::HashMap::with_capacity(self.elem_ids.len());
+        for (i, &e) in self.elem_ids.iter().enumerate() {
+            pos.insert(e, i);
+        }
+        owned_elems
+            .iter()
+            .flat_map(|e| {
+                let s = pos.get(e).map_or(Matrix3::zeros(), |&i| self.stress[i]);
+                crate::io::tensor6(&s)
+            })
+            .collect()
+    }
+
+    /// Current positions of every node, as of the last detection or
+    /// [`Self::gather_positions`].
+    pub fn positions(&self) -> &[[f64; 3]] {
+        &self.x_all
+    }
+
+    /// Collective. Refresh [`Self::positions`] from the owners (gathered in
+    /// PETSc order).
+    pub fn gather_positions(&mut self, comm: &SimpleCommunicator) {
+        let owned: Vec<f64> = self.x[..self.n_owned]
+            .iter()
+            .flat_map(|p| [p.x, p.y, p.z])
+            .collect();
+        let all = crate::parallel::all_gather_f64(comm, &owned);
+        for (g, c) in all.chunks_exact(3).enumerate() {
+            self.x_all[self.orig_of_global[g] as usize] = [c[0], c[1], c[2]];
+        }
+    }
+
+    /// Collective. The velocities of the substep before the last (original
+    /// numbering), `None` before the first substep (or right after a
+    /// restore that had none).
+    pub fn gather_velocities_prev(&self, comm: &SimpleCommunicator) -> Option<Vec<[f64; 3]>> {
+        let mut have = i32::from(self.v_prev.len() >= self.n_owned);
+        let mine = have;
+        comm.all_reduce_into(&mine, &mut have, SystemOperation::min());
+        if have == 0 {
+            return None;
+        }
+        let owned: Vec<f64> = self.v_prev[..self.n_owned]
+            .iter()
+            .flat_map(|v| [v.x, v.y, v.z])
+            .collect();
+        let all = crate::parallel::all_gather_f64(comm, &owned);
+        let mut out = vec![[0.0; 3]; self.x_all.len()];
+        for (g, c) in all.chunks_exact(3).enumerate() {
+            out[self.orig_of_global[g] as usize] = [c[0], c[1], c[2]];
+        }
+        Some(out)
+    }
+
+    /// Collective. Velocities of every node (original numbering).
+    pub fn gather_velocities(&self, comm: &SimpleCommunicator) -> Vec<[f64; 3]> {
+        let owned = self.velocity();
+        let all = crate::parallel::all_gather_f64(comm, &owned);
+        let mut out = vec![[0.0; 3]; self.x_all.len()];
+        for (g, c) in all.chunks_exact(3).enumerate() {
+            out[self.orig_of_global[g] as usize] = [c[0], c[1], c[2]];
+        }
+        out
+    }
+
+    /// Collective. Continue from a saved state ([`SavedMotion`]): positions and velocities
+    /// of every node (original numbering) and the energy dissipated so
+    /// far. Contact candidates are detected afresh; forces depend only on
+    /// the overlapping pairs and are summed in a fixed order, so the
+    /// trajectory continues exactly as it would have.
+    pub fn restore(
+        &mut self,
+        comm: &SimpleCommunicator,
+        model: &Model,
+        layout: &Layout,
+        saved: SavedMotion,
+    ) -> Result<()> {
+        let SavedMotion {
+            positions,
+            velocities,
+            velocities_prev,
+            dissipated,
+            dissipated_per_rank,
+        } = saved;
+        self.x_all.copy_from_slice(positions);
+        for (i, &n) in self.node_of_local.iter().enumerate() {
+            self.x[i] = Vector3::from(positions[n as usize]);
+            self.v[i] = Vector3::from(velocities[n as usize]);
+        }
+        self.dissipated = match dissipated_per_rank {
+            Some(d) if d.len() == comm.size() as usize => d[comm.rank() as usize],
+            _ if comm.rank() == 0 => dissipated,
+            _ => 0.0,
+        };
+        self.v_prev.clear();
+        if let Some(vp) = velocities_prev {
+            self.v_prev.extend(
+                self.node_of_local[..self.n_owned]
+                    .iter()
+                    .map(|&n| Vector3::from(vp[n as usize])),
+            );
+        }
+        self.detect(comm, model, layout)?;
+        self.redetect = false;
+        Ok(())
+    }
+
+    /// Collective. Each rank's share of the dissipated energy, by rank.
+    pub fn gather_dissipated(&self, comm: &SimpleCommunicator) -> Vec<f64> {
+        crate::parallel::all_gather_f64(comm, &[self.dissipated])
+    }
+}

@@ -1,0 +1,319 @@
+//! One substep of the explicit dynamics: contact forces of the candidate
+//! pairs, element forces (seed 004 eqs 5–35 via
+//! [`crate::mechanics::explicit::element_forces`]) with the halo exchange
+//! of ghost contributions overlapping the interior elements, and the
+//! central-difference update of the owned nodes
+//! ([`crate::mechanics::explicit::update_nodes_damped`]).
+
+use mpi::collective::SystemOperation;
+use mpi::topology::SimpleCommunicator;
+use mpi::traits::*;
+use nalgebra::Vector3;
+
+use super::{ExplicitDomain, NONE};
+use crate::contact::penalty::{overlap_state, penalty_forces, LinearizedOverlap, PenaltyParams};
+use crate::error::{Error, Result};
+use crate::geometry::{separated_along, separating_axis, tet_bounds, TetPlanes};
+use crate::mechanics::explicit::{element_forces, update_nodes_damped, NodeUpdate, ThermalLoad};
+use crate::model::Model;
+use crate::parallel::Layout;
+
+/// Corners of a tet and its bounding box (low, high corner).
+pub(super) type TetGeometry = ([[f64; 3]; 4], [f64; 3], [f64; 3]);
+
+impl ExplicitDomain {
+    /// Collective. Advance by `n` substeps.
+    pub fn advance(
+        &mut self,
+        comm: &SimpleCommunicator,
+        model: &Model,
+        layout: &Layout,
+        n: u64,
+    ) -> Result<()> {
+        // Linearised pairs depend on when their models were made: starting
+        // every step with fresh candidates (and models) makes a restart,
+        // which detects afresh, repeat the run bitwise.
+        if self.linear_tolerance > 0.0 && n > 0 {
+            self.redetect = true;
+        }
+        for i in 0..n {
+            if i + 1 == n {
+                self.v_prev.clear();
+                self.v_prev.extend_from_slice(&self.v[..self.n_owned]);
+            }
+            if self.redetect {
+                self.detect(comm, model, layout)?;
+                self.redetect = false;
+            }
+            let local = self.substep(comm);
+            // Agree on errors and on the need to re-detect contacts.
+            let moved = if self.penalty.is_some() {
+                self.x[..self.n_owned]
+                    .iter()
+                    .zip(&self.x_detect)
+                    .map(|(a, b)| (a - b).norm_squared())
+                    .fold(0.0, f64::max)
+            } else {
+                0.0
+            };
+            let mine = [f64::from(u8::from(local.is_err())), moved];
+            let mut any = [0.0; 2];
+            comm.all_reduce_into(&mine[..], &mut any[..], SystemOperation::max());
+            if any[0] > 0.0 {
+                return match local {
+                    Err(e) => Err(e),
+                    Ok(()) => Err(Error::OtherRank),
+                };
+            }
+            let half = 0.5 * self.margin;
+            self.redetect = any[1] >= half * half;
+            self.counters.substeps += 1;
+        }
+        Ok(())
+    }
+
+    /// One substep (collective over neighbours only). Errors are returned
+    /// after the messages are exchanged, so no neighbour waits.
+    pub(super) fn substep(&mut self, comm: &SimpleCommunicator) -> Result<()> {
+        let mut error: Option<Error> = None;
+        let ne = self.elements.len();
+        let pair_base = 4 * ne;
+        // Contact forces, 8 slots per candidate pair.
+        self.contact_energy = 0.0;
+        self.active_pairs = 0;
+        self.touching.iter_mut().for_each(|t| *t = 0);
+        if let Some((params, _)) = &self.penalty {
+            let mut power = 0.0;
+            self.pair_geometry.clear();
+            self.pair_geometry.extend(self.pair_tets.iter().map(|t| {
+                let x: [[f64; 3]; 4] = t.map(|l| self.x[l as usize].into());
+                let (lo, hi) = tet_bounds(&x);
+                (x, lo, hi)
+            }));
+            self.substep_id += 1;
+            let now = self.substep_id;
+            let tolerance = self.linear_tolerance;
+            let geo = &self.pair_geometry;
+            let (planes, stamp) = (&mut self.pair_planes, &mut self.planes_stamp);
+            let (lin_of, linearized) = (&mut self.lin_of, &mut self.linearized);
+            let witness = &mut self.witness;
+            let mut exact = 0u64;
+            for (j, c) in self.candidates.iter().enumerate() {
+                let out = &mut self.contrib[pair_base + 8 * j..pair_base + 8 * j + 8];
+                let (ta, tb) = (c.ta as usize, c.tb as usize);
+                let ((xa, lo_a, hi_a), (xb, lo_b, hi_b)) = (&geo[ta], &geo[tb]);
+                let slot = lin_of[j] as usize;
+                // A contacting pair's linearised overlap, while it holds.
+                let lin_volume = linearized
+                    .get(slot)
+                    .and_then(|m| m.volume_at(xa, xb).map(|v| (m, v)));
+                // Most other candidates are apart: their boxes tell, or the
+                // axis that separated them when they were last evaluated.
+                if lin_volume.is_none()
+                    && ((0..3).any(|d| lo_a[d] > hi_b[d] || lo_b[d] > hi_a[d])
+                        || separated_along(xa, xb, witness[j]))
+                {
+                    lin_of[j] = NONE;
+                    out.iter_mut().for_each(|f| *f = Vector3::zeros());
+                    continue;
+                }
+                let (la, lb) = (&self.pair_tets[ta], &self.pair_tets[tb]);
+                let va = la.map(|l| self.v[l as usize].into());
+                let vb = lb.map(|l| self.v[l as usize].into());
+                let p = PenaltyParams {
+                    stiffness: c.stiffness,
+                    reduced_mass: c.reduced_mass,
+                    time_step: self.dt,
+                    ..*params
+                };
+                let result = match lin_volume {
+                    Some((m, v)) => Some(penalty_forces(&m.state, v, &va, &vb, &p)),
+                    None => {
+                        for t in [ta, tb] {
+                            if stamp[t] != now {
+                                planes[t] = TetPlanes::new(&geo[t].0);
+                                stamp[t] = now;
+                            }
+                        }
+                        exact += 1;
+                        match overlap_state((xa, &planes[ta]), (xb, &planes[tb])) {
+                            Some(s) => {
+                                witness[j] = 0;
+                                if tolerance > 0.0 {
+                                    let m = LinearizedOverlap::new(s, xa, xb, tolerance);
+                                    if slot < linearized.len() {
+                                        linearized[slot] = m;
+                                    } else {
+                                        lin_of[j] = linearized.len() as u32;
+                                        linearized.push(m);
+                                    }
+                                }
+                                Some(penalty_forces(&s, s.volume, &va, &vb, &p))
+                            }
+                            None => {
+                                lin_of[j] = NONE;
+                                witness[j] = separating_axis(xa, xb).unwrap_or(0);
+                                None
+                            }
+                        }
+                    }
+                };
+                match result {
+                    Some(r) => {
+                        for k in 0..4 {
+                            out[k] = Vector3::from(r.forces_a[k]);
+                            out[4 + k] = Vector3::from(r.forces_b[k]);
+                        }
+                        self.contact_energy += r.energy;
+                        power += r.dissipation;
+                        self.active_pairs += 1;
+                        self.touching[c.body_a as usize] = 1;
+                        self.touching[c.body_b as usize] = 1;
+                    }
+                    None => out.iter_mut().for_each(|f| *f = Vector3::zeros()),
+                }
+            }
+            self.dissipated += power * self.dt;
+            self.counters.pair_updates += self.candidates.len() as u64;
+            self.counters.exact_overlaps += exact;
+        }
+        // Elements next to the halo, then the interior while messages fly.
+        let nb = self.n_boundary;
+        let (dt_b, dt_i) = self.elem_dt.split_at(nb);
+        let (rate_b, rate_i) = self.elem_rate.split_at(nb);
+        let (s_b, s_i) = self.stress.split_at_mut(nb);
+        let (elem_part, rest) = self.contrib.split_at_mut(pair_base);
+        let (f_b, f_i) = elem_part.as_chunks_mut::<4>().0.split_at_mut(nb);
+        let mut strain = 0.0;
+        let mut elem_error = None;
+        match element_forces(
+            &self.elements[..nb],
+            &self.materials,
+            &self.x,
+            &self.v,
+            ThermalLoad::transient(dt_b, rate_b),
+            f_b,
+            Some(s_b),
+        ) {
+            Ok(w) => strain += w,
+            Err(e) => elem_error = Some((e, 0)),
+        }
+        // Ghost contributions, one by one, to their owners.
+        let send: Vec<Vec<f64>> = self
+            .send_slots
+            .iter()
+            .map(|slots| {
+                let mut buf = Vec::with_capacity(3 * slots.len());
+                for &s in slots {
+                    let s = s as usize;
+                    let f = if s < pair_base {
+                        f_b[s / 4][s % 4]
+                    } else {
+                        rest[s - pair_base]
+                    };
+                    buf.extend_from_slice(&[f.x, f.y, f.z]);
+                }
+                buf
+            })
+            .collect();
+        let mut recv: Vec<Vec<f64>> = self
+            .recv_at
+            .iter()
+            .map(|&(_, n)| vec![0.0; 3 * n])
+            .collect();
+        let interior = &self.elements[nb..];
+        let (materials, x, v) = (&self.materials, &self.x, &self.v);
+        let mut inner: std::result::Result<f64, crate::mechanics::MechanicsError> = Ok(0.0);
+        self.halo.exchange(comm, &send, &mut recv, || {
+            inner = element_forces(
+                interior,
+                materials,
+                x,
+                v,
+                ThermalLoad::transient(dt_i, rate_i),
+                f_i,
+                Some(s_i),
+            );
+        });
+        match inner {
+            Ok(w) => strain += w,
+            Err(e) => {
+                elem_error.get_or_insert((e, nb));
+            }
+        }
+        for (&(start, n), buf) in self.recv_at.iter().zip(&recv) {
+            for i in 0..n {
+                self.contrib[start + i] = Vector3::new(buf[3 * i], buf[3 * i + 1], buf[3 * i + 2]);
+            }
+        }
+        if let Some((e, offset)) = elem_error {
+            error.get_or_insert(self.element_error(e, offset));
+        }
+        self.strain_energy = strain;
+        self.counters.element_updates += ne as u64;
+        // Owned node forces, summed in key order; then the owners advance.
+        self.sum_owned_forces();
+        let no = self.n_owned;
+        let p = NodeUpdate {
+            dt: self.dt,
+            gravity: self.gravity,
+            mass_damping: self.damping,
+        };
+        let free = self.free_damping.unwrap_or(self.damping);
+        if self.free_damping.is_some() {
+            // Which bodies touch something, over all ranks (a body's pairs
+            // may be on another rank than its nodes).
+            let mine = self.touching.clone();
+            comm.all_reduce_into(&mine[..], &mut self.touching[..], SystemOperation::max());
+        }
+        let (touching, owned_body, damping) = (&self.touching, &self.owned_body, self.damping);
+        // Not in the seeds: packing-stage mass damping only on bodies in contact (free flight undamped).
+        let node_damping = |i: usize| {
+            if touching[owned_body[i] as usize] != 0 {
+                damping
+            } else {
+                free
+            }
+        };
+        if let Err(e) = update_nodes_damped(
+            &p,
+            node_damping,
+            &self.mass[..no],
+            &self.f[..no],
+            &self.bc[..no],
+            &mut self.x[..no],
+            &mut self.v[..no],
+        ) {
+            let msg = match e {
+                crate::mechanics::MechanicsError::NonFinite { node } => format!(
+                    "node {} became non-finite (NaN or infinite): the explicit step \
+                     is unstable or a contact exploded; reduce mechanics.dt or mechanics.safety",
+                    self.node_of_local[node]
+                ),
+                other => other.to_string(),
+            };
+            error.get_or_insert(Error::Mechanics(msg));
+        }
+        self.forward_state(comm);
+        match error {
+            Some(e) => Err(e),
+            None => Ok(()),
+        }
+    }
+
+    fn element_error(&self, e: crate::mechanics::MechanicsError, offset: usize) -> Error {
+        use crate::mechanics::MechanicsError as M;
+        match e {
+            M::Inverted {
+                elem: Some(i),
+                what,
+                value,
+            } => Error::Mechanics(format!(
+                "element {} turned inside out ({what} = {value:.6e}): the run diverged; \
+                 reduce mechanics.dt or mechanics.safety, or raise the contact penalty",
+                self.elem_ids[offset + i]
+            )),
+            other => Error::Mechanics(other.to_string()),
+        }
+    }
+}

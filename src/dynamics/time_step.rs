@@ -1,0 +1,164 @@
+//! The explicit time step: the exact highest frequency of each small free
+//! body, the element bound in larger ones (seed 004 sec 2, the Tet4 of
+//! [`crate::mechanics::element`]), and the contact penalty as a stiffer
+//! modulus.
+
+use mpi::collective::SystemOperation;
+use mpi::topology::SimpleCommunicator;
+use mpi::traits::*;
+use nalgebra::Vector3;
+
+use crate::error::{Error, Result};
+use crate::mechanics::element::{characteristic_length, element_critical_dt, to_vectors};
+use crate::mechanics::frequency::{
+    body_max_frequency, stable_step, BodyShape, BODY_EIGEN_MAX_NODES,
+};
+use crate::mechanics::ElasticMaterial;
+use crate::model::Model;
+
+/// Collective. The explicit step of the free elements `elem_ids` of this
+/// rank (`pn` the contact penalty, if any): the scenario's, checked against
+/// the critical one, or safety × critical, cut to fill `coupling_dt`.
+/// Returns (Δt, substeps per thermal step, the smallest characteristic
+/// element length over the ranks).
+pub(super) fn time_step(
+    comm: &SimpleCommunicator,
+    model: &Model,
+    materials: &[ElasticMaterial],
+    elem_ids: &[u32],
+    pn: Option<f64>,
+    coupling_dt: f64,
+) -> Result<(f64, u64, f64)> {
+    let mm = model.mechanics.as_ref().expect("mechanics model");
+    let mesh = &model.mesh;
+    // Time step: the exact highest frequency of each small free body
+    // (congruent copies share it), the element bound in larger ones; the
+    // contact penalty acts as a stiffer modulus.
+    let mut dt_local = f64::INFINITY;
+    let mut min_len = f64::INFINITY;
+    let mut body_elems: Vec<Vec<u32>> = vec![Vec::new(); model.bodies.len()];
+    for &e in elem_ids {
+        body_elems[mesh.body[e as usize] as usize].push(e);
+    }
+    let mut all_elems: Vec<Vec<u32>> = vec![Vec::new(); model.bodies.len()];
+    for (e, &b) in mesh.body.iter().enumerate() {
+        if !body_elems[b as usize].is_empty() {
+            all_elems[b as usize].push(e as u32);
+        }
+    }
+    let mut shapes: Vec<(BodyShape, f64)> = Vec::new();
+    let mut local_error = None;
+    for (b, owned) in body_elems.iter().enumerate() {
+        if owned.is_empty() {
+            continue;
+        }
+        for &e in owned {
+            min_len = min_len.min(characteristic_length(&to_vectors(
+                &mesh.element_coords(e as usize),
+            )));
+        }
+        let body_dt = body_frequency(model, materials, &all_elems[b], &mut shapes)
+            .map_err(|err| Error::Mechanics(format!("body `{}`: {err}", model.bodies[b].name)));
+        match body_dt.unwrap_or_else(|err| {
+            local_error.get_or_insert(err);
+            None
+        }) {
+            Some((omega, eta_over_m, m_min)) => {
+                dt_local = dt_local.min(stable_step(omega, eta_over_m * omega));
+                if let Some(pn) = pn {
+                    // Not numbered in the seeds: a penalty p_n acts like a modulus, Δt ≤ (2/ω) sqrt(M/p_n).
+                    dt_local = dt_local.min(2.0 / omega * (m_min / pn).sqrt());
+                }
+            }
+            None => {
+                for &e in owned {
+                    let e = e as usize;
+                    let xe = to_vectors(&mesh.element_coords(e));
+                    let mat = &materials[model.elem_material[e] as usize];
+                    dt_local = dt_local.min(element_critical_dt(&xe, mat));
+                    if let Some(pn) = pn {
+                        // Not numbered in the seeds: a penalty p_n acts like a modulus, Δt ≤ L sqrt(ρ/p_n).
+                        dt_local =
+                            dt_local.min(characteristic_length(&xe) * (mat.density / pn).sqrt());
+                    }
+                }
+            }
+        }
+    }
+    crate::parallel::agree(comm, local_error.map_or(Ok(()), Err))?;
+    let mut crit: f64 = 0.0;
+    comm.all_reduce_into(&dt_local, &mut crit, SystemOperation::min());
+    let mut min_len_all: f64 = 0.0;
+    comm.all_reduce_into(&min_len, &mut min_len_all, SystemOperation::min());
+    if !crit.is_finite() {
+        // Nothing deforms (all bodies held): any step works.
+        crit = coupling_dt;
+    }
+    let allowed = mm.safety * crit;
+    let (dt, substeps) = match (mm.dt, mm.substeps) {
+        (Some(dt), _) if dt > crit * (1.0 + 1e-12) => {
+            return Err(Error::Mechanics(format!(
+                "mechanics.dt = {dt:e} s exceeds the critical explicit step {crit:e} s of this \
+                 mesh, materials and contact penalty (safety × critical = {allowed:e} s)"
+            )))
+        }
+        (Some(dt), Some(n)) => (dt, n),
+        (None, Some(n)) => (allowed, n),
+        (given, None) => {
+            let limit = given.unwrap_or(allowed);
+            let n = (coupling_dt / limit).ceil().max(1.0) as u64;
+            (coupling_dt / n as f64, n)
+        }
+    };
+    Ok((dt, substeps, min_len_all))
+}
+
+/// For a free body of elements `elems` small enough for its exact highest
+/// frequency ([`BODY_EIGEN_MAX_NODES`]): (ω_max, the largest η/M, the
+/// smallest P-wave modulus M) of its elements; `None` for larger bodies.
+/// `shapes` caches ω_max of the shapes seen (copies of one template).
+fn body_frequency(
+    model: &Model,
+    materials: &[ElasticMaterial],
+    elems: &[u32],
+    shapes: &mut Vec<(BodyShape, f64)>,
+) -> std::result::Result<Option<(f64, f64, f64)>, crate::mechanics::MechanicsError> {
+    let mesh = &model.mesh;
+    let mut nodes: Vec<u32> = elems.iter().flat_map(|&e| mesh.tets[e as usize]).collect();
+    nodes.sort_unstable();
+    nodes.dedup();
+    if nodes.len() > BODY_EIGEN_MAX_NODES {
+        return Ok(None);
+    }
+    let local = |g: u32| nodes.binary_search(&g).expect("node of the body") as u32;
+    let tets: Vec<[u32; 4]> = elems
+        .iter()
+        .map(|&e| mesh.tets[e as usize].map(local))
+        .collect();
+    let mat_ids: Vec<u32> = elems
+        .iter()
+        .map(|&e| model.elem_material[e as usize])
+        .collect();
+    let x: Vec<Vector3<f64>> = nodes
+        .iter()
+        .map(|&g| Vector3::from(mesh.nodes[g as usize]))
+        .collect();
+    let shape = BodyShape::new(&x, &tets, &mat_ids);
+    let omega = match shapes.iter().find(|(s, _)| s.congruent(&shape)) {
+        Some(&(_, w)) => w,
+        None => {
+            let mats: Vec<ElasticMaterial> =
+                mat_ids.iter().map(|&m| materials[m as usize]).collect();
+            let w = body_max_frequency(&x, &tets, &mats)?;
+            shapes.push((shape, w));
+            w
+        }
+    };
+    let (mut eta_over_m, mut m_min) = (0.0_f64, f64::INFINITY);
+    for &m in &mat_ids {
+        let mat = &materials[m as usize];
+        eta_over_m = eta_over_m.max(mat.viscosity / mat.p_wave_modulus());
+        m_min = m_min.min(mat.p_wave_modulus());
+    }
+    Ok(Some((omega, eta_over_m, m_min)))
+}

@@ -7,6 +7,7 @@
 
 use crate::contact::DeltaT;
 use crate::error::{Error, Result};
+use crate::geometry::transform::{rotate_points, rotation_xyz_degrees, translate_points};
 use crate::mechanics::explicit::VelocityBc;
 use crate::mechanics::ElasticMaterial;
 use crate::mesh::{self, TetMesh};
@@ -233,7 +234,7 @@ impl Model {
                 }
                 for (name, mut c) in copies {
                     if let Some(t) = b.translate {
-                        translate(&mut c, t);
+                        translate_points(&mut c.nodes, t);
                     }
                     c.validate().map_err(|source| Error::Mesh {
                         context: format!("{context} ({name} from {})", file.display()),
@@ -330,14 +331,10 @@ impl Model {
                 source,
             })?;
             if let Some(r) = b.rotate {
-                let rot = rotation_xyz_degrees(r);
-                for p in m.nodes.iter_mut() {
-                    let q = rot * nalgebra::Vector3::new(p[0], p[1], p[2]);
-                    *p = [q.x, q.y, q.z];
-                }
+                rotate_points(&mut m.nodes, &rotation_xyz_degrees(r));
             }
             if let Some(t) = b.translate {
-                translate(&mut m, t);
+                translate_points(&mut m.nodes, t);
             }
             m.validate().map_err(|source| Error::Mesh {
                 context: context.clone(),
@@ -424,7 +421,7 @@ impl Model {
             };
             for (name, off) in copies {
                 let mut c = m.clone();
-                translate(&mut c, off);
+                translate_points(&mut c.nodes, off);
                 push_body(&mut combined, &mut bodies, b, name, c, material);
                 elem_material.extend_from_slice(&mat_of_elem);
             }
@@ -768,23 +765,6 @@ fn push_body(
         reference_temperature: b.reference_temperature.unwrap_or(b.initial_temperature),
         heating: b.heating.map(|h| (h.to, h.over)),
     });
-}
-
-fn translate(m: &mut TetMesh, t: [f64; 3]) {
-    for p in m.nodes.iter_mut() {
-        for d in 0..3 {
-            p[d] += t[d];
-        }
-    }
-}
-
-/// Rotation by angles (degrees) about x, then y, then z.
-pub fn rotation_xyz_degrees(r: [f64; 3]) -> nalgebra::Matrix3<f64> {
-    let [ax, ay, az] = r.map(f64::to_radians);
-    let rx = nalgebra::Rotation3::from_axis_angle(&nalgebra::Vector3::x_axis(), ax);
-    let ry = nalgebra::Rotation3::from_axis_angle(&nalgebra::Vector3::y_axis(), ay);
-    let rz = nalgebra::Rotation3::from_axis_angle(&nalgebra::Vector3::z_axis(), az);
-    (rz * ry * rx).into_inner()
 }
 
 /// Find the set a scenario names: `<body>.<set>` exactly, or `<set>` when

@@ -12,8 +12,8 @@ use crate::mechanics::explicit::VelocityBc;
 use crate::mechanics::ElasticMaterial;
 use crate::mesh::{self, TetMesh};
 use crate::scenario::{
-    contact_resistance, CapacityKind, LoadedScenario, MechanicsBcSpec, MeshSpec, PenaltySpec,
-    ThermalBcSpec,
+    contact_resistance, CapacityKind, LoadedScenario, MechanicsBcSpec, MeshSpec,
+    ParticleOutputSpec, PenaltySpec, SolverSpec, ThermalBcSpec,
 };
 
 /// A material's constants (thermal ones are 0 in a purely mechanical run).
@@ -125,6 +125,23 @@ pub struct ContactModel {
     pub every: u64,
 }
 
+/// What a run writes, and where.
+#[derive(Debug, Clone)]
+pub struct OutputPlan {
+    /// Directory: the scenario's (resolved against its file), else
+    /// `output/<stem>`; `--output` overrides it.
+    pub directory: std::path::PathBuf,
+    /// File stem (the scenario's, else its file's stem).
+    pub stem: String,
+    /// Write a restart checkpoint at the end of the run (and when the
+    /// packing settles).
+    pub checkpoint: bool,
+    /// Also overwrite the checkpoint every N steps (0: only at the end).
+    pub checkpoint_every: u64,
+    /// Particle statistics.
+    pub particles: Option<ParticleOutputSpec>,
+}
+
 /// Everything a run needs, independent of the rank count.
 #[derive(Debug, Clone)]
 pub struct Model {
@@ -150,6 +167,10 @@ pub struct Model {
     pub steps: u64,
     /// Steps at which fields are written (ascending, includes 0 and `steps`).
     pub output_steps: Vec<u64>,
+    /// Output files.
+    pub output: OutputPlan,
+    /// Linear solver of the thermal problem.
+    pub solver: SolverSpec,
 }
 
 /// The most output steps (field steps in the HDF5/XDMF series) a run may
@@ -650,6 +671,19 @@ impl Model {
             dt,
             steps,
             output_steps,
+            output: OutputPlan {
+                directory: s
+                    .output
+                    .directory
+                    .as_ref()
+                    .map(|d| sc.resolve(d))
+                    .unwrap_or_else(|| std::path::PathBuf::from("output").join(sc.output_stem())),
+                stem: sc.output_stem(),
+                checkpoint: s.output.checkpoint,
+                checkpoint_every: s.output.checkpoint_every,
+                particles: s.output.particles.clone(),
+            },
+            solver: s.solver.clone(),
             thermal_active: s.has_thermal(),
             mechanics,
             elem_material,

@@ -157,10 +157,13 @@ mod tests {
         let s = Schedule::new(100_000, &[0, 100_000], 0, 0, 0, true);
         assert_eq!(s.next_stop(7), 8);
         // A restart at 500 skips the outputs up to it.
-        let s = Schedule::new(1000, &[0, 250, 500, 750, 1000], 500, 0, 0, false);
+        let mut s = Schedule::new(1000, &[0, 250, 500, 750, 1000], 500, 0, 0, false);
         assert!(!s.is_output(500));
         assert_eq!(s.next_output(), Some(750));
         assert!(s.is_finite_check(750) && s.is_finite_check(1000) && !s.is_finite_check(600));
+        // An output not yet written holds the loop back; once written, the end.
+        assert_eq!(s.next_stop(749), 750);
+        s.output_written();
         assert_eq!(s.next_stop(999), 1000);
     }
 }

@@ -7,12 +7,13 @@
 
 use crate::contact::DeltaT;
 use crate::error::{Error, Result};
+use crate::geometry::transform::{rotate_points, rotation_xyz_degrees, translate_points};
 use crate::mechanics::explicit::VelocityBc;
 use crate::mechanics::ElasticMaterial;
 use crate::mesh::{self, TetMesh};
 use crate::scenario::{
-    contact_resistance, CapacityKind, LoadedScenario, MechanicsBcSpec, MeshSpec, PenaltySpec,
-    ThermalBcSpec,
+    contact_resistance, CapacityKind, LoadedScenario, MechanicsBcSpec, MeshSpec,
+    ParticleOutputSpec, PenaltySpec, SolverSpec, ThermalBcSpec,
 };
 
 /// A material's constants (thermal ones are 0 in a purely mechanical run).
@@ -124,6 +125,23 @@ pub struct ContactModel {
     pub every: u64,
 }
 
+/// What a run writes, and where.
+#[derive(Debug, Clone)]
+pub struct OutputPlan {
+    /// Directory: the scenario's (resolved against its file), else
+    /// `output/<stem>`; `--output` overrides it.
+    pub directory: std::path::PathBuf,
+    /// File stem (the scenario's, else its file's stem).
+    pub stem: String,
+    /// Write a restart checkpoint at the end of the run (and when the
+    /// packing settles).
+    pub checkpoint: bool,
+    /// Also overwrite the checkpoint every N steps (0: only at the end).
+    pub checkpoint_every: u64,
+    /// Particle statistics.
+    pub particles: Option<ParticleOutputSpec>,
+}
+
 /// Everything a run needs, independent of the rank count.
 #[derive(Debug, Clone)]
 pub struct Model {
@@ -149,6 +167,10 @@ pub struct Model {
     pub steps: u64,
     /// Steps at which fields are written (ascending, includes 0 and `steps`).
     pub output_steps: Vec<u64>,
+    /// Output files.
+    pub output: OutputPlan,
+    /// Linear solver of the thermal problem.
+    pub solver: SolverSpec,
 }
 
 /// The most output steps (field steps in the HDF5/XDMF series) a run may
@@ -233,7 +255,7 @@ impl Model {
                 }
                 for (name, mut c) in copies {
                     if let Some(t) = b.translate {
-                        translate(&mut c, t);
+                        translate_points(&mut c.nodes, t);
                     }
                     c.validate().map_err(|source| Error::Mesh {
                         context: format!("{context} ({name} from {})", file.display()),
@@ -330,14 +352,10 @@ impl Model {
                 source,
             })?;
             if let Some(r) = b.rotate {
-                let rot = rotation_xyz_degrees(r);
-                for p in m.nodes.iter_mut() {
-                    let q = rot * nalgebra::Vector3::new(p[0], p[1], p[2]);
-                    *p = [q.x, q.y, q.z];
-                }
+                rotate_points(&mut m.nodes, &rotation_xyz_degrees(r));
             }
             if let Some(t) = b.translate {
-                translate(&mut m, t);
+                translate_points(&mut m.nodes, t);
             }
             m.validate().map_err(|source| Error::Mesh {
                 context: context.clone(),
@@ -424,7 +442,7 @@ impl Model {
             };
             for (name, off) in copies {
                 let mut c = m.clone();
-                translate(&mut c, off);
+                translate_points(&mut c.nodes, off);
                 push_body(&mut combined, &mut bodies, b, name, c, material);
                 elem_material.extend_from_slice(&mat_of_elem);
             }
@@ -653,6 +671,19 @@ impl Model {
             dt,
             steps,
             output_steps,
+            output: OutputPlan {
+                directory: s
+                    .output
+                    .directory
+                    .as_ref()
+                    .map(|d| sc.resolve(d))
+                    .unwrap_or_else(|| std::path::PathBuf::from("output").join(sc.output_stem())),
+                stem: sc.output_stem(),
+                checkpoint: s.output.checkpoint,
+                checkpoint_every: s.output.checkpoint_every,
+                particles: s.output.particles.clone(),
+            },
+            solver: s.solver.clone(),
             thermal_active: s.has_thermal(),
             mechanics,
             elem_material,
@@ -768,23 +799,6 @@ fn push_body(
         reference_temperature: b.reference_temperature.unwrap_or(b.initial_temperature),
         heating: b.heating.map(|h| (h.to, h.over)),
     });
-}
-
-fn translate(m: &mut TetMesh, t: [f64; 3]) {
-    for p in m.nodes.iter_mut() {
-        for d in 0..3 {
-            p[d] += t[d];
-        }
-    }
-}
-
-/// Rotation by angles (degrees) about x, then y, then z.
-pub fn rotation_xyz_degrees(r: [f64; 3]) -> nalgebra::Matrix3<f64> {
-    let [ax, ay, az] = r.map(f64::to_radians);
-    let rx = nalgebra::Rotation3::from_axis_angle(&nalgebra::Vector3::x_axis(), ax);
-    let ry = nalgebra::Rotation3::from_axis_angle(&nalgebra::Vector3::y_axis(), ay);
-    let rz = nalgebra::Rotation3::from_axis_angle(&nalgebra::Vector3::z_axis(), az);
-    (rz * ry * rx).into_inner()
 }
 
 /// Find the set a scenario names: `<body>.<set>` exactly, or `<set>` when

@@ -161,7 +161,7 @@ fn read_positions(path: &Path) -> Result<Vec<Placement>, String> {
             .collect();
         match v {
             Ok(v) if v.len() == 6 && v.iter().all(|x| x.is_finite()) => {
-                let rot = crate::model::rotation_xyz_degrees([v[3], v[4], v[5]]);
+                let rot = crate::geometry::transform::rotation_xyz_degrees([v[3], v[4], v[5]]);
                 out.push((Vector3::new(v[0], v[1], v[2]), rot));
             }
             _ => {

@@ -11,7 +11,7 @@ mod common;
 use std::path::Path;
 
 use common::*;
-use fdem::model::rotation_xyz_degrees;
+use fdem::geometry::transform::rotation_xyz_degrees;
 
 type P = [f64; 3];
 

@@ -6,10 +6,12 @@
 //! owned ones) so that every pair is found by exactly one rank.
 
 mod detect;
+mod exchange;
 pub mod penalty;
 mod surface;
 
 pub use detect::{detect_contacts, proximity_pairs, BoundaryTets, FaceList};
+pub use exchange::{pairs_from_f64s, pairs_to_f64s, PAIR_F64S};
 pub use penalty::{pair_stiffness, tet_tet_penalty, PenaltyParams, PenaltyResult};
 pub use surface::{tet_tet_contact_surface, ContactSurface, TetSide};
 

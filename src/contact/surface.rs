@@ -1,7 +1,7 @@
 //! The contact surface between a target and a contactor tet (seed 000
 //! sec 3.1, eq 25) and the face-node weights that carry its heat.
 
-use crate::geometry::{cross, dot, face_tet_clip, polygon_area, sub};
+use crate::geometry::{cross, dot, face_tet_clip, polygon_area, sub, tet4_geometry};
 
 /// Surfaces and nodal weights of one tet pair.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -106,7 +106,7 @@ fn polygon_centroid(p: &[[f64; 3]]) -> [f64; 3] {
 /// Barycentric coordinates (the Tet4 shape functions N_i) of `p` in `t`,
 /// clamped to [0, 1] and renormalised against round-off.
 fn barycentric(t: &[[f64; 3]; 4], p: [f64; 3]) -> [f64; 4] {
-    let g = crate::thermal::element::tet4_geometry(t);
+    let g = tet4_geometry(t);
     let mut n = [0.0; 4];
     for (i, ni) in n.iter_mut().enumerate() {
         // N_i is linear with gradient g.grad[i] and N_i(x_i) = 1.

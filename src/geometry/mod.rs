@@ -1,16 +1,20 @@
 //! Convex geometry kernels for contact: clipping a triangle by a tet's
 //! half-spaces (seed 000 sec 3.1), polygon areas, and a separating-axis
-//! overlap test for two tets. Pure functions over `[f64; 3]`.
+//! overlap test for two tets; Tet4 shape-function geometry; rigid
+//! rotations and translations. Pure functions over `[f64; 3]`.
 
 mod clip;
 pub mod overlap;
 pub mod placement;
+mod tet4;
+pub mod transform;
 
 pub use clip::{face_tet_clip, polygon_area, tet_tet_overlap, triangle_in_tet_area, Polygon};
 pub use overlap::{
     face_planes, planes_within, separated_along, separating_axis, tet_tet_intersection,
     tet_tet_intersection_with, tets_within, FacePatch, Intersection, TetPlanes,
 };
+pub use tet4::{tet4_geometry, Tet4Geometry};
 
 /// Axis-aligned bounds (min, max corners) of a tet.
 #[inline]

@@ -186,5 +186,8 @@ fn nut_mesh_defaults_are_the_generators() {
     else {
         panic!("not a nut")
     };
-    assert_eq!((*per_side, *radial, *layers), crate::mesh::nut::NUT_DIVISIONS);
+    assert_eq!(
+        (*per_side, *radial, *layers),
+        crate::mesh::nut::NUT_DIVISIONS
+    );
 }

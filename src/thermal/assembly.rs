@@ -105,7 +105,7 @@ pub fn assemble<'p>(
     for &e in &layout.owned_elems {
         let e = e as usize;
         let mat = model.material_of(e);
-        let geo = element::tet4_geometry(&model.mesh.element_coords(e));
+        let geo = crate::geometry::tet4_geometry(&model.mesh.element_coords(e));
         let idx = model.mesh.tets[e].map(g);
         let k = element::conductivity(&geo, mat.conductivity);
         let rho_c = mat.density * mat.specific_heat;

@@ -13,7 +13,8 @@
 
 use std::collections::HashMap;
 
-use super::element::{conductivity, tet4_geometry};
+use super::element::conductivity;
+use crate::geometry::tet4_geometry;
 use crate::mesh::TetMesh;
 
 /// The positive off-diagonals of a mesh's conductance matrix (k = 1).

@@ -24,7 +24,7 @@ pub fn dense_operators(
     let mut m = DMatrix::zeros(n, n);
     let mut kk = DMatrix::zeros(n, n);
     for e in 0..mesh.tets.len() {
-        let g = element::tet4_geometry(&mesh.element_coords(e));
+        let g = crate::geometry::tet4_geometry(&mesh.element_coords(e));
         let ke = element::conductivity(&g, k);
         let me = if lumped {
             element::capacity_lumped(&g, rho_c)

@@ -1,0 +1,609 @@
+//! Output: the HDF5/XDMF series, the history CSV (per-body temperature
+//! columns), the particle statistics and the per-body contact areas.
+//!
+//! Collective like the rest of the run; rank 0 alone writes the CSV and
+//! PNG files, and every rank agrees on the outcome.
+
+use std::path::{Path, PathBuf};
+
+use mpi::collective::SystemOperation;
+use mpi::topology::SimpleCommunicator;
+use mpi::traits::*;
+
+use crate::contact::ContactSet;
+use crate::error::{Error, Result};
+use crate::io::checkpoint::Checkpoint;
+use crate::io::particles::ParticleReport;
+use crate::io::{HistoryWriter, MeshPart, TimeSeriesWriter};
+use crate::model::Model;
+use crate::parallel::{agree, Layout};
+use crate::scenario::ParticleOutputSpec;
+use crate::thermal::ThermalSystem;
+
+use super::Mechanics;
+
+/// The files a run writes into, open.
+pub(super) struct Output {
+    /// Output directory.
+    pub dir: PathBuf,
+    /// File stem.
+    pub stem: String,
+    /// Whether this run continues the series already in `dir` (a restart in place).
+    pub continues: bool,
+    /// History CSV.
+    pub history_path: PathBuf,
+    writer: TimeSeriesWriter,
+    history: HistoryWriter,
+    groups: BodyGroups,
+    stats: BodyStats,
+    /// Particle statistics (rank 0 keeps them; every rank takes part in the reductions).
+    report: Option<ParticleReport>,
+    radial_steps: Vec<u64>,
+}
+
+impl Output {
+    /// Collective. Create the output directory and open the series and the
+    /// history: continued after the checkpoint when a restart writes into
+    /// the directory of the series it continues, else new.
+    pub fn open(
+        comm: &SimpleCommunicator,
+        model: &Model,
+        layout: &Layout,
+        output_dir: Option<&Path>,
+        heat: bool,
+        mechanics: bool,
+        restart: Option<&Checkpoint>,
+    ) -> Result<Output> {
+        let rank = comm.rank();
+        let stem = model.output.stem.clone();
+        let dir = output_dir.map_or_else(|| model.output.directory.clone(), Path::to_path_buf);
+        let made = if rank == 0 {
+            create_output_dir(&dir)
+        } else {
+            Ok(())
+        };
+        agree(comm, made)?;
+        // A restart into the directory of the series it continues keeps that
+        // series up to the checkpoint and appends; anywhere else it starts one.
+        let (h5_path, _) = crate::io::output_paths(&dir, &stem);
+        let continues = restart.is_some() && {
+            let mut exists = i32::from(rank == 0 && h5_path.is_file());
+            comm.process_at_rank(0).broadcast_into(&mut exists);
+            exists == 1
+        };
+        let keep_until = restart.map_or(0.0, |c| c.time);
+        let writer = if continues {
+            reopen_writer(comm, model, layout, &dir, &stem, keep_until)?
+        } else {
+            open_writer(comm, model, layout, &dir, &stem)?
+        };
+        let history_path = dir.join(format!("{stem}_history.csv"));
+        let mut header: Vec<String> = vec!["step".into(), "time".into()];
+        if heat {
+            for h in [
+                "stored_heat",
+                "boundary_heat_in",
+                "ksp_iterations",
+                "contacts",
+                "contact_area",
+            ] {
+                header.push(h.into());
+            }
+        }
+        if mechanics {
+            for h in [
+                "mech_time",
+                "kinetic_energy",
+                "strain_energy",
+                "contact_energy",
+                "dissipated_energy",
+                "momentum_x",
+                "momentum_y",
+                "momentum_z",
+                "mech_contacts",
+                "mech_candidates",
+            ] {
+                header.push(h.into());
+            }
+        }
+        // Per-body columns, or per scenario entry when there are many bodies.
+        let groups = BodyGroups::new(model);
+        if heat {
+            for g in &groups.names {
+                for s in ["min", "mean", "max"] {
+                    header.push(format!("{g}_{s}_T"));
+                }
+            }
+        }
+        let header_ref: Vec<&str> = header.iter().map(String::as_str).collect();
+        let history = if continues {
+            HistoryWriter::reopen(&history_path, &header_ref, 1, keep_until)
+        } else {
+            HistoryWriter::create(&history_path, &header_ref)
+        };
+        let history = agree(comm, history.map_err(Error::from))?;
+        let stats = BodyStats::new(model, layout);
+        let report = model.output.particles.as_ref().and_then(|p| {
+            heat.then_some(())?;
+            particle_report(model, p)
+        });
+        let radial_steps: Vec<u64> = match &model.output.particles {
+            Some(p) if !p.radial_times.is_empty() => p
+                .radial_times
+                .iter()
+                .map(|&t| (t / model.dt).round() as u64)
+                .collect(),
+            _ => (1..=4).map(|k| k * model.steps / 4).collect(),
+        };
+        Ok(Output {
+            dir,
+            stem,
+            continues,
+            history_path,
+            writer,
+            history,
+            groups,
+            stats,
+            report,
+            radial_steps,
+        })
+    }
+
+    /// Whether the particle statistics need every step.
+    pub fn every_step(&self) -> bool {
+        self.report.is_some()
+    }
+
+    /// Collective. Write the fields of `step` to the series and a row to the history.
+    #[allow(clippy::too_many_arguments)]
+    pub fn write(
+        &mut self,
+        comm: &SimpleCommunicator,
+        model: &Model,
+        layout: &Layout,
+        sys: &mut Option<ThermalSystem>,
+        mech: Option<&Mechanics>,
+        contacts: &ContactSet,
+        step: u64,
+    ) -> Result<()> {
+        let time = step as f64 * model.dt;
+        let t = match sys.as_ref() {
+            Some(s) => Some(s.t.to_local_vec()?),
+            None => None,
+        };
+        let mut node_fields: Vec<(&str, usize, Vec<f64>)> = Vec::new();
+        let mut cell_fields: Vec<(&str, usize, Vec<f64>)> = Vec::new();
+        if let Some(t) = &t {
+            node_fields.push(("temperature", 1, t.clone()));
+        }
+        if let Some(Mechanics { domain: m, .. }) = mech {
+            node_fields.push(("displacement", 3, m.displacement()));
+            node_fields.push(("velocity", 3, m.velocity()));
+            cell_fields.push(("stress", 6, m.stress_tensor6(&layout.owned_elems)));
+        } else if model.has_motion() {
+            // Rigid displacement of each owned node (ParaView: Warp By Vector).
+            let u: Vec<f64> = layout
+                .owned_nodes
+                .iter()
+                .flat_map(|&n| {
+                    model.bodies[model.body_of_node(n)]
+                        .velocity
+                        .map(|v| v * time)
+                })
+                .collect();
+            node_fields.push(("displacement", 3, u));
+        }
+        let nf: Vec<(&str, usize, &[f64])> = node_fields
+            .iter()
+            .map(|(n, c, v)| (*n, *c, v.as_slice()))
+            .collect();
+        let cf: Vec<(&str, usize, &[f64])> = cell_fields
+            .iter()
+            .map(|(n, c, v)| (*n, *c, v.as_slice()))
+            .collect();
+        self.writer.write_step(time, &nf, &cf)?;
+        let mut row = vec![step as f64, time];
+        if let Some(s) = sys.as_mut() {
+            let e = s.energy()?;
+            row.extend_from_slice(&[
+                e.stored,
+                e.boundary_in(),
+                s.iterations as f64,
+                contacts.all.len() as f64,
+                contacts.total_area(),
+            ]);
+        }
+        if let Some(Mechanics {
+            domain: m,
+            substeps_per_step: n,
+        }) = mech
+        {
+            let st = m.state(comm);
+            row.extend_from_slice(&[
+                step as f64 * *n as f64 * m.dt,
+                st.kinetic,
+                st.strain,
+                st.contact,
+                st.dissipated,
+                st.momentum[0],
+                st.momentum[1],
+                st.momentum[2],
+                st.active_pairs as f64,
+                st.candidate_pairs as f64,
+            ]);
+        }
+        if let Some(t) = &t {
+            for s in self.groups.reduce(&self.stats.compute(comm, t)) {
+                row.extend_from_slice(&s);
+            }
+        }
+        self.history.append(&row)?;
+        Ok(())
+    }
+
+    /// Collective. Record the particle statistics of `step` (and its radial
+    /// profile at the profile steps).
+    pub fn record(
+        &mut self,
+        comm: &SimpleCommunicator,
+        model: &Model,
+        sys: &Option<ThermalSystem>,
+        step: u64,
+    ) -> Result<()> {
+        if let (Some(r), Some(s)) = (self.report.as_mut(), sys.as_ref()) {
+            let t = s.t.to_local_vec()?;
+            let st = self.stats.compute(comm, &t);
+            let time = step as f64 * model.dt;
+            r.record(time, &st);
+            if self.radial_steps.contains(&step) {
+                r.record_profile(time, &st);
+            }
+        }
+        Ok(())
+    }
+
+    /// Collective. Write the particle statistics and the per-body contact
+    /// areas, close the series; the files written besides the series.
+    pub fn finish(
+        &self,
+        comm: &SimpleCommunicator,
+        model: &Model,
+        contacts: &ContactSet,
+    ) -> Result<Vec<PathBuf>> {
+        let (dir, stem) = (&self.dir, &self.stem);
+        let mut particle_files = Vec::new();
+        if let Some(r) = &self.report {
+            let written = if comm.rank() == 0 {
+                r.write(dir, stem).map_err(Error::from)
+            } else {
+                Ok(Vec::new())
+            };
+            particle_files = agree(comm, written)?;
+        }
+        if model.thermal_active && model.contact.is_some() {
+            let path = dir.join(format!("{stem}_body_contacts.csv"));
+            let written = if comm.rank() == 0 {
+                write_body_contacts(model, contacts, &path)
+            } else {
+                Ok(())
+            };
+            agree(comm, written)?;
+            particle_files.push(path);
+        }
+        Ok(particle_files)
+    }
+
+    /// Collective. Close the series.
+    pub fn close(self) -> Result<()> {
+        self.writer.close()?;
+        Ok(())
+    }
+}
+
+/// The progress bar (rank 0, when asked for).
+pub(super) fn progress_bar(
+    show: bool,
+    steps: u64,
+    start_step: u64,
+    heat: bool,
+    mechanics: bool,
+) -> Option<indicatif::ProgressBar> {
+    if !show {
+        return None;
+    }
+    let b = indicatif::ProgressBar::new(steps);
+    b.set_position(start_step);
+    let what = match (heat, mechanics) {
+        (true, true) => "thermo-mechanics",
+        (false, true) => "mechanics",
+        _ => "thermal",
+    };
+    b.set_style(
+        indicatif::ProgressStyle::with_template(&format!(
+            "{{spinner}} {what} [{{elapsed_precise}}] {{wide_bar}} {{pos}}/{{len}} steps ({{eta}})"
+        ))
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    Some(b)
+}
+
+/// Per-body statistics of the owned nodes.
+struct BodyStats {
+    body_of_owned: Vec<u32>,
+    weight_of_owned: Vec<f64>,
+    nbodies: usize,
+}
+
+impl BodyStats {
+    fn new(model: &Model, layout: &Layout) -> BodyStats {
+        let mut w = vec![0.0; model.mesh.nodes.len()];
+        for e in 0..model.mesh.tets.len() {
+            let v = model.mesh.element_volume(e) / 4.0;
+            for &n in &model.mesh.tets[e] {
+                w[n as usize] += v;
+            }
+        }
+        BodyStats {
+            body_of_owned: layout
+                .owned_nodes
+                .iter()
+                .map(|&n| model.body_of_node(n) as u32)
+                .collect(),
+            weight_of_owned: layout.owned_nodes.iter().map(|&n| w[n as usize]).collect(),
+            nbodies: model.bodies.len(),
+        }
+    }
+
+    /// Collective. (min, volume-weighted mean, max) per body.
+    fn compute(&self, comm: &SimpleCommunicator, t: &[f64]) -> Vec<[f64; 3]> {
+        let nb = self.nbodies;
+        let mut mins = vec![f64::INFINITY; nb];
+        let mut maxs = vec![f64::NEG_INFINITY; nb];
+        let mut sums = vec![0.0; 2 * nb];
+        for (i, &x) in t.iter().enumerate() {
+            let b = self.body_of_owned[i] as usize;
+            mins[b] = mins[b].min(x);
+            maxs[b] = maxs[b].max(x);
+            sums[2 * b] += self.weight_of_owned[i] * x;
+            sums[2 * b + 1] += self.weight_of_owned[i];
+        }
+        let mut gmin = vec![0.0; nb];
+        let mut gmax = vec![0.0; nb];
+        let mut gsum = vec![0.0; 2 * nb];
+        comm.all_reduce_into(&mins[..], &mut gmin[..], SystemOperation::min());
+        comm.all_reduce_into(&maxs[..], &mut gmax[..], SystemOperation::max());
+        comm.all_reduce_into(&sums[..], &mut gsum[..], SystemOperation::sum());
+        (0..nb)
+            .map(|b| [gmin[b], gsum[2 * b] / gsum[2 * b + 1], gmax[b]])
+            .collect()
+    }
+}
+
+/// This rank's part of the output mesh: owned node coordinates, and cells
+/// in the global (PETSc) node numbering.
+fn mesh_rows(model: &Model, layout: &Layout) -> (Vec<[f64; 3]>, Vec<[u32; 4]>) {
+    let coords = layout
+        .owned_nodes
+        .iter()
+        .map(|&n| model.mesh.nodes[n as usize])
+        .collect();
+    let cells = layout
+        .owned_elems
+        .iter()
+        .map(|&e| model.mesh.tets[e as usize].map(|n| layout.global_of[n as usize]))
+        .collect();
+    (coords, cells)
+}
+
+/// Collective. Reopen the series in `dir` to continue it after the
+/// checkpoint at `keep_until` (same mesh and partition, checked).
+fn reopen_writer(
+    comm: &SimpleCommunicator,
+    model: &Model,
+    layout: &Layout,
+    dir: &Path,
+    stem: &str,
+    keep_until: f64,
+) -> Result<TimeSeriesWriter> {
+    let (coords, cells) = mesh_rows(model, layout);
+    let ncells = cells.len() as u64;
+    let mut cell_offset = 0u64;
+    comm.exclusive_scan_into(&ncells, &mut cell_offset, SystemOperation::sum());
+    if comm.rank() == 0 {
+        cell_offset = 0;
+    }
+    let part = MeshPart {
+        global_nodes: layout.num_global() as u64,
+        node_offset: layout.owned_range().0 as u64,
+        coords: &coords,
+        global_cells: model.mesh.tets.len() as u64,
+        cell_offset,
+        cells: &cells,
+    };
+    let node_id: Vec<i32> = layout.owned_nodes.iter().map(|&n| n as i32).collect();
+    Ok(TimeSeriesWriter::reopen(
+        comm, dir, stem, &part, &node_id, keep_until,
+    )?)
+}
+
+fn open_writer(
+    comm: &SimpleCommunicator,
+    model: &Model,
+    layout: &Layout,
+    dir: &Path,
+    stem: &str,
+) -> Result<TimeSeriesWriter> {
+    let (coords, cells) = mesh_rows(model, layout);
+    let ncells = cells.len() as u64;
+    let mut cell_offset = 0u64;
+    comm.exclusive_scan_into(&ncells, &mut cell_offset, SystemOperation::sum());
+    if comm.rank() == 0 {
+        cell_offset = 0;
+    }
+    let part = MeshPart {
+        global_nodes: layout.num_global() as u64,
+        node_offset: layout.owned_range().0 as u64,
+        coords: &coords,
+        global_cells: model.mesh.tets.len() as u64,
+        cell_offset,
+        cells: &cells,
+    };
+    let mut w = TimeSeriesWriter::create(comm, dir, stem, &part)?;
+    let body_node: Vec<i32> = layout
+        .owned_nodes
+        .iter()
+        .map(|&n| model.body_of_node(n) as i32)
+        .collect();
+    let node_id: Vec<i32> = layout.owned_nodes.iter().map(|&n| n as i32).collect();
+    let body_cell: Vec<i32> = layout
+        .owned_elems
+        .iter()
+        .map(|&e| model.mesh.body[e as usize] as i32)
+        .collect();
+    let rank_cell: Vec<i32> = vec![comm.rank(); cells.len()];
+    w.write_static_node_field_i32("body", &body_node)?;
+    w.write_static_node_field_i32("node_id", &node_id)?;
+    w.write_static_cell_field_i32("body", &body_cell)?;
+    w.write_static_cell_field_i32("rank", &rank_cell)?;
+    Ok(w)
+}
+
+/// The particles of `[output.particles]`: their bodies, volumes and
+/// distances from the axis.
+fn particle_report(model: &Model, p: &ParticleOutputSpec) -> Option<ParticleReport> {
+    let bodies: Vec<usize> = (0..model.bodies.len())
+        .filter(|&b| model.bodies[b].template == p.template)
+        .collect();
+    if bodies.is_empty() {
+        return None;
+    }
+    let mut volumes = Vec::new();
+    let mut radii = Vec::new();
+    for &b in &bodies {
+        let (e0, e1) = model.bodies[b].elem_range;
+        let (mut v, mut c) = (0.0, [0.0; 3]);
+        for e in e0 as usize..e1 as usize {
+            let ve = model.mesh.element_volume(e);
+            let x = model.mesh.element_coords(e);
+            v += ve;
+            for d in 0..3 {
+                c[d] += ve * (x[0][d] + x[1][d] + x[2][d] + x[3][d]) / 4.0;
+            }
+        }
+        volumes.push(v);
+        radii.push((c[0] / v - p.axis[0]).hypot(c[1] / v - p.axis[1]));
+    }
+    Some(ParticleReport::new(bodies, volumes, radii, p.radial_bins))
+}
+
+/// History columns per body, or per scenario entry (template) when there
+/// are more than [`BodyGroups::MAX_BODY_COLUMNS`] bodies.
+struct BodyGroups {
+    names: Vec<String>,
+    /// Group of every body, and each body's volume.
+    group: Vec<usize>,
+    volume: Vec<f64>,
+}
+
+impl BodyGroups {
+    const MAX_BODY_COLUMNS: usize = 16;
+
+    fn new(model: &Model) -> BodyGroups {
+        let volume: Vec<f64> = model
+            .bodies
+            .iter()
+            .map(|b| {
+                (b.elem_range.0..b.elem_range.1)
+                    .map(|e| model.mesh.element_volume(e as usize))
+                    .sum()
+            })
+            .collect();
+        if model.bodies.len() <= Self::MAX_BODY_COLUMNS {
+            return BodyGroups {
+                names: model.bodies.iter().map(|b| b.name.clone()).collect(),
+                group: (0..model.bodies.len()).collect(),
+                volume,
+            };
+        }
+        let mut names: Vec<String> = Vec::new();
+        let group = model
+            .bodies
+            .iter()
+            .map(|b| match names.iter().position(|n| *n == b.template) {
+                Some(i) => i,
+                None => {
+                    names.push(b.template.clone());
+                    names.len() - 1
+                }
+            })
+            .collect();
+        BodyGroups {
+            names,
+            group,
+            volume,
+        }
+    }
+
+    /// (min, volume-weighted mean, max) per group from per-body values.
+    fn reduce(&self, per_body: &[[f64; 3]]) -> Vec<[f64; 3]> {
+        let ng = self.names.len();
+        let mut out = vec![[f64::INFINITY, 0.0, f64::NEG_INFINITY]; ng];
+        let mut vol = vec![0.0; ng];
+        for (b, s) in per_body.iter().enumerate() {
+            let g = self.group[b];
+            out[g][0] = out[g][0].min(s[0]);
+            out[g][1] += self.volume[b] * s[1];
+            out[g][2] = out[g][2].max(s[2]);
+            vol[g] += self.volume[b];
+        }
+        for (o, v) in out.iter_mut().zip(vol) {
+            o[1] /= v;
+        }
+        out
+    }
+}
+
+/// Contact area summed per pair of bodies: `body_a,body_b,name_a,name_b,pairs,area`.
+fn write_body_contacts(model: &Model, contacts: &ContactSet, path: &Path) -> Result<()> {
+    let mut per: std::collections::BTreeMap<(u32, u32), (u64, f64)> = Default::default();
+    for p in &contacts.all {
+        let a = model.mesh.body[p.target as usize];
+        let b = model.mesh.body[p.contactor as usize];
+        let e = per.entry((a.min(b), a.max(b))).or_default();
+        e.0 += 1;
+        e.1 += p.area();
+    }
+    let mut text = String::from("body_a,body_b,name_a,name_b,pairs,area\n");
+    for ((a, b), (n, s)) in per {
+        text.push_str(&format!(
+            "{a},{b},{},{},{n},{s:.12e}\n",
+            model.bodies[a as usize].name, model.bodies[b as usize].name
+        ));
+    }
+    std::fs::write(path, text).map_err(|source| Error::File {
+        path: path.display().to_string(),
+        source,
+    })
+}
+
+/// Create the output directory (and its parents), saying that the directory
+/// is the problem when a file stands in its place or in a parent's.
+fn create_output_dir(dir: &Path) -> Result<()> {
+    let bad = |message: String| Error::OutputDir {
+        path: dir.display().to_string(),
+        message,
+    };
+    if dir.exists() && !dir.is_dir() {
+        return Err(bad(
+            "is an existing file, not a directory; name a directory with --output or output.directory"
+                .into(),
+        ));
+    }
+    if let Some(file) = dir.ancestors().skip(1).find(|a| a.is_file()) {
+        return Err(bad(format!(
+            "cannot be created: {} is a file, not a directory",
+            file.display()
+        )));
+    }
+    std::fs::create_dir_all(dir).map_err(|e| bad(format!("cannot be created: {e}")))
+}

@@ -1,0 +1,338 @@
+//! What a run did: [`RunSummary`] and its printout, the phase times, and
+//! the peak memory.
+
+use std::path::PathBuf;
+
+use mpi::collective::SystemOperation;
+use mpi::topology::SimpleCommunicator;
+use mpi::traits::*;
+
+use crate::error::Result;
+use crate::thermal::system::EnergyAccount;
+
+use super::output::Output;
+use super::{Mechanics, Stages};
+
+/// Where the bodies settled: step, time and kinetic energy (J).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Settled {
+    /// Step.
+    pub step: u64,
+    /// Time (s).
+    pub time: f64,
+    /// Kinetic energy (J).
+    pub kinetic: f64,
+}
+
+/// Wall-clock seconds spent per phase (rank 0's view, max over ranks).
+#[derive(Debug, Clone, Default)]
+pub struct PhaseTimes {
+    /// Meshes, sets, checks.
+    pub model: f64,
+    /// METIS partition and numbering.
+    pub partition: f64,
+    /// Assembly and solver set-up (factorisation).
+    pub assembly: f64,
+    /// Contact detection and surfaces.
+    pub contact: f64,
+    /// Time stepping (solves).
+    pub stepping: f64,
+    /// HDF5/XDMF/CSV output.
+    pub output: f64,
+    /// Explicit mechanics (set-up and substeps, detection included).
+    pub mechanics: f64,
+    /// Of which contact detection and halo rebuilds.
+    pub mechanics_detect: f64,
+    /// Of which the set-up (partition-local arrays, step, first detection).
+    pub mechanics_setup: f64,
+}
+
+/// What the explicit mechanics did.
+#[derive(Debug, Clone, Copy)]
+pub struct MechanicsSummary {
+    /// Explicit step (s).
+    pub dt: f64,
+    /// Substeps per thermal step.
+    pub substeps_per_step: u64,
+    /// Substeps taken.
+    pub substeps: u64,
+    /// Contact detections (candidate list rebuilds).
+    pub detections: u64,
+    /// Element updates, all ranks.
+    pub element_updates: u64,
+    /// Contact pair evaluations, all ranks.
+    pub pair_updates: u64,
+    /// Of those, exact overlap computations (the rest: boxes apart, or
+    /// linearised overlaps).
+    pub exact_overlaps: u64,
+    /// Smallest (at-rest) contact search margin (m).
+    pub margin: f64,
+}
+
+/// What a run did.
+#[derive(Debug, Clone)]
+pub struct RunSummary {
+    /// Ranks.
+    pub ranks: usize,
+    /// Nodes and elements.
+    pub nodes: usize,
+    /// Elements.
+    pub elements: usize,
+    /// Steps taken.
+    pub steps: u64,
+    /// Total Krylov iterations.
+    pub ksp_iterations: u64,
+    /// Solver in use.
+    pub solver: String,
+    /// Phase times.
+    pub times: PhaseTimes,
+    /// Output directory.
+    pub output_dir: PathBuf,
+    /// HDF5 file.
+    pub h5: PathBuf,
+    /// XDMF file.
+    pub xdmf: PathBuf,
+    /// History CSV.
+    pub history: PathBuf,
+    /// Final heat balance.
+    pub energy: EnergyAccount,
+    /// Peak resident memory per rank, max over ranks (bytes).
+    pub peak_memory: u64,
+    /// Contact pairs and total contact area at the end.
+    pub contacts: (usize, f64),
+    /// Contact detections run.
+    pub detections: u64,
+    /// Times the thermal operator was assembled.
+    pub assemblies: u64,
+    /// Mechanics, when it ran.
+    pub mechanics: Option<MechanicsSummary>,
+    /// Step the run started from (0, or a checkpoint's).
+    pub start_step: u64,
+    /// Where the bodies settled (the run stopped there).
+    pub settled: Option<Settled>,
+    /// Checkpoint written.
+    pub checkpoint: Option<PathBuf>,
+    /// Particle statistics files written.
+    pub particle_files: Vec<PathBuf>,
+    /// Whether heat conduction was solved (else the heat line is left out).
+    pub heat: bool,
+}
+
+impl std::fmt::Display for RunSummary {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let t = &self.times;
+        writeln!(f, "fdem run summary")?;
+        writeln!(
+            f,
+            "  mesh        {} nodes, {} Tet4 on {} rank(s)",
+            self.nodes, self.elements, self.ranks
+        )?;
+        writeln!(f, "  solver      {}", self.solver)?;
+        writeln!(
+            f,
+            "  steps       {} ({} KSP iterations, {:.2} per step)",
+            self.steps,
+            self.ksp_iterations,
+            self.ksp_iterations as f64 / self.steps.max(1) as f64
+        )?;
+        writeln!(
+            f,
+            "  time [s]    model {:.3} | partition {:.3} | contact {:.3} | assembly+setup {:.3} | stepping {:.3} | output {:.3}",
+            t.model, t.partition, t.contact, t.assembly, t.stepping, t.output
+        )?;
+        writeln!(
+            f,
+            "  contact     {} pairs, area {:.6e} m^2; {} detection(s), operator assembled {} time(s)",
+            self.contacts.0, self.contacts.1, self.detections, self.assemblies
+        )?;
+        if self.steps > 0 {
+            writeln!(
+                f,
+                "  per step    {:.2} us",
+                1e6 * t.stepping / self.steps as f64
+            )?;
+        }
+        if let Some(m) = &self.mechanics {
+            let rate = if t.mechanics > 0.0 {
+                m.element_updates as f64 / t.mechanics / self.ranks as f64
+            } else {
+                0.0
+            };
+            writeln!(
+                f,
+                "  mechanics   dt {:.4e} s, {} substeps ({} per step), {:.3} s ({:.3} s set-up, {:.3} s detection, {} detections), {:.2} M tet updates/s/rank, {} pair evaluations ({} exact overlaps)",
+                m.dt,
+                m.substeps,
+                m.substeps_per_step,
+                t.mechanics,
+                t.mechanics_setup,
+                t.mechanics_detect,
+                m.detections,
+                rate / 1e6,
+                m.pair_updates,
+                m.exact_overlaps
+            )?;
+        }
+        if self.heat {
+            writeln!(
+                f,
+                "  heat        stored change {:.6e}, boundary in {:.6e} (balance {:.2e})",
+                self.energy.stored_change,
+                self.energy.boundary_in(),
+                self.energy.stored_change - self.energy.boundary_in()
+            )?;
+        }
+        writeln!(
+            f,
+            "  memory      peak {:.1} MiB per rank",
+            self.peak_memory as f64 / 1048576.0
+        )?;
+        if self.start_step > 0 {
+            writeln!(f, "  restart     from step {}", self.start_step)?;
+        }
+        if let Some(Settled {
+            step,
+            time,
+            kinetic,
+        }) = self.settled
+        {
+            writeln!(
+                f,
+                "  settled     at step {step}, t = {time:.4} s (kinetic energy {kinetic:.3e} J)"
+            )?;
+        }
+        writeln!(f, "  output      {}", self.xdmf.display())?;
+        for p in self.checkpoint.iter().chain(&self.particle_files) {
+            writeln!(f, "              {}", p.display())?;
+        }
+        write!(f, "              {}", self.history.display())
+    }
+}
+
+/// Peak resident set size of this process (VmHWM), bytes.
+pub fn peak_rss() -> u64 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("VmHWM:"))
+                .and_then(|l| l.split_whitespace().nth(1))
+                .and_then(|v| v.parse::<u64>().ok())
+        })
+        .map_or(0, |kb| kb * 1024)
+}
+
+impl PhaseTimes {
+    /// Collective. Each phase's maximum over the ranks.
+    pub(super) fn max_over_ranks(&self, comm: &SimpleCommunicator) -> PhaseTimes {
+        let local = [
+            self.model,
+            self.partition,
+            self.assembly,
+            self.stepping,
+            self.output,
+            self.contact,
+            self.mechanics,
+            self.mechanics_detect,
+            self.mechanics_setup,
+        ];
+        let mut tmax = [0.0; 9];
+        comm.all_reduce_into(&local[..], &mut tmax[..], SystemOperation::max());
+        PhaseTimes {
+            model: tmax[0],
+            partition: tmax[1],
+            assembly: tmax[2],
+            stepping: tmax[3],
+            output: tmax[4],
+            contact: tmax[5],
+            mechanics: tmax[6],
+            mechanics_detect: tmax[7],
+            mechanics_setup: tmax[8],
+        }
+    }
+}
+
+impl MechanicsSummary {
+    /// Collective. The domain's counters, work summed over the ranks.
+    pub(super) fn gather(comm: &SimpleCommunicator, mech: &Mechanics) -> MechanicsSummary {
+        let m = &mech.domain;
+        let mine = [
+            m.counters.element_updates as f64,
+            m.counters.pair_updates as f64,
+            m.counters.exact_overlaps as f64,
+        ];
+        let mut counts = [0.0; 3];
+        comm.all_reduce_into(&mine[..], &mut counts[..], SystemOperation::sum());
+        MechanicsSummary {
+            dt: m.dt,
+            substeps_per_step: mech.substeps_per_step,
+            substeps: m.counters.substeps,
+            detections: m.counters.detections,
+            element_updates: counts[0] as u64,
+            pair_updates: counts[1] as u64,
+            exact_overlaps: counts[2] as u64,
+            margin: m.min_margin(),
+        }
+    }
+}
+
+impl Stages<'_, '_> {
+    /// Collective. Close the output and gather what the run did.
+    pub(super) fn summary(
+        mut self,
+        out: Output,
+        start_step: u64,
+        step: u64,
+        settled: Option<Settled>,
+        checkpoint: Option<PathBuf>,
+        particle_files: Vec<PathBuf>,
+    ) -> Result<RunSummary> {
+        let comm = self.comm;
+        let energy = match self.sys.as_mut() {
+            Some(s) => s.energy()?,
+            None => EnergyAccount::default(),
+        };
+        let (h5, xdmf) = crate::io::output_paths(&out.dir, &out.stem);
+        let (output_dir, history) = (out.dir.clone(), out.history_path.clone());
+        out.close()?;
+
+        let mut peak_memory = 0u64;
+        comm.all_reduce_into(&peak_rss(), &mut peak_memory, SystemOperation::max());
+        self.times.mechanics_detect = self
+            .mech
+            .as_ref()
+            .map_or(0.0, |m| m.domain.counters.detect_time);
+        let times = self.times.max_over_ranks(comm);
+        let mechanics = self
+            .mech
+            .as_ref()
+            .map(|m| MechanicsSummary::gather(comm, m));
+        let sys = self.sys.as_ref();
+        Ok(RunSummary {
+            ranks: self.layout.size,
+            nodes: self.model.mesh.nodes.len(),
+            elements: self.model.mesh.tets.len(),
+            steps: step - start_step,
+            ksp_iterations: sys.map_or(0, |s| s.iterations),
+            start_step,
+            settled,
+            checkpoint,
+            particle_files,
+            heat: sys.is_some(),
+            solver: sys.map_or("none (no thermal problem)".into(), |s| {
+                s.solver_name.clone()
+            }),
+            times,
+            output_dir,
+            h5,
+            xdmf,
+            history,
+            energy,
+            peak_memory,
+            contacts: (self.contacts.set.all.len(), self.contacts.set.total_area()),
+            detections: self.contacts.detections,
+            assemblies: sys.map_or(0, |s| s.assemblies),
+            mechanics,
+        })
+    }
+}

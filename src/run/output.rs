@@ -72,11 +72,14 @@ impl Output {
             exists == 1
         };
         let keep_until = restart.map_or(0.0, |c| c.time);
-        let writer = if continues {
-            reopen_writer(comm, model, layout, &dir, &stem, keep_until)?
-        } else {
-            open_writer(comm, model, layout, &dir, &stem)?
-        };
+        let writer = open_writer(
+            comm,
+            model,
+            layout,
+            &dir,
+            &stem,
+            continues.then_some(keep_until),
+        )?;
         let history_path = dir.join(format!("{stem}_history.csv"));
         let mut header: Vec<String> = vec!["step".into(), "time".into()];
         if heat {
@@ -395,43 +398,16 @@ fn mesh_rows(model: &Model, layout: &Layout) -> (Vec<[f64; 3]>, Vec<[u32; 4]>) {
     (coords, cells)
 }
 
-/// Collective. Reopen the series in `dir` to continue it after the
-/// checkpoint at `keep_until` (same mesh and partition, checked).
-fn reopen_writer(
-    comm: &SimpleCommunicator,
-    model: &Model,
-    layout: &Layout,
-    dir: &Path,
-    stem: &str,
-    keep_until: f64,
-) -> Result<TimeSeriesWriter> {
-    let (coords, cells) = mesh_rows(model, layout);
-    let ncells = cells.len() as u64;
-    let mut cell_offset = 0u64;
-    comm.exclusive_scan_into(&ncells, &mut cell_offset, SystemOperation::sum());
-    if comm.rank() == 0 {
-        cell_offset = 0;
-    }
-    let part = MeshPart {
-        global_nodes: layout.num_global() as u64,
-        node_offset: layout.owned_range().0 as u64,
-        coords: &coords,
-        global_cells: model.mesh.tets.len() as u64,
-        cell_offset,
-        cells: &cells,
-    };
-    let node_id: Vec<i32> = layout.owned_nodes.iter().map(|&n| n as i32).collect();
-    Ok(TimeSeriesWriter::reopen(
-        comm, dir, stem, &part, &node_id, keep_until,
-    )?)
-}
-
+/// Collective. The series writer of `dir`: a new series, or with
+/// `continue_after = Some(t)` the existing one reopened to continue after
+/// the checkpoint at `t` (same mesh and partition, checked).
 fn open_writer(
     comm: &SimpleCommunicator,
     model: &Model,
     layout: &Layout,
     dir: &Path,
     stem: &str,
+    continue_after: Option<f64>,
 ) -> Result<TimeSeriesWriter> {
     let (coords, cells) = mesh_rows(model, layout);
     let ncells = cells.len() as u64;
@@ -448,13 +424,18 @@ fn open_writer(
         cell_offset,
         cells: &cells,
     };
+    let node_id: Vec<i32> = layout.owned_nodes.iter().map(|&n| n as i32).collect();
+    if let Some(keep_until) = continue_after {
+        return Ok(TimeSeriesWriter::reopen(
+            comm, dir, stem, &part, &node_id, keep_until,
+        )?);
+    }
     let mut w = TimeSeriesWriter::create(comm, dir, stem, &part)?;
     let body_node: Vec<i32> = layout
         .owned_nodes
         .iter()
         .map(|&n| model.body_of_node(n) as i32)
         .collect();
-    let node_id: Vec<i32> = layout.owned_nodes.iter().map(|&n| n as i32).collect();
     let body_cell: Vec<i32> = layout
         .owned_elems
         .iter()

@@ -3,8 +3,9 @@
 #   scripts/compare-outputs.sh run DIR [FDEM]   # run the cases with FDEM into DIR
 #   scripts/compare-outputs.sh compare REF NEW  # mechanics bitwise, temperatures to 1e-10
 # Cases: N = 50 deposition, eight-body drop and collision on 1 and 2 ranks
-# (trajectories bitwise); two discs, cube stack, hot block on the floor and
-# the N = 50 heat-up on 2 ranks (temperatures to round-off).
+# (trajectories bitwise); two discs, cube stack, hot block on the floor, the
+# N = 50 deposition coupled with heat and the N = 50 heat-up on 2 ranks
+# (temperatures to round-off, positions bitwise).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 source scripts/env.sh
@@ -28,6 +29,12 @@ case "$cmd" in
     go two-discs 2 scenarios/two-discs.toml
     go cube-stack 2 scenarios/cube-stack.toml
     go hot-block 2 scenarios/hot-block-on-floor.toml
+    # The N = 50 deposition coupled with heat: container at 300, nuts at 0,
+    # thermal contact detected every step from the mechanics' candidates.
+    go coupled 2 scenarios/nut-packing-deposit.toml --set bodies.1.pack.count=50 \
+      --set materials.0.conductivity=1.0 --set materials.0.specific_heat=1.0 \
+      --set thermal.theta=1.0 --set contact.resistance=0.01 --set contact.every=1 \
+      --set bodies.0.initial_temperature=300.0 --set bodies.1.initial_temperature=0.0
     go heatup 2 scenarios/nut-packing-heatup.toml --from "$dir/deposit-2"
     ;;
   compare)

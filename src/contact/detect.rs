@@ -1,12 +1,9 @@
-//! Contact detection: a BVH (parry) over the bounding boxes of the tets,
-//! queried with each owned boundary tet; candidate pairs of different
-//! bodies are kept when their volumes overlap (separating axes) and their
-//! contact surface is positive. O(n log n).
+//! Thermal contact detection: the boundary tets, and the narrow phase on
+//! the contact search's candidates ([`super::search`]): a pair is kept
+//! when the two tets' volumes overlap (separating axes) and their contact
+//! surface (seed 000 sec 3.1, eq 25) is positive.
 
-use parry3d_f64::bounding_volume::Aabb;
-use parry3d_f64::math::Point;
-use parry3d_f64::partitioning::{Bvh, BvhBuildStrategy};
-
+use super::search::{BodyTets, Candidate, ContactSearch, SearchOptions};
 use super::{tet_tet_contact_surface, ContactPair};
 use crate::geometry::tet_tet_overlap;
 use crate::mesh::TetMesh;
@@ -47,6 +44,10 @@ pub struct BoundaryTets {
     pub face_mask: Vec<u8>,
     /// Per mesh node: whether it lies on its body's boundary.
     pub boundary_node: Vec<bool>,
+    /// Per element: its boundary faces' bits (0 for an interior tet).
+    pub mask: Vec<u8>,
+    /// Per element: its position in `elems` (`u32::MAX` for an interior tet).
+    pub index: Vec<u32>,
 }
 
 impl BoundaryTets {
@@ -63,13 +64,21 @@ impl BoundaryTets {
                 bt.boundary_node[n as usize] = true;
             }
         }
+        bt.index = vec![u32::MAX; mesh.tets.len()];
         for (e, &m) in mask.iter().enumerate() {
             if m != 0 {
+                bt.index[e] = bt.elems.len() as u32;
                 bt.elems.push(e as u32);
                 bt.face_mask.push(m);
             }
         }
+        bt.mask = mask;
         bt
+    }
+
+    /// The boundary faces of element `e` (none for an interior tet).
+    pub fn faces_of(&self, e: u32) -> FaceList {
+        FaceList::from_mask(self.mask[e as usize])
     }
 
     /// Bit i set when local node i of element `e` lies on its body's boundary.
@@ -98,109 +107,81 @@ impl BoundaryTets {
     }
 }
 
-fn aabb(x: &[[f64; 3]; 4]) -> Aabb {
-    let (lo, hi) = crate::geometry::tet_bounds(x);
-    // Loosen by a hair so touching boxes are candidates too.
-    let pad = 1e-9 * ((hi[0] - lo[0]) + (hi[1] - lo[1]) + (hi[2] - lo[2]));
-    Aabb::new(
-        Point::new(lo[0] - pad, lo[1] - pad, lo[2] - pad),
-        Point::new(hi[0] + pad, hi[1] + pad, hi[2] + pad),
-    )
+/// Seed 000 sec 3.1 for one candidate pair: tets `a` and `b` of
+/// different bodies (at least one a boundary tet) at corners `ca` and
+/// `cb`. None unless their volumes overlap (separating axes) and the
+/// contact surface is positive. Labelled target = the lower id.
+pub fn tet_pair_contact(
+    mesh: &TetMesh,
+    bt: &BoundaryTets,
+    (a, ca): (u32, &[[f64; 3]; 4]),
+    (b, cb): (u32, &[[f64; 3]; 4]),
+) -> Option<ContactPair> {
+    if !tet_tet_overlap(ca, cb) {
+        return None;
+    }
+    let ((t, ct), (c, cc)) = if a < b {
+        ((a, ca), (b, cb))
+    } else {
+        ((b, cb), (a, ca))
+    };
+    let (ft, fc) = (bt.faces_of(t), bt.faces_of(c));
+    let pair = ContactPair {
+        target: t,
+        contactor: c,
+        surface: tet_tet_contact_surface(
+            (ct, ft.as_slice(), bt.node_bits(mesh, t)),
+            (cc, fc.as_slice(), bt.node_bits(mesh, c)),
+        ),
+    };
+    (pair.area() > 0.0).then_some(pair)
 }
 
-/// Pairs `(x, y)`, `x < y`, of boundary tets of different bodies whose
-/// boxes overlap: the broad phase alone, no narrow phase. Used to tell the
-/// partitioner which bodies touch, so that touching particles land on the
-/// same rank.
-pub fn proximity_pairs(mesh: &TetMesh, bt: &BoundaryTets) -> Vec<(u32, u32)> {
-    if bt.is_empty() {
-        return Vec::new();
-    }
-    let boxes: Vec<Aabb> = bt
-        .elems
+/// The thermal contact pairs among `candidates` (the contact search's,
+/// [`super::search`]) at the corners `corners(e)`: those whose volumes
+/// overlap with a positive surface, sorted by (target, contactor).
+pub fn contact_pairs(
+    mesh: &TetMesh,
+    bt: &BoundaryTets,
+    candidates: &[Candidate],
+    corners: impl Fn(u32) -> [[f64; 3]; 4],
+) -> Vec<ContactPair> {
+    let mut pairs: Vec<ContactPair> = candidates
         .iter()
-        .map(|&e| aabb(&mesh.element_coords(e as usize)))
+        .filter_map(|c| tet_pair_contact(mesh, bt, (c.a, &corners(c.a)), (c.b, &corners(c.b))))
         .collect();
-    let bvh = Bvh::from_leaves(BvhBuildStrategy::Binned, &boxes);
-    let mut pairs = Vec::new();
-    for (i, &x) in bt.elems.iter().enumerate() {
-        for j in bvh.intersect_aabb(&boxes[i]) {
-            let y = bt.elems[j as usize];
-            if x < y && mesh.body[x as usize] != mesh.body[y as usize] {
-                pairs.push((x, y));
-            }
-        }
-    }
-    pairs.sort_unstable();
+    pairs.sort_by_key(|p| (p.target, p.contactor));
     pairs
 }
 
-/// Find the contact pairs this caller is responsible for: those found
-/// from a boundary tet `x` with `owns(x)`. The contactor volume may be any
-/// tet of another body (a face that penetrates a few per cent of an element
-/// can lie in an interior tet); a pair of two boundary tets is kept only
-/// from its lower id, so over a partition of `owns` every pair is found
-/// exactly once. Pairs are labelled target = lower id and come sorted by
-/// (target, contactor).
+/// The search options of a thermal contact detection at the current
+/// positions: no margin; boxes loosened by a hair so touching boxes are
+/// candidates too; a boundary face against every tet of another body (a
+/// face that penetrates a few per cent of an element can lie in an
+/// interior tet), held bodies included.
+pub const THERMAL_SEARCH: SearchOptions = SearchOptions {
+    margin: 0.0,
+    pad: 1e-9,
+    interior: true,
+    held_pairs: true,
+};
+
+/// Find the contact pairs this caller is responsible for: those of the
+/// contact search ([`ContactSearch`] with [`THERMAL_SEARCH`]) from the
+/// boundary tets that `tets` lists as owned, at the corners `corners(e)`.
+/// Over a partition of the tets every pair is found exactly once; pairs
+/// come sorted by (target, contactor).
 pub fn detect_contacts(
     mesh: &TetMesh,
     bt: &BoundaryTets,
-    owns: impl Fn(u32) -> bool,
+    search: &mut ContactSearch,
+    tets: &BodyTets,
+    corners: impl Fn(u32) -> [[f64; 3]; 4] + Copy,
+    held: &[bool],
+    fixed: &[bool],
 ) -> Vec<ContactPair> {
-    let ne = mesh.tets.len();
-    let mut mask = vec![0u8; ne];
-    for (i, &e) in bt.elems.iter().enumerate() {
-        mask[e as usize] = bt.face_mask[i];
-    }
-    let faces = |e: u32| FaceList::from_mask(mask[e as usize]);
-    let boxes: Vec<Aabb> = (0..ne).map(|e| aabb(&mesh.element_coords(e))).collect();
-    let bvh = Bvh::from_leaves(BvhBuildStrategy::Binned, &boxes);
-    let mut pairs = Vec::new();
-    for &x in &bt.elems {
-        if !owns(x) {
-            continue;
-        }
-        let cx = mesh.element_coords(x as usize);
-        let fx = faces(x);
-        for y in bvh.intersect_aabb(&boxes[x as usize]) {
-            if mesh.body[y as usize] == mesh.body[x as usize] {
-                continue;
-            }
-            // Two boundary tets: the lower id finds the pair.
-            if mask[y as usize] != 0 && y < x {
-                continue;
-            }
-            let cy = mesh.element_coords(y as usize);
-            if !tet_tet_overlap(&cx, &cy) {
-                continue;
-            }
-            let fy = faces(y);
-            let pair = if x < y {
-                ContactPair {
-                    target: x,
-                    contactor: y,
-                    surface: tet_tet_contact_surface(
-                        (&cx, fx.as_slice(), bt.node_bits(mesh, x)),
-                        (&cy, fy.as_slice(), bt.node_bits(mesh, y)),
-                    ),
-                }
-            } else {
-                ContactPair {
-                    target: y,
-                    contactor: x,
-                    surface: tet_tet_contact_surface(
-                        (&cy, fy.as_slice(), bt.node_bits(mesh, y)),
-                        (&cx, fx.as_slice(), bt.node_bits(mesh, x)),
-                    ),
-                }
-            };
-            if pair.area() > 0.0 {
-                pairs.push(pair);
-            }
-        }
-    }
-    pairs.sort_by_key(|p| (p.target, p.contactor));
-    pairs
+    let candidates = search.find(tets, corners, held, fixed, THERMAL_SEARCH);
+    contact_pairs(mesh, bt, &candidates, corners)
 }
 
 #[cfg(test)]
@@ -215,12 +196,28 @@ mod tests {
         m
     }
 
+    /// The pairs found from the tets `owns` picks, every body free.
+    fn detect(m: &TetMesh, owns: impl Fn(u32) -> bool) -> Vec<ContactPair> {
+        let bt = BoundaryTets::new(m);
+        let tets = BodyTets::new(m, &bt, 2, owns);
+        let free = [false; 2];
+        let corners = |e: u32| m.element_coords(e as usize);
+        detect_contacts(
+            m,
+            &bt,
+            &mut ContactSearch::new(2),
+            &tets,
+            corners,
+            &free,
+            &free,
+        )
+    }
+
     #[test]
     fn overlapping_bars_have_the_cross_section_as_surface() {
         for h in [0.1, 0.05] {
             let m = two_bars(0.001, h);
-            let bt = BoundaryTets::new(&m);
-            let pairs = detect_contacts(&m, &bt, |_| true);
+            let pairs = detect(&m, |_| true);
             let s: f64 = pairs.iter().map(|p| p.area()).sum();
             // The two end faces overlap fully: 0.1 × 0.1 on each side.
             assert!((s - 0.01).abs() < 1e-12, "h = {h}: S = {s}");
@@ -231,33 +228,30 @@ mod tests {
     }
 
     #[test]
-    fn proximity_pairs_link_only_touching_bodies() {
+    fn touching_pairs_hold_every_boundary_contact() {
         let m = two_bars(0.001, 0.1);
-        let bt = BoundaryTets::new(&m);
-        let near = proximity_pairs(&m, &bt);
+        let near = super::super::search::touching_pairs(&m, 2, 1e-9);
         assert!(!near.is_empty());
+        let bt = BoundaryTets::new(&m);
         // Every contact pair of two boundary tets is among them.
-        for p in detect_contacts(&m, &bt, |_| true) {
-            let key = (p.target.min(p.contactor), p.target.max(p.contactor));
+        for p in detect(&m, |_| true) {
+            if bt.mask[p.target as usize] == 0 || bt.mask[p.contactor as usize] == 0 {
+                continue;
+            }
+            let key = (p.target, p.contactor);
             assert!(near.binary_search(&key).is_ok(), "{key:?} missing");
         }
-        assert!(near
-            .iter()
-            .all(|&(a, b)| a < b && m.body[a as usize] != m.body[b as usize]));
-        assert!(proximity_pairs(&two_bars(-0.01, 0.1), &bt).is_empty());
     }
 
     #[test]
     fn separated_bars_have_no_contact_and_split_detection_is_exact() {
         let m = two_bars(-0.01, 0.1);
-        let bt = BoundaryTets::new(&m);
-        assert!(detect_contacts(&m, &bt, |_| true).is_empty());
-        // Owned-target filters that split the elements find each pair once.
+        assert!(detect(&m, |_| true).is_empty());
+        // Owned-tet filters that split the elements find each pair once.
         let m = two_bars(0.003, 0.05);
-        let bt = BoundaryTets::new(&m);
-        let all = detect_contacts(&m, &bt, |_| true);
-        let mut split = detect_contacts(&m, &bt, |e| e % 3 == 0);
-        split.extend(detect_contacts(&m, &bt, |e| e % 3 != 0));
+        let all = detect(&m, |_| true);
+        let mut split = detect(&m, |e| e % 3 == 0);
+        split.extend(detect(&m, |e| e % 3 != 0));
         split.sort_by_key(|p| (p.target, p.contactor));
         assert_eq!(all, split);
     }

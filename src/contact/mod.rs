@@ -1,18 +1,23 @@
-//! Contact between bodies: detection (BVH broad phase over boundary tets,
-//! separating-axis and clipping narrow phase), the contact surface of seed
-//! 000 sec 3.1, and the contact conductance blocks of eqs 24–30.
+//! Contact between bodies: the one contact search (`search`: candidate
+//! pairs and who finds them), the thermal narrow phase and contact surface
+//! of seed 000 sec 3.1 (`detect`, `surface`), the contact conductance
+//! blocks of eqs 24–30, and the penalty contact (`penalty`).
 //!
-//! Pure: no MPI or PETSc. The caller picks which target tets to query (its
-//! owned ones) so that every pair is found by exactly one rank.
+//! Pure: no MPI or PETSc. The caller says which tets it owns, so that
+//! every pair is found by exactly one rank.
 
 mod detect;
 mod exchange;
 pub mod penalty;
+pub mod search;
 mod surface;
 
-pub use detect::{detect_contacts, proximity_pairs, BoundaryTets, FaceList};
+pub use detect::{
+    contact_pairs, detect_contacts, tet_pair_contact, BoundaryTets, FaceList, THERMAL_SEARCH,
+};
 pub use exchange::{pairs_from_f64s, pairs_to_f64s, PAIR_F64S};
 pub use penalty::{pair_stiffness, tet_tet_penalty, PenaltyParams, PenaltyResult};
+pub use search::{finds_pair, BodyTets, Candidate, ContactSearch, SearchOptions};
 pub use surface::{tet_tet_contact_surface, ContactSurface, TetSide};
 
 /// One contact: a boundary tet of one body overlapping a boundary tet of

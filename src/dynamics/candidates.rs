@@ -1,21 +1,21 @@
-//! Contact detection: the broad phase candidate lists (bodies, then
-//! boundary tets within the search margin), the ghosts and halo they need,
-//! and the balancing of pair work across ranks (`balance_pairs`). Pairs
-//! join boundary tets, like the contact surface of seed 000 sec 3.1; the
-//! penalty potential itself is `contact::penalty`.
+//! Contact candidates of the explicit dynamics: the one contact search
+//! ([`crate::contact::search`]) at each detection, the penalty candidates
+//! pruned by face planes and their balancing over the ranks
+//! (`balance_pairs`), the thermal-only candidates of a coupled run, the
+//! ghosts and halo they need, and the thermal narrow phase on them
+//! (`thermal_contacts`, seed 000 sec 3.1). The penalty potential itself is
+//! `contact::penalty`.
 
 use mpi::collective::SystemOperation;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
 use nalgebra::Matrix3;
-use parry3d_f64::bounding_volume::Aabb;
-use parry3d_f64::math::Point;
-use parry3d_f64::partitioning::{Bvh, BvhBuildStrategy};
 
 use super::{ExplicitDomain, NONE};
 use crate::contact::penalty::pair_stiffness;
+use crate::contact::{tet_pair_contact, ContactPair, SearchOptions};
 use crate::error::{Error, Result};
-use crate::geometry::{face_planes, planes_within, tet_bounds, TetPlanes};
+use crate::geometry::{face_planes, planes_within, TetPlanes};
 use crate::mechanics::MechElement;
 use crate::model::Model;
 use crate::parallel::{Halo, Layout};
@@ -28,14 +28,6 @@ const MARGIN_GROWTH: f64 = 4.0;
 /// likely runs the overlap kernel each substep), in units of one whose
 /// boxes are apart (a box test and zeroed forces).
 const HOT_PAIR_WEIGHT: u64 = 32;
-
-/// A box (low, high corner) grown by `g` on every side.
-fn grown_aabb((lo, hi): &([f64; 3], [f64; 3]), g: f64) -> Aabb {
-    Aabb::new(
-        Point::new(lo[0] - g, lo[1] - g, lo[2] - g),
-        Point::new(hi[0] + g, hi[1] + g, hi[2] + g),
-    )
-}
 
 /// A candidate contact pair: boundary tets `a` (of a free body) and `b` (of
 /// another body) whose boxes, grown by the margin, overlap.
@@ -69,10 +61,13 @@ impl ExplicitDomain {
         self.gather_positions(comm);
         // Candidate pairs.
         self.candidates.clear();
+        self.thermal_only.clear();
         self.margin = self.adapted_margin(comm);
-        if let Some((_, penalty)) = self.penalty {
-            let weights = self.find_pairs(model, penalty);
-            self.balance_pairs(comm, model, penalty, &weights);
+        if self.penalty.is_some() || self.thermal {
+            let weights = self.find_pairs(model);
+            if let Some((_, penalty)) = self.penalty {
+                self.balance_pairs(comm, model, penalty, &weights);
+            }
         }
         // Ghosts: those of the elements, then those of the contacts, in
         // ascending node order. The tets of the pairs are listed once each
@@ -104,6 +99,18 @@ impl ExplicitDomain {
         }
         for &e in &tets {
             self.tet_slot[e as usize] = NONE;
+        }
+        // The thermal-only candidates' nodes are ghosts too (their
+        // corners are read at thermal detections).
+        for &(a, b) in &self.thermal_only {
+            for e in [a, b] {
+                for &n in &mesh.tets[e as usize] {
+                    if self.local_of[n as usize] == NONE {
+                        self.local_of[n as usize] = NONE - 1;
+                        contact_nodes.push(n);
+                    }
+                }
+            }
         }
         contact_nodes.sort_unstable();
         for n in contact_nodes {
@@ -180,109 +187,70 @@ impl ExplicitDomain {
         self.stress.resize(self.elements.len(), Matrix3::zeros());
         self.build_assembly(comm, layout);
         self.x_detect = self.x[..self.n_owned].to_vec();
+        self.detected_at = Some(self.counters.substeps);
         self.counters.detections += 1;
         self.counters.detect_time += clock.elapsed().as_secs_f64();
         Ok(())
     }
 
-    /// This rank's candidate pairs, with their estimated costs (see
-    /// [`Self::balance_pairs`]). Two levels: bodies whose boxes come within
-    /// the margin, then, for each such pair, the owned boundary tets of
-    /// one tested against a tree of the other's boundary tets, so no query
-    /// wades through its own body's tets and a body falling alone costs
-    /// one box test. The fixed bodies' trees are built once.
-    fn find_pairs(&mut self, model: &Model, penalty: f64) -> Vec<u64> {
+    /// This rank's candidates from the one contact search
+    /// ([`crate::contact::search`]), with their estimated costs (see
+    /// [`Self::balance_pairs`]). Pairs of two boundary tets of bodies not
+    /// both held are the penalty candidates, pruned by face planes; when
+    /// the thermal contact is coupled, the search also returns a boundary
+    /// tet against another body's interior tets and pairs of two held
+    /// bodies, kept for the thermal contact only.
+    fn find_pairs(&mut self, model: &Model) -> Vec<u64> {
         let mesh = &model.mesh;
         let margin = self.margin;
         let x_all = &self.x_all;
         let corners = |e: u32| mesh.tets[e as usize].map(|n| x_all[n as usize]);
+        let opts = SearchOptions {
+            margin,
+            pad: 0.0,
+            interior: self.thermal,
+            held_pairs: self.thermal,
+        };
+        let found = self.search.find(
+            &self.body_tets,
+            corners,
+            &self.body_held,
+            &self.body_fixed,
+            opts,
+        );
         // Not in the seeds: the penalty potential sums over pairs of
         // boundary tets (a face on the surface), like the contact
         // surface of seed 000 sec 3.1; a tet that meets the surface only
         // at an edge or corner overlaps a shallow intruder by O(δ²).
-        let bt = &self.boundary.elems;
-        let raw: Vec<([f64; 3], [f64; 3])> = bt.iter().map(|&e| tet_bounds(&corners(e))).collect();
-        // Face planes of every boundary tet, for the candidates' pruning.
-        let planes: Vec<[[f64; 4]; 4]> = bt.iter().map(|&e| face_planes(&corners(e))).collect();
-        let nb = model.bodies.len();
-        let mut body_box = vec![([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]); nb];
-        for (i, &e) in bt.iter().enumerate() {
-            let bb = &mut body_box[mesh.body[e as usize] as usize];
-            for d in 0..3 {
-                bb.0[d] = bb.0[d].min(raw[i].0[d]);
-                bb.1[d] = bb.1[d].max(raw[i].1[d]);
-            }
-        }
-        let with_tets: Vec<u32> = (0..nb as u32)
-            .filter(|&b| !self.body_bt[b as usize].is_empty())
-            .collect();
-        let leaves: Vec<Aabb> = with_tets
-            .iter()
-            .map(|&b| grown_aabb(&body_box[b as usize], 0.0))
-            .collect();
-        let body_tree = Bvh::from_leaves(BvhBuildStrategy::Binned, &leaves);
-        let tree_of = |b: usize| {
-            let leaves: Vec<Aabb> = self.body_bt[b]
-                .iter()
-                .map(|&i| grown_aabb(&raw[i as usize], 0.0))
-                .collect();
-            Bvh::from_leaves(BvhBuildStrategy::Binned, &leaves)
+        let penalty = self.penalty.map(|(_, pn)| pn);
+        let bt = &self.boundary;
+        let planes: Vec<[[f64; 4]; 4]> = match penalty {
+            Some(_) => bt.elems.iter().map(|&e| face_planes(&corners(e))).collect(),
+            None => Vec::new(),
         };
-        for b in 0..nb {
-            if model.bodies[b].fixed && self.fixed_trees[b].is_none() && !self.body_bt[b].is_empty()
-            {
-                self.fixed_trees[b] = Some(tree_of(b));
-            }
-        }
-        let mut moving_trees: Vec<Option<Bvh>> = (0..nb).map(|_| None).collect();
-        let mut found: Vec<(u32, u32, bool)> = Vec::new();
-        for ba in 0..nb {
-            // A held body's pairs are found from the free side (the
-            // particles' ranks, which the partition balances).
-            if self.body_held[ba] || self.my_body_bt[ba].is_empty() {
-                continue;
-            }
-            let mut near: Vec<usize> = body_tree
-                .intersect_aabb(&grown_aabb(&body_box[ba], margin))
-                .map(|i| with_tets[i as usize] as usize)
-                // Of two free bodies, the lower id finds the pairs.
-                .filter(|&bb| bb != ba && (self.body_held[bb] || ba < bb))
-                .collect();
-            near.sort_unstable();
-            for bb in near {
-                let tree = match &self.fixed_trees[bb] {
-                    Some(t) => t,
-                    None => moving_trees[bb].get_or_insert_with(|| tree_of(bb)),
-                };
-                let (lo_b, hi_b) = body_box[bb];
-                for &ia in &self.my_body_bt[ba] {
-                    let (lo, hi) = raw[ia as usize];
-                    if (0..3).any(|d| lo[d] - margin > hi_b[d] || lo_b[d] > hi[d] + margin) {
-                        continue;
-                    }
-                    for leaf in tree.intersect_aabb(&grown_aabb(&raw[ia as usize], margin)) {
-                        let ib = self.body_bt[bb][leaf as usize] as usize;
-                        let (a, b) = (bt[ia as usize], bt[ib]);
-                        if !planes_within(
-                            (&corners(a), &planes[ia as usize]),
-                            (&corners(b), &planes[ib]),
-                            margin,
-                        ) {
-                            continue;
-                        }
-                        let (lo_t, hi_t) = raw[ib];
-                        let hot = (0..3).all(|d| lo[d] <= hi_t[d] && lo_t[d] <= hi[d]);
-                        found.push((a, b, hot));
-                    }
+        let mut kept: Vec<(u32, u32, bool)> = Vec::new();
+        for c in found {
+            let held = |e: u32| self.body_held[mesh.body[e as usize] as usize];
+            if penalty.is_some() && c.b_boundary && !(held(c.a) && held(c.b)) {
+                let (ia, ib) = (bt.index[c.a as usize], bt.index[c.b as usize]);
+                if planes_within(
+                    (&corners(c.a), &planes[ia as usize]),
+                    (&corners(c.b), &planes[ib as usize]),
+                    margin,
+                ) {
+                    kept.push((c.a, c.b, c.hot));
                 }
+            } else if self.thermal {
+                self.thermal_only.push((c.a, c.b));
             }
         }
-        self.candidates = found
-            .iter()
-            .map(|&(a, b, _)| self.candidate(model, penalty, a, b))
-            .collect();
-        found
-            .iter()
+        if let Some(pn) = penalty {
+            self.candidates = kept
+                .iter()
+                .map(|&(a, b, _)| self.candidate(model, pn, a, b))
+                .collect();
+        }
+        kept.iter()
             .map(|&(_, _, hot)| if hot { HOT_PAIR_WEIGHT } else { 1 })
             .collect()
     }
@@ -386,6 +354,42 @@ impl ExplicitDomain {
             keep.push(self.candidate(model, penalty, ab[0], ab[1]));
         }
         self.candidates = keep;
+    }
+
+    /// Collective. The thermal contact pairs this rank holds at the
+    /// current positions (seed 000 sec 3.1): the narrow phase on its
+    /// candidates, penalty and thermal-only, so a coupled run searches
+    /// once per detection. When the candidates are due for renewal (a node
+    /// has used up half the margin) they are renewed first, as the next
+    /// substep would; every pair of tets that overlaps now is among them.
+    pub fn thermal_contacts(
+        &mut self,
+        comm: &SimpleCommunicator,
+        model: &Model,
+        layout: &Layout,
+    ) -> Result<Vec<ContactPair>> {
+        if self.redetect {
+            self.detect(comm, model, layout)?;
+            self.redetect = false;
+        }
+        let mesh = &model.mesh;
+        let corners = |e: u32| {
+            mesh.tets[e as usize].map(|n| {
+                let p = &self.x[self.local_of[n as usize] as usize];
+                [p.x, p.y, p.z]
+            })
+        };
+        let mut pairs: Vec<ContactPair> = self
+            .candidates
+            .iter()
+            .map(|c| (c.a, c.b))
+            .chain(self.thermal_only.iter().copied())
+            .filter_map(|(a, b)| {
+                tet_pair_contact(mesh, &self.boundary, (a, &corners(a)), (b, &corners(b)))
+            })
+            .collect();
+        pairs.sort_by_key(|p| (p.target, p.contactor));
+        Ok(pairs)
     }
 
     /// Smallest search margin of the contact candidates (m), used at rest

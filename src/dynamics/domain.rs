@@ -4,7 +4,6 @@
 
 use mpi::topology::SimpleCommunicator;
 use nalgebra::{Matrix3, Vector3};
-use parry3d_f64::partitioning::Bvh;
 
 use super::candidates::Candidate;
 use super::state::MechanicsCounters;
@@ -12,7 +11,7 @@ use super::substep::TetGeometry;
 use super::time_step::time_step;
 use super::NONE;
 use crate::contact::penalty::{LinearizedOverlap, PenaltyParams};
-use crate::contact::BoundaryTets;
+use crate::contact::{BodyTets, BoundaryTets, ContactSearch};
 use crate::error::{Error, Result};
 use crate::geometry::TetPlanes;
 use crate::mechanics::{ElasticMaterial, MechElement, Tet4Reference, VelocityBc};
@@ -53,12 +52,20 @@ pub struct ExplicitDomain {
     /// Whole bodies held (fixed or kinematic).
     pub(super) body_held: Vec<bool>,
     pub(super) boundary: BoundaryTets,
-    /// Per body, its boundary tets (indices into `boundary.elems`), and
-    /// those of them this rank owns.
-    pub(super) body_bt: Vec<Vec<u32>>,
-    pub(super) my_body_bt: Vec<Vec<u32>>,
-    /// Trees of the fixed bodies' boundary tets (they never move).
-    pub(super) fixed_trees: Vec<Option<Bvh>>,
+    /// Per body, its boundary and interior tets, and the boundary tets
+    /// this rank owns (it searches from them).
+    pub(super) body_tets: BodyTets,
+    /// Whole bodies that never move (their search trees are kept).
+    pub(super) body_fixed: Vec<bool>,
+    /// The contact search.
+    pub(super) search: ContactSearch,
+    /// Whether the thermal contact reads the candidates (a coupled run).
+    pub(super) thermal: bool,
+    /// Candidates for the thermal contact only: a boundary tet against an
+    /// interior tet, or two held bodies' tets.
+    pub(super) thermal_only: Vec<(u32, u32)>,
+    /// Substep count at the last detection.
+    pub(super) detected_at: Option<u64>,
     /// Per element, its index in `pair_tets` while the lists are built
     /// (NONE otherwise).
     pub(super) tet_slot: Vec<u32>,
@@ -236,9 +243,12 @@ impl ExplicitDomain {
             orig_of_global,
             body_held,
             boundary: BoundaryTets::new(mesh),
-            body_bt: Vec::new(),
-            my_body_bt: Vec::new(),
-            fixed_trees: (0..model.bodies.len()).map(|_| None).collect(),
+            body_tets: BodyTets::default(),
+            body_fixed: model.bodies.iter().map(|b| b.fixed).collect(),
+            search: ContactSearch::new(model.bodies.len()),
+            thermal: model.thermal_active && model.contact.is_some(),
+            thermal_only: Vec::new(),
+            detected_at: None,
             tet_slot: vec![NONE; mesh.tets.len()],
             penalty,
             margin,
@@ -342,15 +352,9 @@ impl ExplicitDomain {
                 material: model.elem_material[e as usize],
             })
             .collect();
-        dom.body_bt = vec![Vec::new(); model.bodies.len()];
-        dom.my_body_bt = vec![Vec::new(); model.bodies.len()];
-        for (i, &e) in dom.boundary.elems.iter().enumerate() {
-            let b = mesh.body[e as usize] as usize;
-            dom.body_bt[b].push(i as u32);
-            if layout.elem_part[e as usize] == rank {
-                dom.my_body_bt[b].push(i as u32);
-            }
-        }
+        dom.body_tets = BodyTets::new(mesh, &dom.boundary, model.bodies.len(), |e| {
+            layout.elem_part[e as usize] == rank
+        });
         dom.refresh_local_arrays();
         dom.detect(comm, model, layout)?;
         dom.update_element_temperatures(None);

@@ -35,8 +35,9 @@
 //!   and the contact penalty;
 //! - `substep`: [`ExplicitDomain::advance`], one substep (contact and
 //!   element forces, halo exchange, central differences);
-//! - `candidates`: contact detection (broad phase candidate lists, the
-//!   ghost list and halo) and `balance_pairs`;
+//! - `candidates`: contact detection (the one contact search, the ghost
+//!   list and halo), `balance_pairs`, and the thermal narrow phase on the
+//!   candidates in a coupled run (`thermal_contacts`);
 //! - `force_sum`: the global-order force summation that makes the
 //!   trajectories bitwise the same on any number of ranks;
 //! - `state`: energies, output fields, checkpoint save and restore.

@@ -33,7 +33,10 @@ impl ExplicitDomain {
         // Linearised pairs depend on when their models were made: starting
         // every step with fresh candidates (and models) makes a restart,
         // which detects afresh, repeat the run bitwise.
-        if self.linear_tolerance > 0.0 && n > 0 {
+        // (A detection at these very positions, by a thermal detection or
+        // a restore, already is that fresh start.)
+        if self.linear_tolerance > 0.0 && n > 0 && self.detected_at != Some(self.counters.substeps)
+        {
             self.redetect = true;
         }
         for i in 0..n {

@@ -29,27 +29,27 @@ pub struct Layout {
 impl Layout {
     /// Collective. Partition on rank 0 with METIS, broadcast, and number.
     pub fn new<C: Communicator>(comm: &C, mesh: &TetMesh) -> Result<Layout, String> {
-        Self::new_weighted(comm, mesh, None)
+        Self::new_weighted(comm, mesh, None, |_| Vec::new())
     }
 
-    /// Collective. As [`Layout::new`], balancing per-element work `weights`.
+    /// Collective. As [`Layout::new`], balancing per-element work
+    /// `weights`, with the element pairs `links(mesh)` (computed on rank 0
+    /// only) joined in the graph as well: touching bodies' boundary tets,
+    /// so a packing is not cut through every contact.
     pub fn new_weighted<C: Communicator>(
         comm: &C,
         mesh: &TetMesh,
         weights: Option<&[i32]>,
+        links: impl Fn(&TetMesh) -> Vec<(u32, u32)>,
     ) -> Result<Layout, String> {
         let size = comm.size() as usize;
         let rank = comm.rank() as usize;
         let ne = mesh.tets.len();
         let mut part: Vec<u32> = vec![0; ne];
         let mut status: i32 = 0;
-        // Touching bodies (boundary tets with overlapping boxes) are linked
-        // in the graph so a packing is not cut through every contact.
         let links = |mesh: &TetMesh| {
-            let multi = mesh.body.iter().any(|&b| b != mesh.body[0]);
-            if size > 1 && multi {
-                let bt = crate::contact::BoundaryTets::new(mesh);
-                crate::contact::proximity_pairs(mesh, &bt)
+            if size > 1 {
+                links(mesh)
             } else {
                 Vec::new()
             }

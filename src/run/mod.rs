@@ -1,18 +1,19 @@
-//! The time loop: model → partition → thermal system → steps → output.
+//! The time loop: model → stages → steps from stop to stop → summary.
 //!
 //! Collective: every function here is called by all ranks. Errors that one
 //! rank finds alone (an output directory it cannot create) are agreed on
 //! before the next collective call so no rank waits for a failed one.
 //!
-//! [`run`] calls the stages in order: [`setup`] (layout, mechanics domain,
-//! contacts, thermal system, each restored from a checkpoint on a
-//! restart), [`output`] (series, history, particle statistics), then the
-//! steps, stopping where [`schedule`] says for detection, checks, output
-//! and [`checkpoint`]s, and ends with the [`summary`].
+//! [`run`] reads like a textbook driver: `Stages::set_up` ([`setup`]:
+//! layout, mechanics domain, contacts, thermal system, each restored from a
+//! checkpoint on a restart), `start_output` ([`output`]), then `advance` to
+//! each stop the [`schedule`] names and `stop` there (detection, checks,
+//! [`settle`], output, [`checkpoint`]), and `finish` with the [`summary`].
 
 mod checkpoint;
 mod output;
 mod schedule;
+mod settle;
 mod setup;
 mod summary;
 
@@ -29,13 +30,13 @@ use crate::io::checkpoint::Checkpoint;
 use crate::model::Model;
 use crate::parallel::Layout;
 use crate::petsc::Petsc;
-use crate::scenario::{LoadedScenario, SettleSpec};
+use crate::scenario::LoadedScenario;
 use crate::thermal::ThermalSystem;
 
 use checkpoint::Restart;
 use output::Output;
 use schedule::Schedule;
-pub use setup::find_contacts;
+use settle::Settling;
 use setup::Contacts;
 pub use summary::{peak_rss, MechanicsSummary, PhaseTimes, RunSummary, Settled};
 
@@ -61,128 +62,99 @@ struct Mechanics {
     substeps_per_step: u64,
 }
 
-/// Collective. Run a scenario to the end.
+/// Collective. Run a scenario to the end: the model, the stages set up
+/// on it, the steps from stop to stop (detection, checks, settle check,
+/// output, checkpoint at each as the schedule says), then the summary.
 pub fn run(
     petsc: &Petsc,
     comm: &SimpleCommunicator,
     sc: &LoadedScenario,
     opts: &RunOptions,
 ) -> Result<RunSummary> {
-    let mut times = PhaseTimes::default();
     let clock = Instant::now();
     let model = Model::from_scenario(sc)?;
-    times.model = clock.elapsed().as_secs_f64();
-
-    let layout = setup::partition(comm, &model, &mut times)?;
+    let times = PhaseTimes {
+        model: clock.elapsed().as_secs_f64(),
+        ..PhaseTimes::default()
+    };
     let restart = match &opts.restart {
         Some(p) => Some(Restart::read(p, &model)?),
         None => None,
     };
+    let mut st = Stages::set_up(petsc, comm, &model, restart.as_ref(), opts, times)?;
     let ck = restart.as_ref().map(|r| &r.checkpoint);
-    let start_step = ck.map_or(0, |c| c.step);
-    // Mechanics first: its set-up checks the time step before any work.
-    let mut mech = setup::mechanics(comm, &model, &layout, restart.as_ref(), &mut times)?;
-    let contacts = Contacts::new(comm, &model, &layout, ck, mech.is_some(), &mut times);
-    let sys = setup::thermal(
-        petsc,
-        &model,
-        &layout,
-        &contacts.set,
-        opts,
-        restart.as_ref(),
-        &mut times,
-    )?;
-    setup::couple_temperatures(comm, &model, &layout, sys.as_ref(), mech.as_mut(), ck)?;
-    let mut st = Stages {
-        petsc,
-        comm,
-        model: &model,
-        layout,
-        sys,
-        mech,
-        contacts,
-        times,
-    };
-
     // Output: only now that the input is known good are files created.
-    let clock = Instant::now();
-    let mut out = st.open_output(opts.output_dir.as_deref(), ck)?;
-    if !out.continues {
-        st.write(&mut out, start_step)?;
-    }
-    st.record(&mut out, start_step)?;
-    st.times.output += clock.elapsed().as_secs_f64();
-
-    let mut settling = Settling::new(&model, ck);
-    let mut schedule = Schedule::new(
-        model.steps,
-        &model.output_steps,
-        start_step,
-        model.contact.as_ref().map_or(0, |c| c.every),
-        model.output.checkpoint_every,
-        out.every_step() || settling.spec.is_some(),
-    );
-    let ck_path = out.dir.join(format!("{}_checkpoint.h5", out.stem));
-    let mut checkpoint = None;
+    let mut out = st.start_output(opts.output_dir.as_deref(), ck)?;
     let show = opts.progress && comm.rank() == 0;
-    let bar = output::progress_bar(
-        show,
-        model.steps,
-        start_step,
-        st.sys.is_some(),
-        st.mech.is_some(),
-    );
-    let mut step = start_step;
-    while step < model.steps && settling.settled.is_none() {
-        // Run uninterrupted until the next output, check or progress tick.
-        let target = schedule.next_stop(step);
-        st.advance(step, target)?;
-        step = target;
-        if let Some(b) = &bar {
+    let mut at = Position::new(&model, ck, &out, st.sys.is_some(), st.mech.is_some(), show);
+    while let Some(target) = at.next_stop() {
+        st.advance(at.step, target)?;
+        at.reached(target);
+        st.stop(&mut at, &mut out)?;
+    }
+    st.finish(at, out)
+}
+
+/// Where the time loop stands: the step, the schedule of stops, the
+/// settle criterion, the progress bar and the checkpoint written.
+struct Position {
+    step: u64,
+    start_step: u64,
+    steps: u64,
+    schedule: Schedule,
+    settling: Settling,
+    bar: Option<indicatif::ProgressBar>,
+    /// Where checkpoints go, and the last one written.
+    checkpoint_path: PathBuf,
+    checkpoint: Option<PathBuf>,
+}
+
+impl Position {
+    /// At the start (the checkpoint's step on a restart).
+    fn new(
+        model: &Model,
+        ck: Option<&Checkpoint>,
+        out: &Output,
+        heat: bool,
+        mechanics: bool,
+        show: bool,
+    ) -> Position {
+        let start_step = ck.map_or(0, |c| c.step);
+        let settling = Settling::new(model, ck);
+        let schedule = Schedule::new(
+            model.steps,
+            &model.output_steps,
+            start_step,
+            model.contact.as_ref().map_or(0, |c| c.every),
+            model.output.checkpoint_every,
+            out.every_step() || settling.spec.is_some(),
+        );
+        Position {
+            step: start_step,
+            start_step,
+            steps: model.steps,
+            schedule,
+            settling,
+            bar: output::progress_bar(show, model.steps, start_step, heat, mechanics),
+            checkpoint_path: out.dir.join(format!("{}_checkpoint.h5", out.stem)),
+            checkpoint: None,
+        }
+    }
+
+    /// The step to run to without a stop; None when the run is over
+    /// (the last step, or settled).
+    fn next_stop(&self) -> Option<u64> {
+        (self.step < self.steps && self.settling.settled.is_none())
+            .then(|| self.schedule.next_stop(self.step))
+    }
+
+    /// The steps up to `step` are taken.
+    fn reached(&mut self, step: u64) {
+        self.step = step;
+        if let Some(b) = &self.bar {
             b.set_position(step);
         }
-        if st.sys.is_some() && schedule.is_detection(step) {
-            st.redetect(step)?;
-        }
-        if schedule.is_finite_check(step) {
-            st.check_finite(step)?;
-        }
-        if let Some(m) = &st.mech {
-            settling.check(comm, m, step, model.dt);
-        }
-        let settled = settling.settled.is_some();
-        let clock = Instant::now();
-        st.record(&mut out, step)?;
-        if schedule.is_output(step) || (settled && step < model.steps) {
-            schedule.output_written();
-            st.write(&mut out, step)?;
-        }
-        if schedule.is_checkpoint(step) && !settled {
-            st.save(step, settling.peak_kinetic, None, &ck_path)?;
-            checkpoint = Some(ck_path.clone());
-        }
-        st.times.output += clock.elapsed().as_secs_f64();
-        if settled {
-            break;
-        }
     }
-    let settled = settling.settled;
-    if model.output.checkpoint || settled.is_some() && model.output.checkpoint_every > 0 {
-        let clock = Instant::now();
-        st.save(
-            step,
-            settling.peak_kinetic,
-            settled.map(|s| s.kinetic),
-            &ck_path,
-        )?;
-        checkpoint = Some(ck_path.clone());
-        st.times.output += clock.elapsed().as_secs_f64();
-    }
-    let particle_files = out.finish(comm, &model, &st.contacts.set)?;
-    if let Some(b) = bar {
-        b.finish_and_clear();
-    }
-    st.summary(out, start_step, step, settled, checkpoint, particle_files)
 }
 
 /// The stages on this rank, between set-up and summary: what the time
@@ -198,7 +170,124 @@ struct Stages<'a, 'p> {
     times: PhaseTimes,
 }
 
+impl<'a, 'p> Stages<'a, 'p> {
+    /// Collective. The stages set up on the model: the partition, the
+    /// mechanics domain (first: its set-up checks the time step before
+    /// any other work), the first contact detection, the thermal system,
+    /// and the mechanics' first temperatures; each at the checkpoint's
+    /// state on a restart.
+    fn set_up(
+        petsc: &'p Petsc,
+        comm: &'a SimpleCommunicator,
+        model: &'a Model,
+        restart: Option<&Restart>,
+        opts: &RunOptions,
+        mut times: PhaseTimes,
+    ) -> Result<Self> {
+        let layout = setup::partition(comm, model, &mut times)?;
+        let ck = restart.map(|r| &r.checkpoint);
+        let mut mech = setup::mechanics(comm, model, &layout, restart, &mut times)?;
+        let contacts = Contacts::new(comm, model, &layout, ck, mech.as_mut())?;
+        let sys = setup::thermal(
+            petsc,
+            model,
+            &layout,
+            &contacts.set,
+            opts,
+            restart,
+            &mut times,
+        )?;
+        setup::couple_temperatures(comm, model, &layout, sys.as_ref(), mech.as_mut(), ck)?;
+        Ok(Stages {
+            petsc,
+            comm,
+            model,
+            layout,
+            sys,
+            mech,
+            contacts,
+            times,
+        })
+    }
+}
+
 impl Stages<'_, '_> {
+    /// Collective. Open the output (continued after the checkpoint on a
+    /// restart in place) and write the start: its fields unless the
+    /// series continues, and its particle statistics.
+    fn start_output(&mut self, dir: Option<&Path>, ck: Option<&Checkpoint>) -> Result<Output> {
+        let clock = Instant::now();
+        let start_step = ck.map_or(0, |c| c.step);
+        let mut out = self.open_output(dir, ck)?;
+        if !out.continues {
+            self.write(&mut out, start_step)?;
+        }
+        self.record(&mut out, start_step)?;
+        self.times.output += clock.elapsed().as_secs_f64();
+        Ok(out)
+    }
+
+    /// Collective. At a stop: re-detect contacts and check the
+    /// temperatures when due, check whether the bodies settled, record the
+    /// particle statistics, write the fields and the checkpoint when due.
+    fn stop(&mut self, at: &mut Position, out: &mut Output) -> Result<()> {
+        let step = at.step;
+        if self.sys.is_some() && at.schedule.is_detection(step) {
+            self.redetect(step)?;
+        }
+        if at.schedule.is_finite_check(step) {
+            self.check_finite(step)?;
+        }
+        if let Some(m) = &self.mech {
+            at.settling.check(self.comm, m, step, self.model.dt);
+        }
+        let settled = at.settling.settled.is_some();
+        let clock = Instant::now();
+        self.record(out, step)?;
+        if at.schedule.is_output(step) || (settled && step < self.model.steps) {
+            at.schedule.output_written();
+            self.write(out, step)?;
+        }
+        if at.schedule.is_checkpoint(step) && !settled {
+            self.save(step, at.settling.peak_kinetic, None, &at.checkpoint_path)?;
+            at.checkpoint = Some(at.checkpoint_path.clone());
+        }
+        self.times.output += clock.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    /// Collective. The final checkpoint (when asked for, or when a
+    /// deposition settled), the particle statistics, and the summary.
+    fn finish(mut self, at: Position, out: Output) -> Result<RunSummary> {
+        let settled = at.settling.settled;
+        let mut checkpoint = at.checkpoint;
+        let output = &self.model.output;
+        if output.checkpoint || settled.is_some() && output.checkpoint_every > 0 {
+            let clock = Instant::now();
+            let kinetic = settled.map(|s| s.kinetic);
+            self.save(
+                at.step,
+                at.settling.peak_kinetic,
+                kinetic,
+                &at.checkpoint_path,
+            )?;
+            checkpoint = Some(at.checkpoint_path);
+            self.times.output += clock.elapsed().as_secs_f64();
+        }
+        let particle_files = out.finish(self.comm, self.model, &self.contacts.set)?;
+        if let Some(b) = at.bar {
+            b.finish_and_clear();
+        }
+        self.summary(
+            out,
+            at.start_step,
+            at.step,
+            settled,
+            checkpoint,
+            particle_files,
+        )
+    }
+
     /// Collective. Open the output files.
     fn open_output(&self, dir: Option<&Path>, restart: Option<&Checkpoint>) -> Result<Output> {
         let (heat, mechanics) = (self.sys.is_some(), self.mech.is_some());
@@ -296,12 +385,10 @@ impl Stages<'_, '_> {
     /// Collective. Detect contacts again; rebuild the operator only when
     /// the contact set or its areas changed.
     fn redetect(&mut self, step: u64) -> Result<()> {
-        let clock = Instant::now();
         let (comm, model, layout) = (self.comm, self.model, &self.layout);
         let found = self
             .contacts
-            .redetect(comm, model, layout, self.mech.as_mut(), step);
-        self.times.contact += clock.elapsed().as_secs_f64();
+            .redetect(comm, model, layout, self.mech.as_mut(), step)?;
         if let Some(found) = found {
             let clock = Instant::now();
             self.contacts.set = found;
@@ -318,63 +405,6 @@ impl Stages<'_, '_> {
         match &self.sys {
             Some(s) => check_finite(self.comm, s, &self.layout, step, self.model.dt),
             None => Ok(()),
-        }
-    }
-}
-
-/// The settle criterion of a deposition: the peak kinetic energy so far,
-/// and where the bodies came to rest.
-struct Settling {
-    spec: Option<SettleSpec>,
-    /// Mass of the free bodies (the settle criterion by rms speed).
-    free_mass: f64,
-    /// Largest kinetic energy seen (J).
-    peak_kinetic: f64,
-    settled: Option<Settled>,
-}
-
-impl Settling {
-    fn new(model: &Model, restart: Option<&Checkpoint>) -> Settling {
-        let free_mass: f64 = (0..model.mesh.tets.len())
-            .filter(|&e| !model.bodies[model.mesh.body[e] as usize].is_held())
-            .map(|e| model.material_of(e).density * model.mesh.element_volume(e))
-            .sum();
-        Settling {
-            spec: model.mechanics.as_ref().and_then(|m| m.settle),
-            free_mass,
-            peak_kinetic: restart.map_or(0.0, |c| c.peak_kinetic),
-            // A restart from a settled run's checkpoint is already done.
-            settled: restart.and_then(|c| {
-                c.settled.map(|kinetic| Settled {
-                    step: c.step,
-                    time: c.time,
-                    kinetic,
-                })
-            }),
-        }
-    }
-
-    /// Collective. Whether the bodies have settled at `step`.
-    fn check(&mut self, comm: &SimpleCommunicator, mech: &Mechanics, step: u64, dt: f64) {
-        let Some(st) = self.spec else {
-            return;
-        };
-        let ke = mech.domain.state(comm).kinetic;
-        self.peak_kinetic = f64::max(self.peak_kinetic, ke);
-        let peak_ke = self.peak_kinetic;
-        let time = step as f64 * dt;
-        // Settled when below any threshold given.
-        let threshold = st
-            .kinetic_energy
-            .unwrap_or(0.0)
-            .max(st.relative.map_or(0.0, |r| r * peak_ke))
-            .max(st.rms_speed.map_or(0.0, |v| 0.5 * self.free_mass * v * v));
-        if time >= st.after && peak_ke > 0.0 && ke < threshold {
-            self.settled = Some(Settled {
-                step,
-                time,
-                kinetic: ke,
-            });
         }
     }
 }

@@ -8,11 +8,13 @@ use std::time::Instant;
 
 use mpi::topology::SimpleCommunicator;
 
-use crate::contact::{detect_contacts, pairs_from_f64s, pairs_to_f64s, BoundaryTets, ContactSet};
+use crate::contact::{
+    contact_pairs, pairs_from_f64s, pairs_to_f64s, BodyTets, BoundaryTets, ContactSearch,
+    ContactSet, THERMAL_SEARCH,
+};
 use crate::dynamics::ExplicitDomain;
 use crate::error::{Error, Result};
 use crate::io::checkpoint::Checkpoint;
-use crate::mesh::TetMesh;
 use crate::model::Model;
 use crate::parallel::Layout;
 use crate::petsc::Petsc;
@@ -45,8 +47,18 @@ pub(super) fn partition(
             })
             .collect()
     });
-    let layout =
-        Layout::new_weighted(comm, &model.mesh, weights.as_deref()).map_err(Error::Partition)?;
+    // Touching bodies are linked in the element graph (the contact
+    // search's pairs of boundary tets whose boxes touch).
+    let bodies = model.bodies.len();
+    let links = |mesh: &crate::mesh::TetMesh| {
+        if bodies > 1 {
+            crate::contact::search::touching_pairs(mesh, bodies, crate::contact::THERMAL_SEARCH.pad)
+        } else {
+            Vec::new()
+        }
+    };
+    let layout = Layout::new_weighted(comm, &model.mesh, weights.as_deref(), links)
+        .map_err(Error::Partition)?;
     times.partition = clock.elapsed().as_secs_f64();
     Ok(layout)
 }
@@ -80,17 +92,43 @@ pub(super) fn mechanics(
     Ok(mech)
 }
 
-/// Thermal contact detection: the boundary tets searched, the current
-/// positions, and the pairs the thermal operator is assembled with.
-pub(super) struct Contacts {
+/// Where a run's thermal contacts come from.
+enum Source {
+    /// No thermal contact.
+    None,
+    /// The mechanics' candidates (a coupled run: one search per detection).
+    Mechanics,
+    /// The contact search at the model's positions (a thermal run; bodies
+    /// with a prescribed velocity move between detections).
+    Search(Box<ThermalSearch>),
+}
+
+/// A thermal run's own contact search.
+struct ThermalSearch {
     bt: BoundaryTets,
-    /// Positions of moving bodies are updated at each detection (a copy of
-    /// the mesh only when something moves).
-    moved: Option<TetMesh>,
+    tets: BodyTets,
+    search: ContactSearch,
+    held: Vec<bool>,
+    /// Bodies that never move.
+    fixed: Vec<bool>,
+    /// Current positions of every node when something moves.
+    positions: Option<Vec<[f64; 3]>>,
+}
+
+/// Thermal contact detection: where the pairs come from, and the pairs
+/// the thermal operator is assembled with.
+pub(super) struct Contacts {
+    source: Source,
     /// The pairs in use.
     pub set: ContactSet,
     /// Detections run.
     pub detections: u64,
+    /// Contact searches this stage ran itself (a thermal run's), and their time (s).
+    pub searches: u64,
+    pub search_time: f64,
+    /// Time of the rest of the detections (s): surfaces, gathering,
+    /// comparing (the mechanics' searches not included).
+    pub surface_time: f64,
 }
 
 impl Contacts {
@@ -101,37 +139,51 @@ impl Contacts {
         model: &Model,
         layout: &Layout,
         restart: Option<&Checkpoint>,
-        mechanics: bool,
-        times: &mut PhaseTimes,
-    ) -> Contacts {
-        let clock = Instant::now();
-        let bt = BoundaryTets::new(&model.mesh);
-        let mut moved = (model.has_motion() || mechanics).then(|| model.mesh.clone());
-        if let (Some(ck), Some(mesh_now)) = (restart, moved.as_mut()) {
-            match &ck.positions {
-                Some(x) => mesh_now.nodes.copy_from_slice(x),
-                None => model.positions_at(ck.time, &mut mesh_now.nodes),
-            }
-        }
-        let set = if model.thermal_active {
-            find_contacts(
-                comm,
-                model,
-                moved.as_ref().unwrap_or(&model.mesh),
-                layout,
-                &bt,
-            )
+        mech: Option<&mut Mechanics>,
+    ) -> Result<Contacts> {
+        let source = if !(model.thermal_active && model.contact.is_some()) {
+            Source::None
+        } else if mech.is_some() {
+            Source::Mechanics
         } else {
-            ContactSet::default()
+            let bt = BoundaryTets::new(&model.mesh);
+            let rank = layout.rank as u32;
+            let tets = BodyTets::new(&model.mesh, &bt, model.bodies.len(), |e| {
+                layout.elem_part[e as usize] == rank
+            });
+            let mut positions = model.has_motion().then(|| model.mesh.nodes.clone());
+            if let (Some(ck), Some(x)) = (restart, positions.as_mut()) {
+                match &ck.positions {
+                    Some(p) => x.copy_from_slice(p),
+                    None => model.positions_at(ck.time, x),
+                }
+            }
+            Source::Search(Box::new(ThermalSearch {
+                bt,
+                tets,
+                search: ContactSearch::new(model.bodies.len()),
+                held: model.bodies.iter().map(|b| b.is_held()).collect(),
+                fixed: model
+                    .bodies
+                    .iter()
+                    .map(|b| b.velocity == [0.0; 3])
+                    .collect(),
+                positions,
+            }))
         };
-        let detections = u64::from(model.contact.is_some() && model.thermal_active);
-        times.contact = clock.elapsed().as_secs_f64();
-        Contacts {
-            bt,
-            moved,
-            set,
-            detections,
+        let mut contacts = Contacts {
+            source,
+            set: ContactSet::default(),
+            detections: 0,
+            searches: 0,
+            search_time: 0.0,
+            surface_time: 0.0,
+        };
+        if !matches!(contacts.source, Source::None) {
+            contacts.set = contacts.find(comm, model, layout, mech)?;
+            contacts.detections = 1;
         }
+        Ok(contacts)
     }
 
     /// Collective. Detect again at the positions of `step`: the new set
@@ -143,20 +195,63 @@ impl Contacts {
         layout: &Layout,
         mech: Option<&mut Mechanics>,
         step: u64,
-    ) -> Option<ContactSet> {
-        if let Some(mesh_now) = self.moved.as_mut() {
-            match mech {
-                Some(Mechanics { domain: m, .. }) => {
-                    m.gather_positions(comm);
-                    mesh_now.nodes.copy_from_slice(m.positions());
-                }
-                None => model.positions_at(step as f64 * model.dt, &mut mesh_now.nodes),
+    ) -> Result<Option<ContactSet>> {
+        if let Source::Search(ts) = &mut self.source {
+            if let Some(x) = ts.positions.as_mut() {
+                model.positions_at(step as f64 * model.dt, x);
             }
         }
-        let mesh_now = self.moved.as_ref().unwrap_or(&model.mesh);
-        let found = find_contacts(comm, model, mesh_now, layout, &self.bt);
+        let found = self.find(comm, model, layout, mech)?;
         self.detections += 1;
-        (!found.same_as(&self.set, 1e-12)).then_some(found)
+        Ok((!found.same_as(&self.set, 1e-12)).then_some(found))
+    }
+
+    /// Collective. The pairs at the current positions: each rank's, then
+    /// every pair on every rank (for preallocation and statistics).
+    fn find(
+        &mut self,
+        comm: &SimpleCommunicator,
+        model: &Model,
+        layout: &Layout,
+        mech: Option<&mut Mechanics>,
+    ) -> Result<ContactSet> {
+        let clock = Instant::now();
+        // Search time, counted once: the mechanics' in its own counters.
+        let searched;
+        let local = match (&mut self.source, mech) {
+            (Source::None, _) => return Ok(ContactSet::default()),
+            (Source::Mechanics, Some(m)) => {
+                let before = m.domain.counters.detect_time;
+                let pairs = m.domain.thermal_contacts(comm, model, layout)?;
+                searched = m.domain.counters.detect_time - before;
+                pairs
+            }
+            (Source::Mechanics, None) => unreachable!("a coupled run has mechanics"),
+            (Source::Search(ts), _) => {
+                let ThermalSearch {
+                    bt,
+                    tets,
+                    search,
+                    held,
+                    fixed,
+                    positions,
+                } = ts.as_mut();
+                let mesh = &model.mesh;
+                let x = positions.as_deref().unwrap_or(&mesh.nodes);
+                let corners = |e: u32| mesh.tets[e as usize].map(|n| x[n as usize]);
+                let t = Instant::now();
+                let candidates = search.find(tets, corners, held, fixed, THERMAL_SEARCH);
+                searched = t.elapsed().as_secs_f64();
+                self.search_time += searched;
+                self.searches += 1;
+                contact_pairs(mesh, bt, &candidates, corners)
+            }
+        };
+        let gathered = crate::parallel::all_gather_f64(comm, &pairs_to_f64s(&local));
+        let mut all = pairs_from_f64s(&gathered);
+        all.sort_by_key(|p| (p.target, p.contactor));
+        self.surface_time += clock.elapsed().as_secs_f64() - searched;
+        Ok(ContactSet { all, local })
     }
 }
 
@@ -226,25 +321,4 @@ pub(super) fn couple_temperatures(
         }
     }
     Ok(())
-}
-
-/// Collective. Detect contacts: each rank queries its own boundary tets,
-/// then all ranks gather every pair (for preallocation and statistics).
-/// `mesh` is the model's mesh at the current positions.
-pub fn find_contacts(
-    comm: &SimpleCommunicator,
-    model: &Model,
-    mesh: &TetMesh,
-    layout: &Layout,
-    bt: &BoundaryTets,
-) -> ContactSet {
-    if model.contact.is_none() {
-        return ContactSet::default();
-    }
-    let rank = layout.rank as u32;
-    let local = detect_contacts(mesh, bt, |e| layout.elem_part[e as usize] == rank);
-    let gathered = crate::parallel::all_gather_f64(comm, &pairs_to_f64s(&local));
-    let mut all = pairs_from_f64s(&gathered);
-    all.sort_by_key(|p| (p.target, p.contactor));
-    ContactSet { all, local }
 }

@@ -33,15 +33,18 @@ pub struct PhaseTimes {
     pub partition: f64,
     /// Assembly and solver set-up (factorisation).
     pub assembly: f64,
-    /// Contact detection and surfaces.
+    /// Thermal contact detections: surfaces, gathering, and the searches
+    /// of a thermal run (a coupled run's searches are the mechanics').
     pub contact: f64,
+    /// Every contact search (the one search, whoever runs it).
+    pub search: f64,
     /// Time stepping (solves).
     pub stepping: f64,
     /// HDF5/XDMF/CSV output.
     pub output: f64,
     /// Explicit mechanics (set-up and substeps, detection included).
     pub mechanics: f64,
-    /// Of which contact detection and halo rebuilds.
+    /// Of which contact searches and halo rebuilds.
     pub mechanics_detect: f64,
     /// Of which the set-up (partition-local arrays, step, first detection).
     pub mechanics_setup: f64,
@@ -100,8 +103,10 @@ pub struct RunSummary {
     pub peak_memory: u64,
     /// Contact pairs and total contact area at the end.
     pub contacts: (usize, f64),
-    /// Contact detections run.
+    /// Thermal contact detections run.
     pub detections: u64,
+    /// Contact searches run (the mechanics' and a thermal run's).
+    pub searches: u64,
     /// Times the thermal operator was assembled.
     pub assemblies: u64,
     /// Mechanics, when it ran.
@@ -145,6 +150,13 @@ impl std::fmt::Display for RunSummary {
             "  contact     {} pairs, area {:.6e} m^2; {} detection(s), operator assembled {} time(s)",
             self.contacts.0, self.contacts.1, self.detections, self.assemblies
         )?;
+        if self.searches > 0 {
+            writeln!(
+                f,
+                "  search      {} contact search(es), {:.3} s (one search per detection, shared by the penalty and thermal contact)",
+                self.searches, t.search
+            )?;
+        }
         if self.steps > 0 {
             writeln!(
                 f,
@@ -160,13 +172,12 @@ impl std::fmt::Display for RunSummary {
             };
             writeln!(
                 f,
-                "  mechanics   dt {:.4e} s, {} substeps ({} per step), {:.3} s ({:.3} s set-up, {:.3} s detection, {} detections), {:.2} M tet updates/s/rank, {} pair evaluations ({} exact overlaps)",
+                "  mechanics   dt {:.4e} s, {} substeps ({} per step), {:.3} s ({:.3} s set-up, {} detections), {:.2} M tet updates/s/rank, {} pair evaluations ({} exact overlaps)",
                 m.dt,
                 m.substeps,
                 m.substeps_per_step,
                 t.mechanics,
                 t.mechanics_setup,
-                t.mechanics_detect,
                 m.detections,
                 rate / 1e6,
                 m.pair_updates,
@@ -235,8 +246,9 @@ impl PhaseTimes {
             self.mechanics,
             self.mechanics_detect,
             self.mechanics_setup,
+            self.search,
         ];
-        let mut tmax = [0.0; 9];
+        let mut tmax = [0.0; 10];
         comm.all_reduce_into(&local[..], &mut tmax[..], SystemOperation::max());
         PhaseTimes {
             model: tmax[0],
@@ -248,6 +260,7 @@ impl PhaseTimes {
             mechanics: tmax[6],
             mechanics_detect: tmax[7],
             mechanics_setup: tmax[8],
+            search: tmax[9],
         }
     }
 }
@@ -302,6 +315,14 @@ impl Stages<'_, '_> {
             .mech
             .as_ref()
             .map_or(0.0, |m| m.domain.counters.detect_time);
+        let c = &self.contacts;
+        self.times.contact = c.search_time + c.surface_time;
+        self.times.search = c.search_time + self.times.mechanics_detect;
+        let searches = c.searches
+            + self
+                .mech
+                .as_ref()
+                .map_or(0, |m| m.domain.counters.detections);
         let times = self.times.max_over_ranks(comm);
         let mechanics = self
             .mech
@@ -331,6 +352,7 @@ impl Stages<'_, '_> {
             peak_memory,
             contacts: (self.contacts.set.all.len(), self.contacts.set.total_area()),
             detections: self.contacts.detections,
+            searches,
             assemblies: sys.map_or(0, |s| s.assemblies),
             mechanics,
         })

@@ -695,13 +695,12 @@ impl Model {
         &self.materials[self.elem_material[e] as usize]
     }
 
-    /// Contact resistance between the materials of elements `a` and `b`.
-    pub fn contact_resistance(&self, a: usize, b: usize) -> f64 {
-        let ma = self.elem_material[a] as usize;
-        let mb = self.elem_material[b] as usize;
+    /// Contact resistance between materials `a` and `b` (infinite without
+    /// contact heat transfer).
+    pub fn resistance(&self, a: u32, b: u32) -> f64 {
         self.contact
             .as_ref()
-            .map_or(f64::INFINITY, |c| c.resistance[ma][mb])
+            .map_or(f64::INFINITY, |c| c.resistance[a as usize][b as usize])
     }
 
     /// Prescribed temperature of node `n` at time `t` (runs without a
@@ -911,12 +910,11 @@ conductance = 50.0
     #[test]
     fn pair_resistance_overrides_the_default() {
         let m = model();
-        let steel = m.bodies[0].elem_range.0 as usize;
-        let glass = m.bodies[1].elem_range.0 as usize;
-        let glass2 = m.bodies[2].elem_range.0 as usize;
-        assert_eq!(m.contact_resistance(steel, glass), 1.0 / 50.0);
-        assert_eq!(m.contact_resistance(glass, steel), 1.0 / 50.0);
-        assert_eq!(m.contact_resistance(glass, glass2), 0.01);
+        let mat = |b: usize| m.elem_material[m.bodies[b].elem_range.0 as usize];
+        let (steel, glass, glass2) = (mat(0), mat(1), mat(2));
+        assert_eq!(m.resistance(steel, glass), 1.0 / 50.0);
+        assert_eq!(m.resistance(glass, steel), 1.0 / 50.0);
+        assert_eq!(m.resistance(glass, glass2), 0.01);
     }
 
     #[test]

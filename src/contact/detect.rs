@@ -76,6 +76,26 @@ impl BoundaryTets {
         bt
     }
 
+    /// From per-element face masks (bit i: the face opposite node i lies
+    /// on its body's boundary) and per-node boundary flags, as a part of a
+    /// distributed mesh carries them.
+    pub fn from_masks(mask: &[u8], boundary_node: Vec<bool>) -> BoundaryTets {
+        let mut bt = BoundaryTets {
+            boundary_node,
+            index: vec![u32::MAX; mask.len()],
+            ..Default::default()
+        };
+        for (e, &m) in mask.iter().enumerate() {
+            if m != 0 {
+                bt.index[e] = bt.elems.len() as u32;
+                bt.elems.push(e as u32);
+                bt.face_mask.push(m);
+            }
+        }
+        bt.mask = mask.to_vec();
+        bt
+    }
+
     /// The boundary faces of element `e` (none for an interior tet).
     pub fn faces_of(&self, e: u32) -> FaceList {
         FaceList::from_mask(self.mask[e as usize])

@@ -7,7 +7,6 @@
 //! every pair is found by exactly one rank.
 
 mod detect;
-mod exchange;
 pub mod penalty;
 pub mod search;
 mod surface;
@@ -15,7 +14,6 @@ mod surface;
 pub use detect::{
     contact_pairs, detect_contacts, tet_pair_contact, BoundaryTets, FaceList, THERMAL_SEARCH,
 };
-pub use exchange::{pairs_from_f64s, pairs_to_f64s, PAIR_F64S};
 pub use penalty::{pair_stiffness, tet_tet_penalty, PenaltyParams, PenaltyResult};
 pub use search::{finds_pair, BodyTets, Candidate, ContactSearch, SearchOptions};
 pub use surface::{tet_tet_contact_surface, ContactSurface, TetSide};
@@ -39,25 +37,39 @@ impl ContactPair {
     }
 }
 
-/// The contact pairs an operator is assembled with.
+/// What the assembly needs of a contact pair besides its surface: the
+/// PETSc numbers of its eight nodes (the target's four, then the
+/// contactor's), and the two elements' materials and bodies.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct PairDofs {
+    /// PETSc numbers of the target's then the contactor's nodes.
+    pub petsc: [u32; 8],
+    /// Materials of the target and the contactor.
+    pub materials: [u32; 2],
+    /// Bodies of the target and the contactor.
+    pub bodies: [u32; 2],
+}
+
+/// The contact pairs an operator is assembled with: this rank's, and the
+/// totals over the ranks. No rank holds every pair.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct ContactSet {
-    /// Every pair on every rank, sorted by (target, contactor).
-    pub all: Vec<ContactPair>,
-    /// The pairs this rank found; it inserts exactly these.
+    /// The pairs this rank inserts, sorted by (target, contactor).
     pub local: Vec<ContactPair>,
+    /// Per local pair, its nodes, materials and bodies.
+    pub dofs: Vec<PairDofs>,
+    /// Pairs over all ranks.
+    pub total_pairs: u64,
+    /// Contact area over all ranks, Σ S (m²).
+    pub total_area: f64,
 }
 
 impl ContactSet {
-    /// Total contact area Σ S.
-    pub fn total_area(&self) -> f64 {
-        self.all.iter().fold(0.0, |s, p| s + p.area())
-    }
-
-    /// Whether two sets have the same pairs and the same areas to `rtol`.
-    pub fn same_as(&self, other: &ContactSet, rtol: f64) -> bool {
-        self.all.len() == other.all.len()
-            && self.all.iter().zip(&other.all).all(|(a, b)| {
+    /// Whether this rank's pairs are those of `other`, with the same areas
+    /// to `rtol` (the caller agrees over the ranks).
+    pub fn same_local(&self, other: &ContactSet, rtol: f64) -> bool {
+        self.local.len() == other.local.len()
+            && self.local.iter().zip(&other.local).all(|(a, b)| {
                 a.target == b.target
                     && a.contactor == b.contactor
                     && (a.area() - b.area()).abs() <= rtol * a.area().max(b.area())

@@ -18,7 +18,7 @@ use crate::error::{Error, Result};
 use crate::geometry::{face_planes, planes_within, TetPlanes};
 use crate::mechanics::MechElement;
 use crate::model::Model;
-use crate::parallel::{Halo, Layout};
+use crate::parallel::{Halo, Part};
 
 /// Substeps the fastest node should need before contact re-detection.
 const DETECT_EVERY: f64 = 10.0;
@@ -53,7 +53,7 @@ impl ExplicitDomain {
         &mut self,
         comm: &SimpleCommunicator,
         model: &Model,
-        layout: &Layout,
+        part: &Part,
     ) -> Result<()> {
         let clock = std::time::Instant::now();
         let mesh = &model.mesh;
@@ -131,7 +131,7 @@ impl ExplicitDomain {
         let ghosts: Vec<(u32, u32, u32)> = (self.n_owned..self.node_of_local.len())
             .map(|l| {
                 let n = self.node_of_local[l];
-                (n, layout.node_owner[n as usize], l as u32)
+                (n, part.whole().node_owner[n as usize], l as u32)
             })
             .collect();
         let n_owned = self.n_owned as u32;
@@ -185,7 +185,7 @@ impl ExplicitDomain {
         }
         // Every substep writes every element's stress: no need to permute it.
         self.stress.resize(self.elements.len(), Matrix3::zeros());
-        self.build_assembly(comm, layout);
+        self.build_assembly(comm, part);
         self.x_detect = self.x[..self.n_owned].to_vec();
         self.detected_at = Some(self.counters.substeps);
         self.counters.detections += 1;
@@ -366,10 +366,10 @@ impl ExplicitDomain {
         &mut self,
         comm: &SimpleCommunicator,
         model: &Model,
-        layout: &Layout,
+        part: &Part,
     ) -> Result<Vec<ContactPair>> {
         if self.redetect {
-            self.detect(comm, model, layout)?;
+            self.detect(comm, model, part)?;
             self.redetect = false;
         }
         let mesh = &model.mesh;

@@ -16,7 +16,7 @@ use crate::error::{Error, Result};
 use crate::geometry::TetPlanes;
 use crate::mechanics::{ElasticMaterial, MechElement, Tet4Reference, VelocityBc};
 use crate::model::{Body, Model};
-use crate::parallel::{Halo, Layout};
+use crate::parallel::{Halo, Part};
 
 /// One rank's part of the explicit mechanics.
 pub struct ExplicitDomain {
@@ -134,7 +134,7 @@ impl ExplicitDomain {
     pub fn new(
         comm: &SimpleCommunicator,
         model: &Model,
-        layout: &Layout,
+        part: &Part,
         coupling_dt: f64,
     ) -> Result<(ExplicitDomain, u64)> {
         let mm = model.mechanics.as_ref().expect("mechanics model");
@@ -163,7 +163,7 @@ impl ExplicitDomain {
         let mut global_mass = vec![0.0; nn];
         let mut refs: Vec<Option<Tet4Reference>> = vec![None; mesh.tets.len()];
         let mut local_error = None;
-        for &e in &layout.owned_elems {
+        for &e in &part.elem_gid {
             let e = e as usize;
             match Tet4Reference::from_coords(&mesh.element_coords(e)) {
                 Ok(r) => refs[e] = Some(r),
@@ -180,15 +180,15 @@ impl ExplicitDomain {
                 global_mass[n as usize] += share;
             }
         }
-        let rank = layout.rank as u32;
+        let rank = part.rank as u32;
         let mut elem_ids = Vec::new();
-        for &e in &layout.owned_elems {
+        for &e in &part.elem_gid {
             if !body_held[mesh.body[e as usize] as usize] {
                 elem_ids.push(e);
             }
         }
         let mut orig_of_global = vec![0u32; nn];
-        for (n, &g) in layout.global_of.iter().enumerate() {
+        for (n, &g) in part.whole().petsc_of.iter().enumerate() {
             orig_of_global[g as usize] = n as u32;
         }
         let x_all = mesh.nodes.clone();
@@ -216,7 +216,7 @@ impl ExplicitDomain {
         let global_bc = mm.bc.clone();
         let mut dom = ExplicitDomain {
             rank,
-            n_owned: layout.owned_nodes.len(),
+            n_owned: part.owned_gids().len(),
             node_of_local: Vec::new(),
             n_elem_ghosts: 0,
             local_of: vec![NONE; nn],
@@ -274,8 +274,8 @@ impl ExplicitDomain {
             gravity: Vector3::from(mm.gravity),
             damping: mm.damping,
             free_damping: mm.free_damping,
-            owned_body: layout
-                .owned_nodes
+            owned_body: part
+                .owned_gids()
                 .iter()
                 .map(|&n| model.body_of_node(n) as u32)
                 .collect(),
@@ -288,15 +288,15 @@ impl ExplicitDomain {
             counters: MechanicsCounters::default(),
         };
         // Owned nodes, then the ghosts of the owned elements.
-        dom.node_of_local = layout.owned_nodes.clone();
-        for (i, &n) in layout.owned_nodes.iter().enumerate() {
+        dom.node_of_local = part.owned_gids().to_vec();
+        for (i, &n) in part.owned_gids().iter().enumerate() {
             dom.local_of[n as usize] = i as u32;
         }
         let mut ghosts: Vec<u32> = dom
             .elem_ids
             .iter()
             .flat_map(|&e| mesh.tets[e as usize])
-            .filter(|&n| layout.node_owner[n as usize] != rank)
+            .filter(|&n| part.whole().node_owner[n as usize] != rank)
             .collect();
         ghosts.sort_unstable();
         ghosts.dedup();
@@ -353,10 +353,10 @@ impl ExplicitDomain {
             })
             .collect();
         dom.body_tets = BodyTets::new(mesh, &dom.boundary, model.bodies.len(), |e| {
-            layout.elem_part[e as usize] == rank
+            part.whole().elem_part[e as usize] == rank
         });
         dom.refresh_local_arrays();
-        dom.detect(comm, model, layout)?;
+        dom.detect(comm, model, part)?;
         dom.update_element_temperatures(None);
         Ok((dom, substeps))
     }
@@ -395,7 +395,7 @@ impl ExplicitDomain {
         self.halo.forward(comm, &mut [x, v], 3);
     }
 
-    /// Collective. New nodal temperatures of the owned nodes (layout
+    /// Collective. New nodal temperatures of the owned nodes (part
     /// order), reached over `dt` seconds (for the temperature rate in the
     /// viscous stress; `None`: no rate).
     pub fn set_temperatures(&mut self, comm: &SimpleCommunicator, owned: &[f64], dt: Option<f64>) {

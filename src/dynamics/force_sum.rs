@@ -7,7 +7,7 @@ use mpi::topology::SimpleCommunicator;
 use nalgebra::Vector3;
 
 use super::ExplicitDomain;
-use crate::parallel::Layout;
+use crate::parallel::Part;
 
 impl ExplicitDomain {
     /// Collective over the neighbours. The order in which each owned
@@ -16,7 +16,7 @@ impl ExplicitDomain {
     /// rank computed them. Ghost contributions travel one by one, not
     /// pre-summed, so the sums, and hence the trajectories, are bitwise
     /// the same on any number of ranks.
-    pub(super) fn build_assembly(&mut self, comm: &SimpleCommunicator, layout: &Layout) {
+    pub(super) fn build_assembly(&mut self, comm: &SimpleCommunicator, part: &Part) {
         const PAIR: u64 = 1 << 63;
         let ne = self.elements.len();
         let pair_base = 4 * ne;
@@ -29,7 +29,7 @@ impl ExplicitDomain {
                 owned.push((l, key, slot as u32));
             } else {
                 let g = self.node_of_local[l as usize];
-                let r = layout.node_owner[g as usize] as i32;
+                let r = part.whole().node_owner[g as usize] as i32;
                 let i = nbrs
                     .binary_search(&r)
                     .expect("owner of a ghost is a neighbour");

@@ -19,7 +19,7 @@
 //! 5. one all-reduce agrees on errors and on whether any node moved far
 //!    enough (half the search margin) to redo contact detection.
 //!
-//! Local numbering: owned nodes first, in the layout's (PETSc) order, then
+//! Local numbering: owned nodes first, in the part's (PETSc) order, then
 //! the ghosts of the owned elements, then the ghosts that only contacts
 //! need. A contact pair joins two boundary tets of different bodies and is
 //! found by the rank owning one of them, `a` (the free body's tet against

@@ -10,7 +10,7 @@ use nalgebra::{Matrix3, Vector3};
 use super::ExplicitDomain;
 use crate::error::Result;
 use crate::model::Model;
-use crate::parallel::Layout;
+use crate::parallel::Part;
 
 /// The motion a checkpoint saves, every node in the original numbering.
 #[derive(Debug, Clone, Copy)]
@@ -107,7 +107,7 @@ impl ExplicitDomain {
         }
     }
 
-    /// Displacement x − X of the owned nodes (layout order), flat.
+    /// Displacement x − X of the owned nodes (part order), flat.
     pub fn displacement(&self) -> Vec<f64> {
         self.x[..self.n_owned]
             .iter()
@@ -119,7 +119,7 @@ impl ExplicitDomain {
             .collect()
     }
 
-    /// Velocity of the owned nodes (layout order), flat.
+    /// Velocity of the owned nodes (part order), flat.
     pub fn velocity(&self) -> Vec<f64> {
         self.v[..self.n_owned]
             .iter()
@@ -205,7 +205,7 @@ impl ExplicitDomain {
         &mut self,
         comm: &SimpleCommunicator,
         model: &Model,
-        layout: &Layout,
+        part: &Part,
         saved: SavedMotion,
     ) -> Result<()> {
         let SavedMotion {
@@ -233,7 +233,7 @@ impl ExplicitDomain {
                     .map(|&n| Vector3::from(vp[n as usize])),
             );
         }
-        self.detect(comm, model, layout)?;
+        self.detect(comm, model, part)?;
         self.redetect = false;
         Ok(())
     }

@@ -16,7 +16,7 @@ use crate::error::{Error, Result};
 use crate::geometry::{separated_along, separating_axis, tet_bounds, TetPlanes};
 use crate::mechanics::explicit::{element_forces, update_nodes_damped, NodeUpdate, ThermalLoad};
 use crate::model::Model;
-use crate::parallel::Layout;
+use crate::parallel::Part;
 
 /// Corners of a tet and its bounding box (low, high corner).
 pub(super) type TetGeometry = ([[f64; 3]; 4], [f64; 3], [f64; 3]);
@@ -27,7 +27,7 @@ impl ExplicitDomain {
         &mut self,
         comm: &SimpleCommunicator,
         model: &Model,
-        layout: &Layout,
+        part: &Part,
         n: u64,
     ) -> Result<()> {
         // Linearised pairs depend on when their models were made: starting
@@ -45,7 +45,7 @@ impl ExplicitDomain {
                 self.v_prev.extend_from_slice(&self.v[..self.n_owned]);
             }
             if self.redetect {
-                self.detect(comm, model, layout)?;
+                self.detect(comm, model, part)?;
                 self.redetect = false;
             }
             let local = self.substep(comm);

@@ -17,7 +17,7 @@ use crate::mechanics::explicit::{critical_dt, internal_forces, mesh_elements, Th
 use crate::mechanics::frequency::body_max_frequency;
 use crate::mechanics::ElasticMaterial;
 use crate::model::Model;
-use crate::parallel::Layout;
+use crate::parallel::Part;
 
 /// Runs `f` on a one-process communicator. MPI is initialised once per
 /// test process and kept (MPI cannot be initialised twice); the tests
@@ -70,14 +70,12 @@ fn cube(alpha: f64, h: f64, mechanics: &str) -> Model {
 }
 
 /// Every element on rank 0 of 1.
-fn one_rank_layout(model: &Model) -> Layout {
-    Layout::from_partition(&model.mesh, vec![0; model.mesh.tets.len()], 0, 1)
+fn one_rank_layout(model: &Model) -> Part {
+    Part::from_model(model, &vec![0; model.mesh.tets.len()], 0, 1)
 }
 
-fn domain(comm: &SimpleCommunicator, model: &Model, layout: &Layout) -> ExplicitDomain {
-    ExplicitDomain::new(comm, model, layout, model.dt)
-        .unwrap()
-        .0
+fn domain(comm: &SimpleCommunicator, model: &Model, part: &Part) -> ExplicitDomain {
+    ExplicitDomain::new(comm, model, part, model.dt).unwrap().0
 }
 
 /// Velocity boundary condition `value` on component `d` of node set `set`.
@@ -137,12 +135,12 @@ fn heated_free_cube(comm: &SimpleCommunicator, h: f64) -> (f64, f64, u64) {
     for (d, side) in ["b0.xmin", "b0.ymin", "b0.zmin"].iter().enumerate() {
         set_bc(&mut model, side, d, Some(0.0));
     }
-    let layout = one_rank_layout(&model);
-    let mut dom = domain(comm, &model, &layout);
+    let part = one_rank_layout(&model);
+    let mut dom = domain(comm, &model, &part);
     heat(comm, &model, &mut dom, 100.0);
     // 30/ω_1 of settling: the slowest (critically damped) modes decay as exp(−ω_1 t).
     let steps = (30.0 / w1 / dom.dt).ceil() as u64;
-    dom.advance(comm, &model, &layout, steps).unwrap();
+    dom.advance(comm, &model, &part, steps).unwrap();
     (current_volume(&dom), max_stress(&dom), steps)
 }
 
@@ -185,10 +183,10 @@ fn fixed_heated_cube_matches_eq_38() {
                 .iter_mut()
                 .for_each(|b| b[d] = Some(0.0));
         }
-        let layout = one_rank_layout(&model);
-        let mut dom = domain(comm, &model, &layout);
+        let part = one_rank_layout(&model);
+        let mut dom = domain(comm, &model, &part);
         heat(comm, &model, &mut dom, 100.0);
-        dom.advance(comm, &model, &layout, 5).unwrap();
+        dom.advance(comm, &model, &part, 5).unwrap();
         let u: f64 = 1.0 + 1e-6 * 100.0;
         let j_e = u.powi(-3);
         let want = mu / j_e * (u.powi(-2) - 1.0) + lambda / j_e * j_e.ln();
@@ -210,9 +208,9 @@ fn time_step_above_the_limit_is_an_error() {
     on_one_rank(|comm| {
         let mat = concrete(1e-5);
         let mut model = cube(1e-5, 0.5, "substeps = 1");
-        let layout = one_rank_layout(&model);
+        let part = one_rank_layout(&model);
         let safety = model.mechanics.as_ref().unwrap().safety;
-        let dom = domain(comm, &model, &layout);
+        let dom = domain(comm, &model, &part);
         let crit = dom.dt / safety;
         let x: Vec<Vector3<f64>> = model.mesh.nodes.iter().map(|p| Vector3::from(*p)).collect();
         let omega =
@@ -231,12 +229,12 @@ fn time_step_above_the_limit_is_an_error() {
             "{crit} vs {element}"
         );
         model.mechanics.as_mut().unwrap().dt = Some(1.01 * crit);
-        match ExplicitDomain::new(comm, &model, &layout, model.dt) {
+        match ExplicitDomain::new(comm, &model, &part, model.dt) {
             Err(e) => assert!(e.to_string().contains("exceeds the critical"), "{e}"),
             Ok(_) => panic!("a step above the limit was accepted"),
         }
         model.mechanics.as_mut().unwrap().dt = Some(crit);
-        let (dom, substeps) = ExplicitDomain::new(comm, &model, &layout, model.dt).unwrap();
+        let (dom, substeps) = ExplicitDomain::new(comm, &model, &part, model.dt).unwrap();
         assert_eq!((dom.dt, substeps), (crit, 1));
     });
 }
@@ -253,11 +251,11 @@ fn free_fall_follows_gravity() {
             "gravity = [0.0, 0.0, -9.81]",
         );
         let g = Vector3::new(0.0, 0.0, -9.81);
-        let layout = one_rank_layout(&model);
-        let mut dom = domain(comm, &model, &layout);
+        let part = one_rank_layout(&model);
+        let mut dom = domain(comm, &model, &part);
         assert!((total_mass(&dom) - 2400.0 * 0.25).abs() < 1e-9);
         let n = 200;
-        dom.advance(comm, &model, &layout, n).unwrap();
+        dom.advance(comm, &model, &part, n).unwrap();
         let t = n as f64 * dom.dt;
         let m = total_mass(&dom);
         assert!((momentum(&dom) / m - g * t).norm() < 1e-12 * g.norm() * t);
@@ -280,8 +278,8 @@ fn free_fall_follows_gravity() {
 fn undamped_vibration_conserves_momentum_and_energy() {
     on_one_rank(|comm| {
         let model = cube(0.0, 0.5, "");
-        let layout = one_rank_layout(&model);
-        let mut dom = domain(comm, &model, &layout);
+        let part = one_rank_layout(&model);
+        let mut dom = domain(comm, &model, &part);
         let c = Vector3::new(0.3, 0.5, 0.4);
         let omega = Vector3::new(0.0, 0.0, 0.001);
         let velocities: Vec<[f64; 3]> = model
@@ -301,7 +299,7 @@ fn undamped_vibration_conserves_momentum_and_energy() {
             dissipated: 0.0,
             dissipated_per_rank: None,
         };
-        dom.restore(comm, &model, &layout, saved).unwrap();
+        dom.restore(comm, &model, &part, saved).unwrap();
         let angular = |dom: &ExplicitDomain| -> Vector3<f64> {
             (0..dom.n_owned)
                 .map(|i| dom.mass[i] * dom.x[i].cross(&dom.v[i]))
@@ -313,7 +311,7 @@ fn undamped_vibration_conserves_momentum_and_energy() {
         let mut worst: f64 = 0.0;
         let mut strain_max: f64 = 0.0;
         for _ in 0..2000 {
-            dom.advance(comm, &model, &layout, 1).unwrap();
+            dom.advance(comm, &model, &part, 1).unwrap();
             let kinetic = 0.5
                 * (0..dom.n_owned)
                     .map(|i| dom.mass[i] * dom.v_prev[i].dot(&dom.v[i]))
@@ -346,14 +344,14 @@ fn velocity_boundary_conditions_are_imposed() {
             set_bc(&mut model, "b0.zmin", d, Some(0.0));
         }
         set_bc(&mut model, "b0.zmax", 0, Some(0.1));
-        let layout = one_rank_layout(&model);
-        let mut dom = domain(comm, &model, &layout);
+        let part = one_rank_layout(&model);
+        let mut dom = domain(comm, &model, &part);
         let n = 50;
-        dom.advance(comm, &model, &layout, n).unwrap();
+        dom.advance(comm, &model, &part, n).unwrap();
         let t = n as f64 * dom.dt;
         let u = dom.displacement();
         let row = |node: u32| {
-            let i = layout.owned_nodes.iter().position(|&o| o == node).unwrap();
+            let i = part.owned_gids().iter().position(|&o| o == node).unwrap();
             Vector3::new(u[3 * i], u[3 * i + 1], u[3 * i + 2])
         };
         for &i in &model.mesh.node_sets["b0.zmin"] {
@@ -374,13 +372,13 @@ fn substep_moves_a_free_body_by_central_differences() {
     on_one_rank(|comm| {
         let model = cube(0.0, 1.0, "gravity = [0.0, 0.0, -9.81]");
         let g = Vector3::new(0.0, 0.0, -9.81);
-        let layout = one_rank_layout(&model);
-        let mut dom = domain(comm, &model, &layout);
+        let part = one_rank_layout(&model);
+        let mut dom = domain(comm, &model, &part);
         assert_eq!(dom.num_elements(), 6);
         let dt = dom.dt;
         let x0 = dom.x.clone();
         for k in 1..=4u32 {
-            dom.advance(comm, &model, &layout, 1).unwrap();
+            dom.advance(comm, &model, &part, 1).unwrap();
             let k = f64::from(k);
             let (v_want, u_want) = (k * dt * g, dt * dt * g * k * (k + 1.0) / 2.0);
             let no = dom.n_owned;
@@ -400,8 +398,8 @@ fn substep_moves_a_free_body_by_central_differences() {
 fn force_sum_is_the_serial_sum_in_any_element_order() {
     on_one_rank(|comm| {
         let model = boxes(0.0, 0.25, &[([0.0; 3], [1.0, 0.5, 0.5])], "");
-        let layout = one_rank_layout(&model);
-        let mut dom = domain(comm, &model, &layout);
+        let part = one_rank_layout(&model);
+        let mut dom = domain(comm, &model, &part);
         // A deformed, moving state.
         let positions: Vec<[f64; 3]> = model
             .mesh
@@ -423,7 +421,7 @@ fn force_sum_is_the_serial_sum_in_any_element_order() {
             dissipated: 0.0,
             dissipated_per_rank: None,
         };
-        dom.restore(comm, &model, &layout, saved).unwrap();
+        dom.restore(comm, &model, &part, saved).unwrap();
         let (x, v) = (dom.x.clone(), dom.v.clone());
         dom.substep(comm).unwrap();
         let first = dom.f[..dom.n_owned].to_vec();
@@ -453,7 +451,7 @@ fn force_sum_is_the_serial_sum_in_any_element_order() {
         dom.elem_tref.reverse();
         dom.elem_dt.reverse();
         dom.elem_rate.reverse();
-        dom.build_assembly(comm, &layout);
+        dom.build_assembly(comm, &part);
         dom.x.copy_from_slice(&x);
         dom.v.copy_from_slice(&v);
         dom.substep(comm).unwrap();
@@ -475,8 +473,8 @@ fn candidates_are_the_pairs_within_the_margin() {
                 &[([0.0; 3], [1.0; 3]), ([1.0 + gap, 0.0, 0.0], [1.0; 3])],
                 contact,
             );
-            let layout = one_rank_layout(&model);
-            let mut dom = domain(comm, &model, &layout);
+            let part = one_rank_layout(&model);
+            let mut dom = domain(comm, &model, &part);
             assert_eq!(dom.margin, 0.05);
             assert_eq!(dom.candidates.is_empty(), !near, "gap {gap}");
             for c in &dom.candidates {
@@ -490,7 +488,7 @@ fn candidates_are_the_pairs_within_the_margin() {
             keys.sort_unstable();
             keys.dedup();
             assert_eq!(keys.len(), dom.candidates.len());
-            dom.advance(comm, &model, &layout, 1).unwrap();
+            dom.advance(comm, &model, &part, 1).unwrap();
             let state = dom.state(comm);
             assert_eq!(state.candidate_pairs, dom.candidates.len() as u64);
             assert_eq!(state.active_pairs, 0);

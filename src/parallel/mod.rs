@@ -1,20 +1,23 @@
-//! Parallel layout: METIS partition of the element graph, node ownership,
-//! a global numbering that matches PETSc's ownership ranges, sparsity for
-//! exact preallocation, and collective error agreement.
+//! Parallel plumbing: the partition of the elements, each rank's [`Part`]
+//! (its elements and nodes, owners, a global numbering that matches
+//! PETSc's ownership ranges), halos, personalised exchanges, and
+//! collective error agreement.
 //!
-//! The mesh is read on every rank (replicated); elements are partitioned
-//! with METIS and each rank assembles only its own elements, adding into
-//! the distributed PETSc matrix. A node is owned by the lowest-numbered
-//! part among the elements that touch it; rank r's owned nodes get the
-//! consecutive global numbers [start_r, end_r), sorted by original id.
+//! A node is owned by the lowest-numbered rank among the elements that
+//! touch it; rank r's owned nodes get the consecutive global numbers
+//! [start_r, end_r), sorted by global id.
 
+pub mod exchange;
 mod halo;
-mod layout;
+mod part;
 mod partition;
 
 pub use halo::Halo;
-pub use layout::Layout;
-pub use partition::{dual_graph, dual_graph_with, partition_elements, partition_elements_weighted};
+pub use part::{GlobalBcs, LocalBcs, Part, WholeMaps};
+pub use partition::{
+    dual_graph, dual_graph_with, partition_collective, partition_elements,
+    partition_elements_weighted,
+};
 
 use mpi::collective::SystemOperation;
 use mpi::traits::*;

@@ -1,6 +1,45 @@
 //! Element partitioning with METIS over the face-adjacency (dual) graph.
 
+use mpi::traits::*;
+
 use crate::mesh::TetMesh;
+
+/// Collective. The part (rank) of every element: METIS on rank 0 over the
+/// dual graph of `mesh`, balancing per-element work `weights`, with the
+/// element pairs `links(mesh)` (computed on rank 0 only) joined in the
+/// graph as well (touching bodies' boundary tets, so a packing is not cut
+/// through every contact); broadcast to every rank.
+pub fn partition_collective<C: Communicator>(
+    comm: &C,
+    mesh: &TetMesh,
+    weights: Option<&[i32]>,
+    links: impl Fn(&TetMesh) -> Vec<(u32, u32)>,
+) -> Result<Vec<u32>, String> {
+    let size = comm.size() as usize;
+    let rank = comm.rank() as usize;
+    let mut part: Vec<u32> = vec![0; mesh.tets.len()];
+    let mut status: i32 = 0;
+    let links = |mesh: &TetMesh| if size > 1 { links(mesh) } else { Vec::new() };
+    if rank == 0 {
+        match partition_elements_weighted(mesh, size, weights, &links(mesh)) {
+            Ok(p) => part = p,
+            Err(_) => status = 1,
+        }
+    }
+    comm.process_at_rank(0).broadcast_into(&mut status);
+    if status != 0 {
+        // Recompute on every rank to get the same message everywhere.
+        return Err(
+            partition_elements_weighted(mesh, size, weights, &links(mesh))
+                .err()
+                .unwrap_or_else(|| "partitioning failed".into()),
+        );
+    }
+    if size > 1 {
+        comm.process_at_rank(0).broadcast_into(&mut part[..]);
+    }
+    Ok(part)
+}
 
 /// The dual graph in CSR form: elements are adjacent when they share a face.
 pub fn dual_graph(mesh: &TetMesh) -> (Vec<i32>, Vec<i32>) {

@@ -1,6 +1,7 @@
 //! Distributed sparse matrices (`MATAIJ`: SeqAIJ on one rank, MPIAIJ on
 //! several), preallocated exactly from the mesh graph.
 
+use std::ffi::CStr;
 use std::marker::PhantomData;
 
 use petsc_sys as ffi;
@@ -50,6 +51,55 @@ impl<'p> Matrix<'p> {
             raw,
             _petsc: PhantomData,
         };
+        petsc_call!(MatSetOption(
+            m.raw,
+            ffi::MatOption::MAT_NEW_NONZERO_ALLOCATION_ERR,
+            to_bool(true)
+        ))?;
+        Ok(m)
+    }
+
+    /// Collective. A square AIJ matrix with `owned` rows on this rank whose
+    /// pattern is the union of the dense blocks `fill` names through
+    /// [`Pattern::add`] (global indices; a rank may name rows it does not
+    /// own), preallocated exactly by PETSc's `MATPREALLOCATOR` and holding
+    /// explicit zeros at every place of the pattern. Inserting outside it
+    /// is an error.
+    pub fn with_pattern(
+        petsc: &'p Petsc,
+        owned: usize,
+        fill: impl FnOnce(&mut Pattern) -> Result<()>,
+    ) -> Result<Self> {
+        let n = owned as PetscInt;
+        let sized = |type_name: &CStr| -> Result<ffi::Mat> {
+            let mut raw: ffi::Mat = std::ptr::null_mut();
+            petsc_call!(MatCreate(petsc.comm(), &mut raw))?;
+            petsc_call!(MatSetSizes(
+                raw,
+                n,
+                n,
+                super::PETSC_DECIDE,
+                super::PETSC_DECIDE
+            ))?;
+            petsc_call!(MatSetType(raw, type_name.as_ptr()))?;
+            Ok(raw)
+        };
+        let mut pre = Matrix {
+            raw: sized(c"preallocator")?,
+            _petsc: PhantomData,
+        };
+        petsc_call!(MatSetUp(pre.raw))?;
+        let mut pattern = Pattern {
+            raw: pre.raw,
+            zeros: Vec::new(),
+        };
+        fill(&mut pattern)?;
+        pre.assemble()?;
+        let m = Matrix {
+            raw: sized(c"aij")?,
+            _petsc: PhantomData,
+        };
+        petsc_call!(MatPreallocatorPreallocate(pre.raw, to_bool(true), m.raw))?;
         petsc_call!(MatSetOption(
             m.raw,
             ffi::MatOption::MAT_NEW_NONZERO_ALLOCATION_ERR,
@@ -278,6 +328,31 @@ impl<'p> Matrix<'p> {
             diag,
             std::ptr::null_mut(),
             std::ptr::null_mut()
+        ))
+    }
+}
+
+/// The pattern of a matrix under construction ([`Matrix::with_pattern`]).
+pub struct Pattern {
+    raw: ffi::Mat,
+    zeros: Vec<f64>,
+}
+
+impl Pattern {
+    /// Every (row, column) of `rows` × `cols` (global indices) is in the pattern.
+    pub fn add(&mut self, rows: &[PetscInt], cols: &[PetscInt]) -> Result<()> {
+        let n = rows.len() * cols.len();
+        if self.zeros.len() < n {
+            self.zeros.resize(n, 0.0);
+        }
+        petsc_call!(MatSetValues(
+            self.raw,
+            rows.len() as PetscInt,
+            rows.as_ptr(),
+            cols.len() as PetscInt,
+            cols.as_ptr(),
+            self.zeros.as_ptr(),
+            ffi::InsertMode::INSERT_VALUES
         ))
     }
 }

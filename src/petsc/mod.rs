@@ -24,7 +24,7 @@ use petsc_sys as ffi;
 
 pub use error::PetscError;
 pub use ksp::{Ksp, SolveStats};
-pub use matrix::Matrix;
+pub use matrix::{Matrix, Pattern};
 pub use vector::{Vector, VectorView, VectorViewMut};
 
 use crate::petsc_call;

@@ -11,7 +11,7 @@ use crate::contact::ContactSet;
 use crate::error::{Error, Result};
 use crate::io::checkpoint::Checkpoint;
 use crate::model::Model;
-use crate::parallel::{agree, Layout};
+use crate::parallel::{agree, Part};
 use crate::thermal::system::EnergyAccount;
 use crate::thermal::ThermalSystem;
 
@@ -82,7 +82,7 @@ fn missing(restart: &Path, message: &str) -> Error {
 pub(super) fn restore_mechanics(
     comm: &SimpleCommunicator,
     model: &Model,
-    layout: &Layout,
+    part: &Part,
     restart: &Restart,
     mech: &mut Mechanics,
 ) -> Result<()> {
@@ -101,18 +101,14 @@ pub(super) fn restore_mechanics(
         dissipated: ck.dissipated,
         dissipated_per_rank: ck.dissipated_per_rank.as_deref(),
     };
-    m.restore(comm, model, layout, saved)?;
+    m.restore(comm, model, part, saved)?;
     m.counters.substeps = ck.substeps;
     Ok(())
 }
 
 /// Put the temperatures and the heat account of the checkpoint into the
 /// thermal system.
-pub(super) fn restore_thermal(
-    layout: &Layout,
-    restart: &Restart,
-    s: &mut ThermalSystem,
-) -> Result<()> {
+pub(super) fn restore_thermal(part: &Part, restart: &Restart, s: &mut ThermalSystem) -> Result<()> {
     let ck = &restart.checkpoint;
     let Some(t) = &ck.temperature else {
         return Err(missing(
@@ -120,7 +116,7 @@ pub(super) fn restore_thermal(
             "the checkpoint has no temperatures, the scenario has a thermal problem",
         ));
     };
-    let owned: Vec<f64> = layout.owned_nodes.iter().map(|&n| t[n as usize]).collect();
+    let owned: Vec<f64> = part.owned_gids().iter().map(|&n| t[n as usize]).collect();
     let h = ck.heat;
     let account = EnergyAccount {
         stored: h[0],
@@ -132,7 +128,7 @@ pub(super) fn restore_thermal(
     match &ck.account {
         Some(a) => {
             let owned_of = |v: &[f64]| -> Vec<f64> {
-                layout.owned_nodes.iter().map(|&n| v[n as usize]).collect()
+                part.owned_gids().iter().map(|&n| v[n as usize]).collect()
             };
             let b = a.base;
             let state = crate::thermal::system::AccountState {
@@ -160,7 +156,7 @@ pub(super) fn restore_thermal(
 pub(super) fn save_checkpoint(
     comm: &SimpleCommunicator,
     model: &Model,
-    layout: &Layout,
+    part: &Part,
     sys: &mut Option<ThermalSystem>,
     mech: Option<&mut Mechanics>,
     step: u64,
@@ -189,7 +185,7 @@ pub(super) fn save_checkpoint(
             .map(|b| [b.elem_range.0, b.elem_range.1])
             .collect(),
         peak_kinetic,
-        thermal_contacts: contacts.all.len() as u64,
+        thermal_contacts: contacts.total_pairs,
         ..Default::default()
     };
     if let Some(Mechanics { domain: m, .. }) = mech {
@@ -210,7 +206,7 @@ pub(super) fn save_checkpoint(
         let all = crate::parallel::all_gather_f64(comm, &owned);
         ck.temperature = Some(
             (0..model.mesh.nodes.len())
-                .map(|n| all[layout.global_of[n] as usize])
+                .map(|n| all[part.whole().petsc_of[n] as usize])
                 .collect(),
         );
         ck.ksp_iterations = s.iterations;
@@ -218,7 +214,7 @@ pub(super) fn save_checkpoint(
         let per_node = |owned: &[f64]| -> Vec<f64> {
             let all = crate::parallel::all_gather_f64(comm, owned);
             (0..model.mesh.nodes.len())
-                .map(|n| all[layout.global_of[n] as usize])
+                .map(|n| all[part.whole().petsc_of[n] as usize])
                 .collect()
         };
         ck.account = Some(crate::io::checkpoint::SavedAccount {

@@ -5,7 +5,7 @@
 //! before the next collective call so no rank waits for a failed one.
 //!
 //! [`run`] reads like a textbook driver: `Stages::set_up` ([`setup`]:
-//! layout, mechanics domain, contacts, thermal system, each restored from a
+//! part, mechanics domain, contacts, thermal system, each restored from a
 //! checkpoint on a restart), `start_output` ([`output`]), then `advance` to
 //! each stop the [`schedule`] names and `stop` there (detection, checks,
 //! [`settle`], output, [`checkpoint`]), and `finish` with the [`summary`].
@@ -28,7 +28,7 @@ use crate::dynamics::ExplicitDomain;
 use crate::error::{Error, Result};
 use crate::io::checkpoint::Checkpoint;
 use crate::model::Model;
-use crate::parallel::Layout;
+use crate::parallel::Part;
 use crate::petsc::Petsc;
 use crate::scenario::LoadedScenario;
 use crate::thermal::ThermalSystem;
@@ -163,7 +163,7 @@ struct Stages<'a, 'p> {
     petsc: &'p Petsc,
     comm: &'a SimpleCommunicator,
     model: &'a Model,
-    layout: Layout,
+    part: Part,
     sys: Option<ThermalSystem<'p>>,
     mech: Option<Mechanics>,
     contacts: Contacts,
@@ -184,25 +184,26 @@ impl<'a, 'p> Stages<'a, 'p> {
         opts: &RunOptions,
         mut times: PhaseTimes,
     ) -> Result<Self> {
-        let layout = setup::partition(comm, model, &mut times)?;
+        let part = setup::partition(comm, model, &mut times)?;
         let ck = restart.map(|r| &r.checkpoint);
-        let mut mech = setup::mechanics(comm, model, &layout, restart, &mut times)?;
-        let contacts = Contacts::new(comm, model, &layout, ck, mech.as_mut())?;
+        let mut mech = setup::mechanics(comm, model, &part, restart, &mut times)?;
+        let contacts = Contacts::new(comm, model, &part, ck, mech.as_mut())?;
         let sys = setup::thermal(
             petsc,
+            comm,
             model,
-            &layout,
+            &part,
             &contacts.set,
             opts,
             restart,
             &mut times,
         )?;
-        setup::couple_temperatures(comm, model, &layout, sys.as_ref(), mech.as_mut(), ck)?;
+        setup::couple_temperatures(comm, model, &part, sys.as_ref(), mech.as_mut(), ck)?;
         Ok(Stages {
             petsc,
             comm,
             model,
-            layout,
+            part,
             sys,
             mech,
             contacts,
@@ -292,13 +293,7 @@ impl Stages<'_, '_> {
     fn open_output(&self, dir: Option<&Path>, restart: Option<&Checkpoint>) -> Result<Output> {
         let (heat, mechanics) = (self.sys.is_some(), self.mech.is_some());
         Output::open(
-            self.comm,
-            self.model,
-            &self.layout,
-            dir,
-            heat,
-            mechanics,
-            restart,
+            self.comm, self.model, &self.part, dir, heat, mechanics, restart,
         )
     }
 
@@ -308,7 +303,7 @@ impl Stages<'_, '_> {
         out.write(
             self.comm,
             self.model,
-            &self.layout,
+            &self.part,
             &mut self.sys,
             mech,
             contacts,
@@ -332,7 +327,7 @@ impl Stages<'_, '_> {
         checkpoint::save_checkpoint(
             self.comm,
             self.model,
-            &self.layout,
+            &self.part,
             &mut self.sys,
             self.mech.as_mut(),
             step,
@@ -346,7 +341,7 @@ impl Stages<'_, '_> {
     /// Take the steps from `step` to `target`: each a thermal step, then
     /// the mechanics substeps at the step's temperatures.
     fn advance(&mut self, mut step: u64, target: u64) -> Result<()> {
-        let (comm, model, layout) = (self.comm, self.model, &self.layout);
+        let (comm, model, part) = (self.comm, self.model, &self.part);
         while step < target {
             // Seed 000 sec 3.4: contact detection → thermal step → mechanics substeps.
             let clock = Instant::now();
@@ -367,14 +362,14 @@ impl Stages<'_, '_> {
                 } else if model.has_heating() {
                     // The ramp's value at the end of this step, reached over the substeps.
                     let time = (step + 1) as f64 * model.dt;
-                    let t: Vec<f64> = layout
-                        .owned_nodes
+                    let t: Vec<f64> = part
+                        .owned_gids()
                         .iter()
                         .map(|&n| model.prescribed_temperature(n, time))
                         .collect();
                     m.set_temperatures(comm, &t, Some(span));
                 }
-                m.advance(comm, model, layout, *n)?;
+                m.advance(comm, model, part, *n)?;
                 self.times.mechanics += clock.elapsed().as_secs_f64();
             }
             step += 1;
@@ -385,15 +380,22 @@ impl Stages<'_, '_> {
     /// Collective. Detect contacts again; rebuild the operator only when
     /// the contact set or its areas changed.
     fn redetect(&mut self, step: u64) -> Result<()> {
-        let (comm, model, layout) = (self.comm, self.model, &self.layout);
+        let (comm, model, part) = (self.comm, self.model, &self.part);
         let found = self
             .contacts
-            .redetect(comm, model, layout, self.mech.as_mut(), step)?;
+            .redetect(comm, model, part, self.mech.as_mut(), step)?;
         if let Some(found) = found {
             let clock = Instant::now();
             self.contacts.set = found;
             if let Some(s) = self.sys.as_mut() {
-                s.rebuild(self.petsc, model, layout, &model.solver, &self.contacts.set)?;
+                s.rebuild(
+                    self.petsc,
+                    comm,
+                    model,
+                    part,
+                    &model.solver,
+                    &self.contacts.set,
+                )?;
             }
             self.times.assembly += clock.elapsed().as_secs_f64();
         }
@@ -403,7 +405,7 @@ impl Stages<'_, '_> {
     /// Collective. Fail naming a node whose temperature is not finite.
     fn check_finite(&self, step: u64) -> Result<()> {
         match &self.sys {
-            Some(s) => check_finite(self.comm, s, &self.layout, step, self.model.dt),
+            Some(s) => check_finite(self.comm, s, &self.part, step, self.model.dt),
             None => Ok(()),
         }
     }
@@ -412,7 +414,7 @@ impl Stages<'_, '_> {
 fn check_finite(
     comm: &SimpleCommunicator,
     sys: &ThermalSystem,
-    layout: &Layout,
+    part: &Part,
     step: u64,
     dt: f64,
 ) -> Result<()> {
@@ -421,7 +423,7 @@ fn check_finite(
         return Ok(());
     }
     let local = bad
-        .and_then(|i| layout.owned_nodes.get(i))
+        .and_then(|i| part.owned_gids().get(i))
         .map_or(u64::MAX, |&n| n as u64);
     let mut node = u64::MAX;
     comm.all_reduce_into(&local, &mut node, SystemOperation::min());

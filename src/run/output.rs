@@ -16,7 +16,7 @@ use crate::io::checkpoint::Checkpoint;
 use crate::io::particles::ParticleReport;
 use crate::io::{HistoryWriter, MeshPart, TimeSeriesWriter};
 use crate::model::Model;
-use crate::parallel::{agree, Layout};
+use crate::parallel::{agree, Part};
 use crate::scenario::ParticleOutputSpec;
 use crate::thermal::ThermalSystem;
 
@@ -48,7 +48,7 @@ impl Output {
     pub fn open(
         comm: &SimpleCommunicator,
         model: &Model,
-        layout: &Layout,
+        part: &Part,
         output_dir: Option<&Path>,
         heat: bool,
         mechanics: bool,
@@ -75,7 +75,7 @@ impl Output {
         let writer = open_writer(
             comm,
             model,
-            layout,
+            part,
             &dir,
             &stem,
             continues.then_some(keep_until),
@@ -110,7 +110,8 @@ impl Output {
             }
         }
         // Per-body columns, or per scenario entry when there are many bodies.
-        let groups = BodyGroups::new(model);
+        let moments = body_moments(comm, model, part);
+        let groups = BodyGroups::new(model, &moments);
         if heat {
             for g in &groups.names {
                 for s in ["min", "mean", "max"] {
@@ -125,10 +126,10 @@ impl Output {
             HistoryWriter::create(&history_path, &header_ref)
         };
         let history = agree(comm, history.map_err(Error::from))?;
-        let stats = BodyStats::new(model, layout);
+        let stats = BodyStats::new(comm, model, part)?;
         let report = model.output.particles.as_ref().and_then(|p| {
             heat.then_some(())?;
-            particle_report(model, p)
+            particle_report(model, &moments, p)
         });
         let radial_steps: Vec<u64> = match &model.output.particles {
             Some(p) if !p.radial_times.is_empty() => p
@@ -163,7 +164,7 @@ impl Output {
         &mut self,
         comm: &SimpleCommunicator,
         model: &Model,
-        layout: &Layout,
+        part: &Part,
         sys: &mut Option<ThermalSystem>,
         mech: Option<&Mechanics>,
         contacts: &ContactSet,
@@ -182,11 +183,11 @@ impl Output {
         if let Some(Mechanics { domain: m, .. }) = mech {
             node_fields.push(("displacement", 3, m.displacement()));
             node_fields.push(("velocity", 3, m.velocity()));
-            cell_fields.push(("stress", 6, m.stress_tensor6(&layout.owned_elems)));
+            cell_fields.push(("stress", 6, m.stress_tensor6(&part.elem_gid)));
         } else if model.has_motion() {
             // Rigid displacement of each owned node (ParaView: Warp By Vector).
-            let u: Vec<f64> = layout
-                .owned_nodes
+            let u: Vec<f64> = part
+                .owned_gids()
                 .iter()
                 .flat_map(|&n| {
                     model.bodies[model.body_of_node(n)]
@@ -212,8 +213,8 @@ impl Output {
                 e.stored,
                 e.boundary_in(),
                 s.iterations as f64,
-                contacts.all.len() as f64,
-                contacts.total_area(),
+                contacts.total_pairs as f64,
+                contacts.total_area,
             ]);
         }
         if let Some(Mechanics {
@@ -285,8 +286,9 @@ impl Output {
         }
         if model.thermal_active && model.contact.is_some() {
             let path = dir.join(format!("{stem}_body_contacts.csv"));
+            let per = body_contacts(comm, contacts);
             let written = if comm.rank() == 0 {
-                write_body_contacts(model, contacts, &path)
+                write_body_contacts(model, &per, &path)
             } else {
                 Ok(())
             };
@@ -338,23 +340,20 @@ struct BodyStats {
 }
 
 impl BodyStats {
-    fn new(model: &Model, layout: &Layout) -> BodyStats {
-        let mut w = vec![0.0; model.mesh.nodes.len()];
-        for e in 0..model.mesh.tets.len() {
-            let v = model.mesh.element_volume(e) / 4.0;
-            for &n in &model.mesh.tets[e] {
-                w[n as usize] += v;
-            }
-        }
-        BodyStats {
-            body_of_owned: layout
-                .owned_nodes
+    fn new(comm: &SimpleCommunicator, model: &Model, part: &Part) -> Result<BodyStats> {
+        // Each owned node's weight: V/4 summed over its elements, some of
+        // which may be on other ranks.
+        let halo = agree(comm, part.node_halo(comm).map_err(Error::Partition))?;
+        let w = part.sum_to_owned(comm, &halo, |e| part.mesh.element_volume(e) / 4.0);
+        Ok(BodyStats {
+            body_of_owned: part
+                .owned_gids()
                 .iter()
                 .map(|&n| model.body_of_node(n) as u32)
                 .collect(),
-            weight_of_owned: layout.owned_nodes.iter().map(|&n| w[n as usize]).collect(),
+            weight_of_owned: w,
             nbodies: model.bodies.len(),
-        }
+        })
     }
 
     /// Collective. (min, volume-weighted mean, max) per body.
@@ -384,16 +383,13 @@ impl BodyStats {
 
 /// This rank's part of the output mesh: owned node coordinates, and cells
 /// in the global (PETSc) node numbering.
-fn mesh_rows(model: &Model, layout: &Layout) -> (Vec<[f64; 3]>, Vec<[u32; 4]>) {
-    let coords = layout
-        .owned_nodes
+fn mesh_rows(part: &Part) -> (Vec<[f64; 3]>, Vec<[u32; 4]>) {
+    let coords = part.mesh.nodes[..part.n_owned].to_vec();
+    let cells = part
+        .mesh
+        .tets
         .iter()
-        .map(|&n| model.mesh.nodes[n as usize])
-        .collect();
-    let cells = layout
-        .owned_elems
-        .iter()
-        .map(|&e| model.mesh.tets[e as usize].map(|n| layout.global_of[n as usize]))
+        .map(|t| t.map(|l| part.petsc[l as usize]))
         .collect();
     (coords, cells)
 }
@@ -404,43 +400,41 @@ fn mesh_rows(model: &Model, layout: &Layout) -> (Vec<[f64; 3]>, Vec<[u32; 4]>) {
 fn open_writer(
     comm: &SimpleCommunicator,
     model: &Model,
-    layout: &Layout,
+    part: &Part,
     dir: &Path,
     stem: &str,
     continue_after: Option<f64>,
 ) -> Result<TimeSeriesWriter> {
-    let (coords, cells) = mesh_rows(model, layout);
+    let (coords, cells) = mesh_rows(part);
     let ncells = cells.len() as u64;
     let mut cell_offset = 0u64;
     comm.exclusive_scan_into(&ncells, &mut cell_offset, SystemOperation::sum());
     if comm.rank() == 0 {
         cell_offset = 0;
     }
-    let part = MeshPart {
-        global_nodes: layout.num_global() as u64,
-        node_offset: layout.owned_range().0 as u64,
+    let mut global_cells = 0u64;
+    comm.all_reduce_into(&ncells, &mut global_cells, SystemOperation::sum());
+    let rows = MeshPart {
+        global_nodes: part.num_global() as u64,
+        node_offset: part.owned_range().0 as u64,
         coords: &coords,
-        global_cells: model.mesh.tets.len() as u64,
+        global_cells,
         cell_offset,
         cells: &cells,
     };
-    let node_id: Vec<i32> = layout.owned_nodes.iter().map(|&n| n as i32).collect();
+    let node_id: Vec<i32> = part.owned_gids().iter().map(|&n| n as i32).collect();
     if let Some(keep_until) = continue_after {
         return Ok(TimeSeriesWriter::reopen(
-            comm, dir, stem, &part, &node_id, keep_until,
+            comm, dir, stem, &rows, &node_id, keep_until,
         )?);
     }
-    let mut w = TimeSeriesWriter::create(comm, dir, stem, &part)?;
-    let body_node: Vec<i32> = layout
-        .owned_nodes
+    let mut w = TimeSeriesWriter::create(comm, dir, stem, &rows)?;
+    let body_node: Vec<i32> = part
+        .owned_gids()
         .iter()
         .map(|&n| model.body_of_node(n) as i32)
         .collect();
-    let body_cell: Vec<i32> = layout
-        .owned_elems
-        .iter()
-        .map(|&e| model.mesh.body[e as usize] as i32)
-        .collect();
+    let body_cell: Vec<i32> = part.mesh.body.iter().map(|&b| b as i32).collect();
     let rank_cell: Vec<i32> = vec![comm.rank(); cells.len()];
     w.write_static_node_field_i32("body", &body_node)?;
     w.write_static_node_field_i32("node_id", &node_id)?;
@@ -449,31 +443,48 @@ fn open_writer(
     Ok(w)
 }
 
+/// Collective. Each body's volume and volume-weighted centroid (the
+/// reference configuration), summed over the parts.
+fn body_moments(comm: &SimpleCommunicator, model: &Model, part: &Part) -> Vec<(f64, [f64; 3])> {
+    let nb = model.bodies.len();
+    let mut m = vec![0.0; 4 * nb];
+    for e in 0..part.num_elements() {
+        let b = part.mesh.body[e] as usize;
+        let ve = part.mesh.element_volume(e);
+        let x = part.mesh.element_coords(e);
+        m[4 * b] += ve;
+        for d in 0..3 {
+            m[4 * b + 1 + d] += ve * (x[0][d] + x[1][d] + x[2][d] + x[3][d]) / 4.0;
+        }
+    }
+    let mut sum = vec![0.0; 4 * nb];
+    comm.all_reduce_into(&m[..], &mut sum[..], SystemOperation::sum());
+    sum.chunks_exact(4)
+        .map(|c| (c[0], [c[1] / c[0], c[2] / c[0], c[3] / c[0]]))
+        .collect()
+}
+
 /// The particles of `[output.particles]`: their bodies, volumes and
 /// distances from the axis.
-fn particle_report(model: &Model, p: &ParticleOutputSpec) -> Option<ParticleReport> {
+fn particle_report(
+    model: &Model,
+    moments: &[(f64, [f64; 3])],
+    p: &ParticleOutputSpec,
+) -> Option<ParticleReport> {
     let bodies: Vec<usize> = (0..model.bodies.len())
         .filter(|&b| model.bodies[b].template == p.template)
         .collect();
     if bodies.is_empty() {
         return None;
     }
-    let mut volumes = Vec::new();
-    let mut radii = Vec::new();
-    for &b in &bodies {
-        let (e0, e1) = model.bodies[b].elem_range;
-        let (mut v, mut c) = (0.0, [0.0; 3]);
-        for e in e0 as usize..e1 as usize {
-            let ve = model.mesh.element_volume(e);
-            let x = model.mesh.element_coords(e);
-            v += ve;
-            for d in 0..3 {
-                c[d] += ve * (x[0][d] + x[1][d] + x[2][d] + x[3][d]) / 4.0;
-            }
-        }
-        volumes.push(v);
-        radii.push((c[0] / v - p.axis[0]).hypot(c[1] / v - p.axis[1]));
-    }
+    let volumes = bodies.iter().map(|&b| moments[b].0).collect();
+    let radii = bodies
+        .iter()
+        .map(|&b| {
+            let c = moments[b].1;
+            (c[0] - p.axis[0]).hypot(c[1] - p.axis[1])
+        })
+        .collect();
     Some(ParticleReport::new(bodies, volumes, radii, p.radial_bins))
 }
 
@@ -489,16 +500,8 @@ struct BodyGroups {
 impl BodyGroups {
     const MAX_BODY_COLUMNS: usize = 16;
 
-    fn new(model: &Model) -> BodyGroups {
-        let volume: Vec<f64> = model
-            .bodies
-            .iter()
-            .map(|b| {
-                (b.elem_range.0..b.elem_range.1)
-                    .map(|e| model.mesh.element_volume(e as usize))
-                    .sum()
-            })
-            .collect();
+    fn new(model: &Model, moments: &[(f64, [f64; 3])]) -> BodyGroups {
+        let volume: Vec<f64> = moments.iter().map(|m| m.0).collect();
         if model.bodies.len() <= Self::MAX_BODY_COLUMNS {
             return BodyGroups {
                 names: model.bodies.iter().map(|b| b.name.clone()).collect(),
@@ -544,18 +547,40 @@ impl BodyGroups {
     }
 }
 
-/// Contact area summed per pair of bodies: `body_a,body_b,name_a,name_b,pairs,area`.
-fn write_body_contacts(model: &Model, contacts: &ContactSet, path: &Path) -> Result<()> {
+/// Collective. Contact area summed per pair of bodies over the ranks, on rank 0.
+fn body_contacts(
+    comm: &SimpleCommunicator,
+    contacts: &ContactSet,
+) -> std::collections::BTreeMap<(u32, u32), (u64, f64)> {
     let mut per: std::collections::BTreeMap<(u32, u32), (u64, f64)> = Default::default();
-    for p in &contacts.all {
-        let a = model.mesh.body[p.target as usize];
-        let b = model.mesh.body[p.contactor as usize];
+    for (p, d) in contacts.local.iter().zip(&contacts.dofs) {
+        let [a, b] = d.bodies;
         let e = per.entry((a.min(b), a.max(b))).or_default();
         e.0 += 1;
         e.1 += p.area();
     }
+    let mine: Vec<f64> = per
+        .iter()
+        .flat_map(|(&(a, b), &(n, s))| [f64::from(a), f64::from(b), n as f64, s])
+        .collect();
+    let all = crate::parallel::all_gather_f64(comm, &mine);
+    let mut merged: std::collections::BTreeMap<(u32, u32), (u64, f64)> = Default::default();
+    for r in all.chunks_exact(4) {
+        let e = merged.entry((r[0] as u32, r[1] as u32)).or_default();
+        e.0 += r[2] as u64;
+        e.1 += r[3];
+    }
+    merged
+}
+
+/// Contact area summed per pair of bodies: `body_a,body_b,name_a,name_b,pairs,area`.
+fn write_body_contacts(
+    model: &Model,
+    per: &std::collections::BTreeMap<(u32, u32), (u64, f64)>,
+    path: &Path,
+) -> Result<()> {
     let mut text = String::from("body_a,body_b,name_a,name_b,pairs,area\n");
-    for ((a, b), (n, s)) in per {
+    for (&(a, b), &(n, s)) in per {
         text.push_str(&format!(
             "{a},{b},{},{},{n},{s:.12e}\n",
             model.bodies[a as usize].name, model.bodies[b as usize].name

@@ -1,4 +1,4 @@
-//! Set-up: the model partitioned into a [`Layout`], the explicit mechanics
+//! Set-up: the model partitioned into this rank's [`Part`], the explicit mechanics
 //! domain, the first contact detection and the thermal system, each
 //! restored from the checkpoint on a restart.
 //!
@@ -8,15 +8,18 @@ use std::time::Instant;
 
 use mpi::topology::SimpleCommunicator;
 
+use mpi::collective::SystemOperation;
+use mpi::traits::*;
+
 use crate::contact::{
-    contact_pairs, pairs_from_f64s, pairs_to_f64s, BodyTets, BoundaryTets, ContactSearch,
-    ContactSet, THERMAL_SEARCH,
+    contact_pairs, BodyTets, BoundaryTets, ContactPair, ContactSearch, ContactSet, PairDofs,
+    THERMAL_SEARCH,
 };
 use crate::dynamics::ExplicitDomain;
 use crate::error::{Error, Result};
 use crate::io::checkpoint::Checkpoint;
 use crate::model::Model;
-use crate::parallel::Layout;
+use crate::parallel::Part;
 use crate::petsc::Petsc;
 use crate::thermal::ThermalSystem;
 
@@ -28,7 +31,7 @@ pub(super) fn partition(
     comm: &SimpleCommunicator,
     model: &Model,
     times: &mut PhaseTimes,
-) -> Result<Layout> {
+) -> Result<Part> {
     let clock = Instant::now();
     // With mechanics, elements of held bodies (a container) cost only their
     // thermal share: weight the partition by the explicit work.
@@ -57,10 +60,17 @@ pub(super) fn partition(
             Vec::new()
         }
     };
-    let layout = Layout::new_weighted(comm, &model.mesh, weights.as_deref(), links)
-        .map_err(Error::Partition)?;
+    let elem_part =
+        crate::parallel::partition_collective(comm, &model.mesh, weights.as_deref(), links)
+            .map_err(Error::Partition)?;
+    let part = Part::from_model(
+        model,
+        &elem_part,
+        comm.rank() as usize,
+        comm.size() as usize,
+    );
     times.partition = clock.elapsed().as_secs_f64();
-    Ok(layout)
+    Ok(part)
 }
 
 /// Collective. The explicit mechanics domain (when the model has
@@ -69,14 +79,14 @@ pub(super) fn partition(
 pub(super) fn mechanics(
     comm: &SimpleCommunicator,
     model: &Model,
-    layout: &Layout,
+    part: &Part,
     restart: Option<&Restart>,
     times: &mut PhaseTimes,
 ) -> Result<Option<Mechanics>> {
     let clock = Instant::now();
     let mut mech = match model.mechanics {
         Some(_) => {
-            let (domain, substeps_per_step) = ExplicitDomain::new(comm, model, layout, model.dt)?;
+            let (domain, substeps_per_step) = ExplicitDomain::new(comm, model, part, model.dt)?;
             Some(Mechanics {
                 domain,
                 substeps_per_step,
@@ -85,7 +95,7 @@ pub(super) fn mechanics(
         None => None,
     };
     if let (Some(r), Some(m)) = (restart, mech.as_mut()) {
-        checkpoint::restore_mechanics(comm, model, layout, r, m)?;
+        checkpoint::restore_mechanics(comm, model, part, r, m)?;
     }
     times.mechanics = clock.elapsed().as_secs_f64();
     times.mechanics_setup = times.mechanics;
@@ -137,7 +147,7 @@ impl Contacts {
     pub fn new(
         comm: &SimpleCommunicator,
         model: &Model,
-        layout: &Layout,
+        part: &Part,
         restart: Option<&Checkpoint>,
         mech: Option<&mut Mechanics>,
     ) -> Result<Contacts> {
@@ -147,9 +157,9 @@ impl Contacts {
             Source::Mechanics
         } else {
             let bt = BoundaryTets::new(&model.mesh);
-            let rank = layout.rank as u32;
+            let rank = part.rank as u32;
             let tets = BodyTets::new(&model.mesh, &bt, model.bodies.len(), |e| {
-                layout.elem_part[e as usize] == rank
+                part.whole().elem_part[e as usize] == rank
             });
             let mut positions = model.has_motion().then(|| model.mesh.nodes.clone());
             if let (Some(ck), Some(x)) = (restart, positions.as_mut()) {
@@ -180,7 +190,7 @@ impl Contacts {
             surface_time: 0.0,
         };
         if !matches!(contacts.source, Source::None) {
-            contacts.set = contacts.find(comm, model, layout, mech)?;
+            contacts.set = contacts.find(comm, model, part, mech)?;
             contacts.detections = 1;
         }
         Ok(contacts)
@@ -192,7 +202,7 @@ impl Contacts {
         &mut self,
         comm: &SimpleCommunicator,
         model: &Model,
-        layout: &Layout,
+        part: &Part,
         mech: Option<&mut Mechanics>,
         step: u64,
     ) -> Result<Option<ContactSet>> {
@@ -201,18 +211,22 @@ impl Contacts {
                 model.positions_at(step as f64 * model.dt, x);
             }
         }
-        let found = self.find(comm, model, layout, mech)?;
+        let found = self.find(comm, model, part, mech)?;
         self.detections += 1;
-        Ok((!found.same_as(&self.set, 1e-12)).then_some(found))
+        // Changed when any rank's pairs changed.
+        let mine = i32::from(!found.same_local(&self.set, 1e-12));
+        let mut changed = 0i32;
+        comm.all_reduce_into(&mine, &mut changed, SystemOperation::max());
+        Ok((changed != 0).then_some(found))
     }
 
-    /// Collective. The pairs at the current positions: each rank's, then
-    /// every pair on every rank (for preallocation and statistics).
+    /// Collective. This rank's pairs at the current positions, with what
+    /// the assembly needs of them, and the totals over the ranks.
     fn find(
         &mut self,
         comm: &SimpleCommunicator,
         model: &Model,
-        layout: &Layout,
+        part: &Part,
         mech: Option<&mut Mechanics>,
     ) -> Result<ContactSet> {
         let clock = Instant::now();
@@ -222,7 +236,7 @@ impl Contacts {
             (Source::None, _) => return Ok(ContactSet::default()),
             (Source::Mechanics, Some(m)) => {
                 let before = m.domain.counters.detect_time;
-                let pairs = m.domain.thermal_contacts(comm, model, layout)?;
+                let pairs = m.domain.thermal_contacts(comm, model, part)?;
                 searched = m.domain.counters.detect_time - before;
                 pairs
             }
@@ -247,21 +261,60 @@ impl Contacts {
                 contact_pairs(mesh, bt, &candidates, corners)
             }
         };
-        let gathered = crate::parallel::all_gather_f64(comm, &pairs_to_f64s(&local));
-        let mut all = pairs_from_f64s(&gathered);
-        all.sort_by_key(|p| (p.target, p.contactor));
+        let set = contact_set(comm, model, part, local);
         self.surface_time += clock.elapsed().as_secs_f64() - searched;
-        Ok(ContactSet { all, local })
+        Ok(set)
+    }
+}
+
+/// Collective. The contact set of this rank's `local` pairs: each with its
+/// nodes' PETSc numbers, materials and bodies, and the totals over the ranks.
+fn contact_set(
+    comm: &SimpleCommunicator,
+    model: &Model,
+    part: &Part,
+    local: Vec<ContactPair>,
+) -> ContactSet {
+    let whole = part.whole();
+    let dofs = local
+        .iter()
+        .map(|p| {
+            let (t, c) = (p.target as usize, p.contactor as usize);
+            let mut petsc = [0u32; 8];
+            for i in 0..4 {
+                petsc[i] = whole.petsc_of[model.mesh.tets[t][i] as usize];
+                petsc[4 + i] = whole.petsc_of[model.mesh.tets[c][i] as usize];
+            }
+            PairDofs {
+                petsc,
+                materials: [model.elem_material[t], model.elem_material[c]],
+                bodies: [model.mesh.body[t], model.mesh.body[c]],
+            }
+        })
+        .collect();
+    let mine = [
+        local.len() as f64,
+        local.iter().map(ContactPair::area).sum::<f64>(),
+    ];
+    let mut total = [0.0; 2];
+    comm.all_reduce_into(&mine[..], &mut total[..], SystemOperation::sum());
+    ContactSet {
+        local,
+        dofs,
+        total_pairs: total[0] as u64,
+        total_area: total[1],
     }
 }
 
 /// Collective. The thermal system (when the thermal problem is solved),
 /// at the checkpoint's temperatures on a restart. Every PETSc object
 /// exists after it: unless allowed, an option none of them read is an error.
+#[allow(clippy::too_many_arguments)]
 pub(super) fn thermal<'p>(
     petsc: &'p Petsc,
+    comm: &SimpleCommunicator,
     model: &Model,
-    layout: &Layout,
+    part: &Part,
     contacts: &ContactSet,
     opts: &RunOptions,
     restart: Option<&Restart>,
@@ -271,8 +324,9 @@ pub(super) fn thermal<'p>(
     let mut sys = if model.thermal_active {
         Some(ThermalSystem::new(
             petsc,
+            comm,
             model,
-            layout,
+            part,
             &model.solver,
             contacts,
         )?)
@@ -289,7 +343,7 @@ pub(super) fn thermal<'p>(
         }
     }
     if let (Some(r), Some(s)) = (restart, sys.as_mut()) {
-        checkpoint::restore_thermal(layout, r, s)?;
+        checkpoint::restore_thermal(part, r, s)?;
     }
     Ok(sys)
 }
@@ -299,7 +353,7 @@ pub(super) fn thermal<'p>(
 pub(super) fn couple_temperatures(
     comm: &SimpleCommunicator,
     model: &Model,
-    layout: &Layout,
+    part: &Part,
     sys: Option<&ThermalSystem>,
     mech: Option<&mut Mechanics>,
     restart: Option<&Checkpoint>,
@@ -312,8 +366,8 @@ pub(super) fn couple_temperatures(
         m.set_temperatures(comm, &t, None);
     } else if let Some(ck) = restart {
         if model.has_heating() {
-            let t: Vec<f64> = layout
-                .owned_nodes
+            let t: Vec<f64> = part
+                .owned_gids()
                 .iter()
                 .map(|&n| model.prescribed_temperature(n, ck.time))
                 .collect();

@@ -330,7 +330,7 @@ impl Stages<'_, '_> {
             .map(|m| MechanicsSummary::gather(comm, m));
         let sys = self.sys.as_ref();
         Ok(RunSummary {
-            ranks: self.layout.size,
+            ranks: self.part.size,
             nodes: self.model.mesh.nodes.len(),
             elements: self.model.mesh.tets.len(),
             steps: step - start_step,
@@ -350,7 +350,10 @@ impl Stages<'_, '_> {
             history,
             energy,
             peak_memory,
-            contacts: (self.contacts.set.all.len(), self.contacts.set.total_area()),
+            contacts: (
+                self.contacts.set.total_pairs as usize,
+                self.contacts.set.total_area,
+            ),
             detections: self.contacts.detections,
             searches,
             assemblies: sys.map_or(0, |s| s.assemblies),

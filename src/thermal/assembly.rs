@@ -1,12 +1,17 @@
-//! Distributed assembly of the thermal operators: each rank adds the
-//! element blocks of its owned elements (and the face terms of faces whose
-//! first node it owns) into PETSc matrices with global (PETSc) numbering.
+//! Distributed assembly of the thermal operators (seed 000 eqs 14–20,
+//! 24–30): each rank adds the element blocks of its part, the face terms
+//! of its elements' faces and its contact pairs into PETSc matrices with
+//! global (PETSc) numbering, preallocated exactly from the same blocks.
+
+use std::collections::BTreeMap;
+
+use mpi::topology::SimpleCommunicator;
 
 use crate::contact::{
     local_conductance_block, rank_one_conductance_block, ContactOperator, ContactSet, DeltaT,
 };
 use crate::model::Model;
-use crate::parallel::Layout;
+use crate::parallel::Part;
 use crate::petsc::{Matrix, Petsc, Result, Vector};
 use crate::scenario::{CapacityKind, ConductionKind};
 
@@ -28,85 +33,142 @@ pub struct Operators<'p> {
     pub load_convection: Vector<'p>,
 }
 
-/// Node couplings the contact conductance adds to the element pattern.
-fn contact_couplings(model: &Model, contacts: &ContactSet, mode: DeltaT) -> Vec<(u32, u32)> {
-    let mesh = &model.mesh;
-    let mut extra = Vec::new();
-    match mode {
-        DeltaT::Local => {
-            for p in &contacts.all {
-                for &a in &mesh.tets[p.target as usize] {
-                    for &b in &mesh.tets[p.contactor as usize] {
-                        extra.push((a, b));
-                    }
-                }
-            }
-        }
-        DeltaT::Average => {
-            // Contact nodes of each body pair couple to every node of both bodies.
-            for ((ba, bb), nodes) in average_rows(model, &contacts.all) {
-                let (ra, rb) = (model.bodies[ba].node_range, model.bodies[bb].node_range);
-                for (&n, _) in nodes.iter() {
-                    extra.extend((ra.0..ra.1).chain(rb.0..rb.1).map(|m| (n, m)));
-                }
-            }
-        }
-    }
-    extra.sort_unstable();
-    extra.dedup();
-    extra
-}
-
 /// Per (target body, contactor body): Σ over pairs of g v_i per node (seed
-/// 000 sec 5.2, exact form): rows of the average-ΔT conductance.
-fn average_rows(
-    model: &Model,
-    pairs: &[crate::contact::ContactPair],
-) -> std::collections::BTreeMap<(usize, usize), std::collections::BTreeMap<u32, f64>> {
-    let mut rows: std::collections::BTreeMap<(usize, usize), std::collections::BTreeMap<u32, f64>> =
-        Default::default();
-    for p in pairs {
-        let (t, c) = (p.target as usize, p.contactor as usize);
-        let g = p.area() / model.contact_resistance(t, c);
-        let key = (model.mesh.body[t] as usize, model.mesh.body[c] as usize);
-        let r = rows.entry(key).or_default();
+/// 000 sec 5.2, exact form), nodes by PETSc number: rows of the
+/// average-ΔT conductance.
+fn average_rows(model: &Model, contacts: &ContactSet) -> BTreeMap<(u32, u32), BTreeMap<u32, f64>> {
+    let mut rows: BTreeMap<(u32, u32), BTreeMap<u32, f64>> = Default::default();
+    for (p, d) in contacts.local.iter().zip(&contacts.dofs) {
+        let g = p.area() / model.resistance(d.materials[0], d.materials[1]);
+        let r = rows.entry((d.bodies[0], d.bodies[1])).or_default();
         for i in 0..4 {
-            *r.entry(model.mesh.tets[t][i]).or_default() += g * p.surface.w_target[i];
-            *r.entry(model.mesh.tets[c][i]).or_default() -= g * p.surface.w_contactor[i];
+            *r.entry(d.petsc[i]).or_default() += g * p.surface.w_target[i];
+            *r.entry(d.petsc[4 + i]).or_default() -= g * p.surface.w_contactor[i];
         }
     }
     rows
 }
 
-/// Collective. Assemble M, K + H + Ch and f for this rank's share of
-/// `model`, with the contact conductance of `contacts` (seed 000 eqs 24–30).
+/// Collective. Every node of each body in `bodies` (ascending): its PETSc
+/// number and its share of its body's heat capacity, a_n = C_n / C_body,
+/// gathered on every rank from the parts (the average-ΔT coupling reads
+/// whole bodies; it serves the small validation models of seed 000 sec 5).
+fn body_weights(
+    comm: &SimpleCommunicator,
+    model: &Model,
+    part: &Part,
+    bodies: &[u32],
+) -> BTreeMap<u32, Vec<(u32, f64)>> {
+    let mut mine: Vec<f64> = Vec::new();
+    for e in 0..part.num_elements() {
+        let b = part.mesh.body[e];
+        if bodies.binary_search(&b).is_err() {
+            continue;
+        }
+        let m = &model.materials[part.elem_material[e] as usize];
+        let c = m.density * m.specific_heat * part.mesh.element_volume(e) / 4.0;
+        for &l in &part.mesh.tets[e] {
+            mine.extend_from_slice(&[f64::from(b), f64::from(part.petsc[l as usize]), c]);
+        }
+    }
+    let all = crate::parallel::all_gather_f64(comm, &mine);
+    let mut cap: BTreeMap<u32, BTreeMap<u32, f64>> = Default::default();
+    for r in all.chunks_exact(3) {
+        *cap.entry(r[0] as u32)
+            .or_default()
+            .entry(r[1] as u32)
+            .or_default() += r[2];
+    }
+    cap.into_iter()
+        .map(|(b, nodes)| {
+            let total: f64 = nodes.values().sum();
+            (b, nodes.into_iter().map(|(n, c)| (n, c / total)).collect())
+        })
+        .collect()
+}
+
+/// Collective. Assemble M, K + H + Ch and f for this rank's part, with the
+/// contact conductance of `contacts` (seed 000 eqs 24–30). The pattern is
+/// the union of the element and contact blocks, preallocated exactly.
 pub fn assemble<'p>(
     petsc: &'p Petsc,
+    comm: &SimpleCommunicator,
     model: &Model,
-    layout: &Layout,
+    part: &Part,
     contacts: &ContactSet,
-) -> Result<Operators<'p>> {
+) -> crate::error::Result<Operators<'p>> {
     let mode = model.contact.as_ref().map_or(DeltaT::Local, |c| c.delta_t);
     let block = match model.contact.as_ref().map(|c| c.operator) {
         Some(ContactOperator::RankOne) => rank_one_conductance_block,
         _ => local_conductance_block,
     };
-    let extra = contact_couplings(model, contacts, mode);
-    let (d_nnz, o_nnz) = layout.preallocation(&model.mesh, &extra);
-    let owned = layout.num_owned();
-    let mut capacity = Matrix::new_aij(petsc, owned, &d_nnz, &o_nnz)?;
-    let mut stiffness = Matrix::new_aij(petsc, owned, &d_nnz, &o_nnz)?;
+    let owned = part.num_owned();
+    let g = |l: u32| part.petsc[l as usize] as i32;
+    let elem_idx = |e: usize| part.mesh.tets[e].map(g);
+    // The average-ΔT rows, and the bodies' weights they couple to.
+    let (rows, weights) = if mode == DeltaT::Average {
+        let rows = average_rows(model, contacts);
+        let mut wanted: Vec<u32> = rows.keys().flat_map(|&(a, b)| [a, b]).collect();
+        let all = crate::parallel::all_gather_f64(
+            comm,
+            &wanted.iter().map(|&b| f64::from(b)).collect::<Vec<_>>(),
+        );
+        wanted = all.iter().map(|&b| b as u32).collect();
+        wanted.sort_unstable();
+        wanted.dedup();
+        (rows, body_weights(comm, model, part, &wanted))
+    } else {
+        Default::default()
+    };
+    let average_cols = |a: u32, b: u32| -> (Vec<i32>, Vec<f64>) {
+        let (wa, wb) = (&weights[&a], &weights[&b]);
+        let cols = wa.iter().chain(wb).map(|&(n, _)| n as i32).collect();
+        let vals = wa
+            .iter()
+            .map(|&(_, w)| w)
+            .chain(wb.iter().map(|&(_, w)| -w))
+            .collect();
+        (cols, vals)
+    };
+    let pattern = |p: &mut crate::petsc::Pattern| -> Result<()> {
+        for e in 0..part.num_elements() {
+            let idx = elem_idx(e);
+            p.add(&idx, &idx)?;
+        }
+        for (f, _, _) in &part.bc.convection {
+            let idx = f.map(g);
+            p.add(&idx, &idx)?;
+        }
+        match mode {
+            DeltaT::Local => {
+                for d in &contacts.dofs {
+                    let idx = d.petsc.map(|n| n as i32);
+                    p.add(&idx, &idx)?;
+                }
+            }
+            DeltaT::Average => {
+                for (&(a, b), r) in &rows {
+                    let (cols, _) = average_cols(a, b);
+                    for &n in r.keys() {
+                        p.add(&[n as i32], &cols)?;
+                        p.add(&cols, &[n as i32])?;
+                    }
+                }
+            }
+        }
+        Ok(())
+    };
+    let mut capacity = Matrix::with_pattern(petsc, owned, pattern)?;
+    let mut stiffness = capacity.duplicate()?;
     let mut load_flux = Vector::new(petsc, owned)?;
     let mut load_convection = Vector::new(petsc, owned)?;
     load_flux.set(0.0)?;
     load_convection.set(0.0)?;
-    let g = |n: u32| layout.global_of[n as usize] as i32;
 
-    for &e in &layout.owned_elems {
-        let e = e as usize;
-        let mat = model.material_of(e);
-        let geo = crate::geometry::tet4_geometry(&model.mesh.element_coords(e));
-        let idx = model.mesh.tets[e].map(g);
+    for e in 0..part.num_elements() {
+        let mat = &model.materials[part.elem_material[e] as usize];
+        let geo = crate::geometry::tet4_geometry(&part.mesh.element_coords(e));
+        let idx = elem_idx(e);
         let k = element::conductivity(&geo, mat.conductivity);
         let rho_c = mat.density * mat.specific_heat;
         let m = match model.thermal.capacity {
@@ -115,81 +177,42 @@ pub fn assemble<'p>(
         };
         stiffness.add_values(&idx, &idx, &k)?;
         capacity.add_values(&idx, &idx, &m)?;
-        let q = model.thermal.source[model.mesh.body[e] as usize];
+        let q = model.thermal.source[part.mesh.body[e] as usize];
         if q != 0.0 {
             load_flux.set_values(&idx, &element::source_load(&geo, q), true)?;
         }
     }
-    let coords = |f: &[u32; 3]| f.map(|n| model.mesh.nodes[n as usize]);
-    for (f, q) in &model.thermal.flux {
-        if layout.owns(f[0]) {
-            let (area, _) = element::triangle_area_normal(&coords(f));
-            load_flux.set_values(&f.map(g), &element::face_flux_load(area, *q), true)?;
-        }
+    let coords = |f: &[u32; 3]| f.map(|n| part.mesh.nodes[n as usize]);
+    for (f, q) in &part.bc.flux {
+        let (area, _) = element::triangle_area_normal(&coords(f));
+        load_flux.set_values(&f.map(g), &element::face_flux_load(area, *q), true)?;
     }
-    for (f, h, tenv) in &model.thermal.convection {
-        if layout.owns(f[0]) {
-            let (area, _) = element::triangle_area_normal(&coords(f));
-            let (hm, hl) = element::face_convection(area, *h, *tenv);
-            let idx = f.map(g);
-            stiffness.add_values(&idx, &idx, &hm)?;
-            load_convection.set_values(&idx, &hl, true)?;
-        }
+    for (f, h, tenv) in &part.bc.convection {
+        let (area, _) = element::triangle_area_normal(&coords(f));
+        let (hm, hl) = element::face_convection(area, *h, *tenv);
+        let idx = f.map(g);
+        stiffness.add_values(&idx, &idx, &hm)?;
+        load_convection.set_values(&idx, &hl, true)?;
     }
-    // Contact conductance; the capacity gets explicit zeros at the same
-    // places so every operator shares one pattern.
+    // Contact conductance (the capacity holds zeros there: one pattern).
     match mode {
         DeltaT::Local => {
-            for p in &contacts.local {
-                let (t, c) = (p.target as usize, p.contactor as usize);
-                let rc = model.contact_resistance(t, c);
+            for (p, d) in contacts.local.iter().zip(&contacts.dofs) {
+                let rc = model.resistance(d.materials[0], d.materials[1]);
                 if !rc.is_finite() {
                     continue;
                 }
-                let mut idx = [0i32; 8];
-                for i in 0..4 {
-                    idx[i] = g(model.mesh.tets[t][i]);
-                    idx[4 + i] = g(model.mesh.tets[c][i]);
-                }
+                let idx = d.petsc.map(|n| n as i32);
                 stiffness.add_values(&idx, &idx, &block(p, rc))?;
-                capacity.add_values(&idx, &idx, &[0.0; 64])?;
             }
         }
         DeltaT::Average => {
             // Row i: g v_i (a_A − a_B), a_X = node capacity / body capacity.
-            let cap = model.node_capacity();
-            let body_cap: Vec<f64> = model
-                .bodies
-                .iter()
-                .map(|b| {
-                    cap[b.node_range.0 as usize..b.node_range.1 as usize]
-                        .iter()
-                        .sum()
-                })
-                .collect();
-            for ((ba, bb), rows) in average_rows(model, &contacts.local) {
-                let (ra, rb) = (model.bodies[ba].node_range, model.bodies[bb].node_range);
-                let cols: Vec<u32> = (ra.0..ra.1).chain(rb.0..rb.1).collect();
-                let a: Vec<f64> = cols
-                    .iter()
-                    .map(|&m| {
-                        if m >= ra.0 && m < ra.1 {
-                            cap[m as usize] / body_cap[ba]
-                        } else {
-                            -cap[m as usize] / body_cap[bb]
-                        }
-                    })
-                    .collect();
-                let gcols: Vec<i32> = cols.iter().map(|&m| g(m)).collect();
-                let zeros = vec![0.0; cols.len()];
-                for (&n, &w) in &rows {
-                    let vals: Vec<f64> = a.iter().map(|x| w * x).collect();
-                    stiffness.add_values(&[g(n)], &gcols, &vals)?;
-                    capacity.add_values(&[g(n)], &gcols, &zeros)?;
-                    // Explicit zeros at the transposed places: one symmetric
-                    // pattern for every operator (and for the bounded form).
-                    stiffness.add_values(&gcols, &[g(n)], &zeros)?;
-                    capacity.add_values(&gcols, &[g(n)], &zeros)?;
+            for (&(a, b), r) in &rows {
+                let (cols, a_vals) = average_cols(a, b);
+                for (&n, &w) in r {
+                    let vals: Vec<f64> = a_vals.iter().map(|x| w * x).collect();
+                    stiffness.add_values(&[n as i32], &cols, &vals)?;
                 }
             }
         }

@@ -23,9 +23,10 @@
 use crate::contact::{ContactSet, DeltaT};
 use crate::error::Error;
 use crate::model::Model;
-use crate::parallel::Layout;
+use crate::parallel::Part;
 use crate::petsc::{Ksp, Matrix, Petsc, Result, Vector};
 use crate::scenario::{CapacityKind, ConductionKind, SolverSpec};
+use mpi::topology::SimpleCommunicator;
 
 use super::assembly::{assemble, Operators};
 
@@ -178,34 +179,35 @@ impl<'p> ThermalSystem<'p> {
     /// Collective. Assemble, apply Dirichlet conditions and set up the solver.
     pub fn new(
         petsc: &'p Petsc,
+        comm: &SimpleCommunicator,
         model: &Model,
-        layout: &Layout,
+        part: &Part,
         solver: &SolverSpec,
         contacts: &ContactSet,
     ) -> crate::error::Result<Self> {
-        let ops = assemble(petsc, model, layout, contacts)?;
+        let ops = assemble(petsc, comm, model, part, contacts)?;
         let symmetric = model
             .contact
             .as_ref()
-            .is_none_or(|c| c.delta_t == DeltaT::Local || contacts.all.is_empty());
+            .is_none_or(|c| c.delta_t == DeltaT::Local || contacts.total_pairs == 0);
         let theta = model.thermal.theta;
         let dt = model.dt;
-        let owned = layout.num_owned();
+        let owned = part.num_owned();
 
         let mut t = Vector::new(petsc, owned)?;
         {
             let mut v = t.view_mut()?;
-            for (i, &n) in layout.owned_nodes.iter().enumerate() {
-                v[i] = model.thermal.initial[n as usize];
+            v.copy_from_slice(&part.bc.initial_t[..owned]);
+            for &(l, value) in &part.bc.dirichlet {
+                v[l as usize] = value;
             }
         }
-        let (lo, _) = layout.owned_range();
-        let d_rows: Vec<i32> = model
-            .thermal
+        let (lo, _) = part.owned_range();
+        let d_rows: Vec<i32> = part
+            .bc
             .dirichlet
             .iter()
-            .filter(|(n, _)| layout.owns(*n))
-            .map(|(n, _)| layout.global_of[*n as usize] as i32)
+            .map(|&(l, _)| part.petsc[l as usize] as i32)
             .collect();
         let mut dmask = t.duplicate()?;
         dmask.set(0.0)?;
@@ -273,7 +275,7 @@ impl<'p> ThermalSystem<'p> {
                 a.set_symmetric(true)?;
             }
 
-            let choice = SolverChoice::auto(layout.num_global(), layout.size, symmetric);
+            let choice = SolverChoice::auto(part.num_global(), part.size, symmetric);
             for (k, v) in &choice.defaults {
                 petsc.set_own_default_option(k, Some(v))?;
             }
@@ -412,13 +414,14 @@ impl<'p> ThermalSystem<'p> {
     pub fn rebuild(
         &mut self,
         petsc: &'p Petsc,
+        comm: &SimpleCommunicator,
         model: &Model,
-        layout: &Layout,
+        part: &Part,
         solver: &SolverSpec,
         contacts: &ContactSet,
     ) -> crate::error::Result<()> {
         let account = self.energy()?;
-        let mut next = ThermalSystem::new(petsc, model, layout, solver, contacts)?;
+        let mut next = ThermalSystem::new(petsc, comm, model, part, solver, contacts)?;
         next.t.copy_from(&self.t)?;
         next.t0.copy_from(&self.t)?;
         next.base = account;

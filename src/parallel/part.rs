@@ -1,0 +1,433 @@
+//! This rank's part of the mesh: the elements it owns, their nodes (owned
+//! first, then the ghosts its elements touch), each with its global id;
+//! the owner and PETSc number of every local node; which faces lie on
+//! their body's boundary; and the boundary conditions resolved to these
+//! nodes and faces. Every array here is of the size of the part, not of
+//! the whole mesh.
+//!
+//! Numbering (the same on any rank count): elements and nodes keep the
+//! global ids of the combined mesh (bodies in order, each contiguous). A
+//! node is owned by the lowest rank among the elements that touch it;
+//! rank r's owned nodes get the consecutive PETSc numbers [start_r,
+//! end_r), in ascending global id.
+
+use crate::mechanics::explicit::VelocityBc;
+use crate::mesh::TetMesh;
+
+/// Boundary conditions on the part's nodes and faces.
+#[derive(Debug, Clone, Default)]
+pub struct LocalBcs {
+    /// Initial temperature of every local node.
+    pub initial_t: Vec<f64>,
+    /// Prescribed temperatures of owned nodes (local index, value).
+    pub dirichlet: Vec<(u32, f64)>,
+    /// Prescribed inward flux on faces of owned elements (local nodes, W/m²).
+    pub flux: Vec<([u32; 3], f64)>,
+    /// Convection on faces of owned elements (local nodes, h, T_env).
+    pub convection: Vec<([u32; 3], f64, f64)>,
+    /// Velocity conditions of every local node (mechanics; empty without).
+    pub velocity: Vec<VelocityBc>,
+    /// Dead-load nodal forces of every owned node (mechanics; empty without).
+    pub traction: Vec<[f64; 3]>,
+}
+
+/// One rank's part of the mesh.
+#[derive(Debug, Clone, Default)]
+pub struct Part {
+    /// This rank and the number of ranks.
+    pub rank: usize,
+    pub size: usize,
+    /// The owned elements (ascending global id) over the local nodes;
+    /// `mesh.body[e]` is the global body id, `mesh.nodes` the reference
+    /// coordinates. No named sets (they are resolved into `bc`).
+    pub mesh: TetMesh,
+    /// Global id of every local element.
+    pub elem_gid: Vec<u32>,
+    /// Material of every local element.
+    pub elem_material: Vec<u32>,
+    /// Per element: bit i set when its face opposite node i lies on its
+    /// body's boundary (a face on a cut between ranks is not).
+    pub face_mask: Vec<u8>,
+    /// Global id of every local node: owned ones ascending, then ghosts ascending.
+    pub node_gid: Vec<u32>,
+    /// Number of owned nodes (the first ones).
+    pub n_owned: usize,
+    /// Owning rank of every local node.
+    pub node_owner: Vec<u32>,
+    /// PETSc number of every local node.
+    pub petsc: Vec<u32>,
+    /// First PETSc number of each rank, and the total at the end.
+    pub starts: Vec<usize>,
+    /// Per local node: whether it lies on its body's boundary.
+    pub boundary_node: Vec<bool>,
+    /// Boundary conditions resolved to the part.
+    pub bc: LocalBcs,
+    /// Maps over the whole mesh, present while the model is built on every
+    /// rank (the contact stages still look up other ranks' nodes in them).
+    pub whole: Option<WholeMaps>,
+}
+
+/// Per element and node of the whole mesh: its rank and PETSc number.
+#[derive(Debug, Clone, Default)]
+pub struct WholeMaps {
+    /// Rank of every element.
+    pub elem_part: Vec<u32>,
+    /// Owning rank of every node.
+    pub node_owner: Vec<u32>,
+    /// PETSc number of every node.
+    pub petsc_of: Vec<u32>,
+}
+
+impl Part {
+    /// Number of owned nodes.
+    pub fn num_owned(&self) -> usize {
+        self.n_owned
+    }
+
+    /// Number of nodes over all ranks.
+    pub fn num_global(&self) -> usize {
+        *self.starts.last().unwrap_or(&0)
+    }
+
+    /// This rank's PETSc rows [start, end).
+    pub fn owned_range(&self) -> (usize, usize) {
+        (self.starts[self.rank], self.starts[self.rank + 1])
+    }
+
+    /// Number of local elements.
+    pub fn num_elements(&self) -> usize {
+        self.elem_gid.len()
+    }
+
+    /// Local index of a node by global id, if it is local.
+    pub fn local_node(&self, gid: u32) -> Option<u32> {
+        let (owned, ghosts) = self.node_gid.split_at(self.n_owned);
+        if let Ok(i) = owned.binary_search(&gid) {
+            return Some(i as u32);
+        }
+        ghosts
+            .binary_search(&gid)
+            .ok()
+            .map(|i| (self.n_owned + i) as u32)
+    }
+
+    /// Local index of an element by global id, if this rank owns it.
+    pub fn local_element(&self, gid: u32) -> Option<u32> {
+        self.elem_gid.binary_search(&gid).ok().map(|i| i as u32)
+    }
+
+    /// Global ids of the owned nodes (ascending).
+    pub fn owned_gids(&self) -> &[u32] {
+        &self.node_gid[..self.n_owned]
+    }
+
+    /// Collective. The halo of the part's ghost nodes (those its elements
+    /// touch) with their owners.
+    pub fn node_halo<C: mpi::traits::Communicator>(&self, comm: &C) -> Result<super::Halo, String> {
+        let ghosts: Vec<(u32, u32, u32)> = (self.n_owned..self.node_gid.len())
+            .map(|l| (self.node_gid[l], self.node_owner[l], l as u32))
+            .collect();
+        let owned = &self.node_gid[..self.n_owned];
+        super::Halo::new(comm, &ghosts, |g| {
+            owned.binary_search(&g).ok().map(|i| i as u32)
+        })
+    }
+
+    /// Collective. Per owned node, the sum over all its elements (on any
+    /// rank) of `share(e)` for each local element e touching it.
+    pub fn sum_to_owned<C: mpi::traits::Communicator>(
+        &self,
+        comm: &C,
+        halo: &super::Halo,
+        share: impl Fn(usize) -> f64,
+    ) -> Vec<f64> {
+        let mut w = vec![0.0; self.node_gid.len()];
+        for e in 0..self.num_elements() {
+            let x = share(e);
+            for &l in &self.mesh.tets[e] {
+                w[l as usize] += x;
+            }
+        }
+        halo.reverse_add(comm, &mut w, 1, |_| {});
+        w.truncate(self.n_owned);
+        w
+    }
+
+    /// The boundary tets of the part from the face masks: local element
+    /// indices, their masks, and the boundary nodes.
+    pub fn boundary_tets(&self) -> crate::contact::BoundaryTets {
+        crate::contact::BoundaryTets::from_masks(&self.face_mask, self.boundary_node.clone())
+    }
+
+    /// Rank `rank`'s part (of `size`) of a model built on every rank, for
+    /// the element partition `elem_part`.
+    pub fn from_model(
+        model: &crate::model::Model,
+        elem_part: &[u32],
+        rank: usize,
+        size: usize,
+    ) -> Part {
+        let bcs = GlobalBcs {
+            initial_t: model.thermal.initial.clone(),
+            dirichlet: model.thermal.dirichlet.clone(),
+            flux: model.thermal.flux.clone(),
+            convection: model.thermal.convection.clone(),
+            velocity: model
+                .mechanics
+                .as_ref()
+                .map_or(Vec::new(), |m| m.bc.clone()),
+            traction: model
+                .mechanics
+                .as_ref()
+                .map_or(Vec::new(), |m| m.traction.clone()),
+        };
+        Part::from_global(
+            &model.mesh,
+            &model.elem_material,
+            elem_part,
+            rank,
+            size,
+            &bcs,
+        )
+    }
+
+    /// Build rank `rank`'s part (of `size`) from the whole mesh and an
+    /// element partition `elem_part`, with the boundary conditions of
+    /// `bcs` given per global node and face. Used where the whole mesh
+    /// exists (a model built on every rank, tests).
+    pub fn from_global(
+        mesh: &TetMesh,
+        elem_material: &[u32],
+        elem_part: &[u32],
+        rank: usize,
+        size: usize,
+        bcs: &GlobalBcs,
+    ) -> Part {
+        let nn = mesh.nodes.len();
+        let mut owner = vec![u32::MAX; nn];
+        for (e, t) in mesh.tets.iter().enumerate() {
+            for &n in t {
+                owner[n as usize] = owner[n as usize].min(elem_part[e]);
+            }
+        }
+        // Nodes used by no element (refused by the mesh checks) go to rank 0.
+        owner
+            .iter_mut()
+            .filter(|o| **o == u32::MAX)
+            .for_each(|o| *o = 0);
+        let mut counts = vec![0usize; size];
+        for &o in &owner {
+            counts[o as usize] += 1;
+        }
+        let mut starts = vec![0usize; size + 1];
+        for r in 0..size {
+            starts[r + 1] = starts[r] + counts[r];
+        }
+        let mut next = starts.clone();
+        let mut petsc_of = vec![0u32; nn];
+        for (n, &o) in owner.iter().enumerate() {
+            petsc_of[n] = next[o as usize] as u32;
+            next[o as usize] += 1;
+        }
+        let rank32 = rank as u32;
+        let elems: Vec<u32> = (0..mesh.tets.len() as u32)
+            .filter(|&e| elem_part[e as usize] == rank32)
+            .collect();
+        let mut ghosts: Vec<u32> = elems
+            .iter()
+            .flat_map(|&e| mesh.tets[e as usize])
+            .filter(|&n| owner[n as usize] != rank32)
+            .collect();
+        ghosts.sort_unstable();
+        ghosts.dedup();
+        let mut node_gid: Vec<u32> = (0..nn as u32)
+            .filter(|&n| owner[n as usize] == rank32)
+            .collect();
+        let n_owned = node_gid.len();
+        node_gid.extend_from_slice(&ghosts);
+        let mut local = std::collections::HashMap::with_capacity(node_gid.len());
+        for (i, &g) in node_gid.iter().enumerate() {
+            local.insert(g, i as u32);
+        }
+        let bt = crate::contact::BoundaryTets::new(mesh);
+        let l = |g: u32| local[&g];
+        let part_mesh = TetMesh {
+            nodes: node_gid.iter().map(|&g| mesh.nodes[g as usize]).collect(),
+            tets: elems
+                .iter()
+                .map(|&e| mesh.tets[e as usize].map(l))
+                .collect(),
+            body: elems.iter().map(|&e| mesh.body[e as usize]).collect(),
+            ..Default::default()
+        };
+        // A face goes to the rank that owns an element holding all three
+        // of its nodes (on a body's boundary there is one such element).
+        let sorted = |mut f: [u32; 3]| {
+            f.sort_unstable();
+            f
+        };
+        let owned_faces: std::collections::HashSet<[u32; 3]> = elems
+            .iter()
+            .flat_map(|&e| {
+                let t = mesh.tets[e as usize];
+                (0..4).map(move |k| {
+                    let mut f = [0u32; 3];
+                    let mut j = 0;
+                    for (i, &n) in t.iter().enumerate() {
+                        if i != k {
+                            f[j] = n;
+                            j += 1;
+                        }
+                    }
+                    f
+                })
+            })
+            .map(sorted)
+            .collect();
+        let here = |f: &[u32; 3]| owned_faces.contains(&sorted(*f));
+        let flux: Vec<([u32; 3], f64)> = bcs
+            .flux
+            .iter()
+            .filter(|(f, _)| here(f))
+            .map(|(f, q)| (f.map(l), *q))
+            .collect();
+        let convection: Vec<([u32; 3], f64, f64)> = bcs
+            .convection
+            .iter()
+            .filter(|(f, _, _)| here(f))
+            .map(|(f, h, t)| (f.map(l), *h, *t))
+            .collect();
+        let bc = LocalBcs {
+            initial_t: node_gid
+                .iter()
+                .map(|&g| bcs.initial_t[g as usize])
+                .collect(),
+            dirichlet: bcs
+                .dirichlet
+                .iter()
+                .filter(|(g, _)| owner[*g as usize] == rank32)
+                .map(|&(g, v)| (l(g), v))
+                .collect(),
+            flux,
+            convection,
+            velocity: if bcs.velocity.is_empty() {
+                Vec::new()
+            } else {
+                node_gid.iter().map(|&g| bcs.velocity[g as usize]).collect()
+            },
+            traction: if bcs.traction.is_empty() {
+                Vec::new()
+            } else {
+                node_gid[..n_owned]
+                    .iter()
+                    .map(|&g| bcs.traction[g as usize])
+                    .collect()
+            },
+        };
+        Part {
+            rank,
+            size,
+            face_mask: elems.iter().map(|&e| bt.mask[e as usize]).collect(),
+            boundary_node: node_gid
+                .iter()
+                .map(|&g| bt.boundary_node[g as usize])
+                .collect(),
+            elem_material: elems.iter().map(|&e| elem_material[e as usize]).collect(),
+            mesh: part_mesh,
+            elem_gid: elems,
+            node_owner: node_gid.iter().map(|&g| owner[g as usize]).collect(),
+            petsc: node_gid.iter().map(|&g| petsc_of[g as usize]).collect(),
+            node_gid,
+            n_owned,
+            starts,
+            bc,
+            whole: Some(WholeMaps {
+                elem_part: elem_part.to_vec(),
+                node_owner: owner,
+                petsc_of,
+            }),
+        }
+    }
+
+    /// The whole-mesh maps (a model built on every rank has them).
+    pub fn whole(&self) -> &WholeMaps {
+        self.whole
+            .as_ref()
+            .expect("whole-mesh maps exist while the model is replicated")
+    }
+}
+
+/// Boundary conditions per global node and face, as a model built on every
+/// rank holds them ([`Part::from_global`]).
+#[derive(Debug, Clone, Default)]
+pub struct GlobalBcs {
+    /// Initial temperature per node.
+    pub initial_t: Vec<f64>,
+    /// (node, value).
+    pub dirichlet: Vec<(u32, f64)>,
+    /// (face nodes, W/m²).
+    pub flux: Vec<([u32; 3], f64)>,
+    /// (face nodes, h, T_env).
+    pub convection: Vec<([u32; 3], f64, f64)>,
+    /// Per node (empty without mechanics).
+    pub velocity: Vec<VelocityBc>,
+    /// Per node (empty without mechanics).
+    pub traction: Vec<[f64; 3]>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::generate::box_mesh;
+
+    fn parts(mesh: &TetMesh, size: usize) -> Vec<Part> {
+        let elem_part = crate::parallel::partition_elements(mesh, size).unwrap();
+        let bcs = GlobalBcs {
+            initial_t: vec![0.0; mesh.nodes.len()],
+            flux: mesh.face_sets["xmin"].iter().map(|&f| (f, 1.0)).collect(),
+            ..Default::default()
+        };
+        (0..size)
+            .map(|r| Part::from_global(mesh, &vec![0; mesh.tets.len()], &elem_part, r, size, &bcs))
+            .collect()
+    }
+
+    #[test]
+    fn parts_number_every_node_once_and_split_the_faces() {
+        let mesh = box_mesh([0.0; 3], [1.0, 0.5, 0.5], 0.25).unwrap();
+        let ps = parts(&mesh, 3);
+        let mut seen = vec![false; mesh.nodes.len()];
+        for p in &ps {
+            let (lo, hi) = p.owned_range();
+            assert_eq!(hi - lo, p.num_owned());
+            for l in 0..p.node_gid.len() {
+                let (g, pe) = (p.node_gid[l], p.petsc[l] as usize);
+                assert_eq!(p.local_node(g), Some(l as u32));
+                if l < p.n_owned {
+                    assert!(pe >= lo && pe < hi);
+                    assert!(!seen[pe], "PETSc number {pe} twice");
+                    seen[pe] = true;
+                } else {
+                    // A ghost's owner numbers it the same way.
+                    let o = &ps[p.node_owner[l] as usize];
+                    let lo_ = o.local_node(g).unwrap() as usize;
+                    assert!(lo_ < o.n_owned);
+                    assert_eq!(o.petsc[lo_] as usize, pe);
+                }
+            }
+        }
+        assert!(seen.iter().all(|&s| s));
+        let elems: usize = ps.iter().map(Part::num_elements).sum();
+        assert_eq!(elems, mesh.tets.len());
+        // Each flux face on exactly one rank.
+        let faces: usize = ps.iter().map(|p| p.bc.flux.len()).sum();
+        assert_eq!(faces, mesh.face_sets["xmin"].len());
+        // Face masks: the body's boundary, not the cuts.
+        let bt = crate::contact::BoundaryTets::new(&mesh);
+        for p in &ps {
+            for (e, &g) in p.elem_gid.iter().enumerate() {
+                assert_eq!(p.face_mask[e], bt.mask[g as usize]);
+            }
+        }
+    }
+}

@@ -127,48 +127,54 @@ impl BoundaryTets {
     }
 }
 
+/// What the narrow phase needs to know of a tet besides its corners.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct TetFaces {
+    /// Global element id (pairs are labelled by it: target = the lower).
+    pub id: u32,
+    /// Bit i: its face opposite node i lies on its body's boundary.
+    pub mask: u8,
+    /// Bit i: its node i lies on its body's boundary.
+    pub bits: u8,
+}
+
 /// Seed 000 sec 3.1 for one candidate pair: tets `a` and `b` of
 /// different bodies (at least one a boundary tet) at corners `ca` and
 /// `cb`. None unless their volumes overlap (separating axes) and the
 /// contact surface is positive. Labelled target = the lower id.
 pub fn tet_pair_contact(
-    mesh: &TetMesh,
-    bt: &BoundaryTets,
-    (a, ca): (u32, &[[f64; 3]; 4]),
-    (b, cb): (u32, &[[f64; 3]; 4]),
+    (a, ca): (TetFaces, &[[f64; 3]; 4]),
+    (b, cb): (TetFaces, &[[f64; 3]; 4]),
 ) -> Option<ContactPair> {
     if !tet_tet_overlap(ca, cb) {
         return None;
     }
-    let ((t, ct), (c, cc)) = if a < b {
+    let ((t, ct), (c, cc)) = if a.id < b.id {
         ((a, ca), (b, cb))
     } else {
         ((b, cb), (a, ca))
     };
-    let (ft, fc) = (bt.faces_of(t), bt.faces_of(c));
+    let (ft, fc) = (FaceList::from_mask(t.mask), FaceList::from_mask(c.mask));
     let pair = ContactPair {
-        target: t,
-        contactor: c,
-        surface: tet_tet_contact_surface(
-            (ct, ft.as_slice(), bt.node_bits(mesh, t)),
-            (cc, fc.as_slice(), bt.node_bits(mesh, c)),
-        ),
+        target: t.id,
+        contactor: c.id,
+        surface: tet_tet_contact_surface((ct, ft.as_slice(), t.bits), (cc, fc.as_slice(), c.bits)),
     };
     (pair.area() > 0.0).then_some(pair)
 }
 
 /// The thermal contact pairs among `candidates` (the contact search's,
-/// [`super::search`]) at the corners `corners(e)`: those whose volumes
-/// overlap with a positive surface, sorted by (target, contactor).
+/// [`super::search`], over tet handles) with `faces(h)` and corners
+/// `corners(h)` of each tet: those whose volumes overlap with a positive
+/// surface, sorted by (target, contactor).
 pub fn contact_pairs(
-    mesh: &TetMesh,
-    bt: &BoundaryTets,
     candidates: &[Candidate],
+    faces: impl Fn(u32) -> TetFaces,
     corners: impl Fn(u32) -> [[f64; 3]; 4],
 ) -> Vec<ContactPair> {
     let mut pairs: Vec<ContactPair> = candidates
         .iter()
-        .filter_map(|c| tet_pair_contact(mesh, bt, (c.a, &corners(c.a)), (c.b, &corners(c.b))))
+        .filter_map(|c| tet_pair_contact((faces(c.a), &corners(c.a)), (faces(c.b), &corners(c.b))))
         .collect();
     pairs.sort_by_key(|p| (p.target, p.contactor));
     pairs
@@ -188,20 +194,23 @@ pub const THERMAL_SEARCH: SearchOptions = SearchOptions {
 
 /// Find the contact pairs this caller is responsible for: those of the
 /// contact search ([`ContactSearch`] with [`THERMAL_SEARCH`]) from the
-/// boundary tets that `tets` lists as owned, at the corners `corners(e)`.
-/// Over a partition of the tets every pair is found exactly once; pairs
-/// come sorted by (target, contactor).
+/// boundary tets that `tets` lists as owned, at the corners `corners(e)`
+/// (`tets` over element ids of `mesh`). Over a partition of the tets every
+/// pair is found exactly once; pairs come sorted by (target, contactor).
 pub fn detect_contacts(
     mesh: &TetMesh,
     bt: &BoundaryTets,
     search: &mut ContactSearch,
     tets: &BodyTets,
     corners: impl Fn(u32) -> [[f64; 3]; 4] + Copy,
-    held: &[bool],
-    fixed: &[bool],
 ) -> Vec<ContactPair> {
-    let candidates = search.find(tets, corners, held, fixed, THERMAL_SEARCH);
-    contact_pairs(mesh, bt, &candidates, corners)
+    let candidates = search.find(tets, corners, |e| e, THERMAL_SEARCH);
+    let faces = |e: u32| TetFaces {
+        id: e,
+        mask: bt.mask[e as usize],
+        bits: bt.node_bits(mesh, e),
+    };
+    contact_pairs(&candidates, faces, corners)
 }
 
 #[cfg(test)]
@@ -219,18 +228,9 @@ mod tests {
     /// The pairs found from the tets `owns` picks, every body free.
     fn detect(m: &TetMesh, owns: impl Fn(u32) -> bool) -> Vec<ContactPair> {
         let bt = BoundaryTets::new(m);
-        let tets = BodyTets::new(m, &bt, 2, owns);
-        let free = [false; 2];
+        let tets = BodyTets::of_mesh(m, &bt, owns, |_| false, |_| false);
         let corners = |e: u32| m.element_coords(e as usize);
-        detect_contacts(
-            m,
-            &bt,
-            &mut ContactSearch::new(2),
-            &tets,
-            corners,
-            &free,
-            &free,
-        )
+        detect_contacts(m, &bt, &mut ContactSearch::new(), &tets, corners)
     }
 
     #[test]
@@ -250,7 +250,7 @@ mod tests {
     #[test]
     fn touching_pairs_hold_every_boundary_contact() {
         let m = two_bars(0.001, 0.1);
-        let near = super::super::search::touching_pairs(&m, 2, 1e-9);
+        let near = super::super::search::touching_pairs(&m, 1e-9);
         assert!(!near.is_empty());
         let bt = BoundaryTets::new(&m);
         // Every contact pair of two boundary tets is among them.

@@ -10,13 +10,16 @@ mod detect;
 pub mod penalty;
 pub mod search;
 mod surface;
+mod tets;
 
 pub use detect::{
-    contact_pairs, detect_contacts, tet_pair_contact, BoundaryTets, FaceList, THERMAL_SEARCH,
+    contact_pairs, detect_contacts, tet_pair_contact, BoundaryTets, FaceList, TetFaces,
+    THERMAL_SEARCH,
 };
 pub use penalty::{pair_stiffness, tet_tet_penalty, PenaltyParams, PenaltyResult};
-pub use search::{finds_pair, BodyTets, Candidate, ContactSearch, SearchOptions};
+pub use search::{finds_pair, BodyTets, Candidate, ContactSearch, SearchOptions, TetRole};
 pub use surface::{tet_tet_contact_surface, ContactSurface, TetSide};
+pub use tets::{ContactTets, OwnAndGhosts};
 
 /// One contact: a boundary tet of one body overlapping a boundary tet of
 /// another. `target < contactor` (element ids) so each pair has one form.

@@ -12,6 +12,8 @@
 //! falling alone costs one box test; the trees of bodies that never move
 //! are built once.
 
+use std::collections::HashMap;
+
 use parry3d_f64::bounding_volume::Aabb;
 use parry3d_f64::math::Point;
 use parry3d_f64::partitioning::{Bvh, BvhBuildStrategy};
@@ -38,49 +40,93 @@ pub fn finds_pair(a: u32, held_a: bool, b: u32, held_b: bool) -> bool {
     }
 }
 
-/// The tets the search runs over, per body. Lists hold element ids.
+/// The tets the search runs over, grouped by the bodies present. Tets are
+/// named by handles (element ids, or local indices over own and ghost
+/// tets: the caller's choice), bodies by their global ids.
 #[derive(Debug, Clone, Default)]
 pub struct BodyTets {
-    /// Per body, its boundary tets (a face on its surface), ascending.
+    /// Global id of each body present, ascending.
+    pub body: Vec<u32>,
+    /// Per body: held (fixed or moved kinematically).
+    pub held: Vec<bool>,
+    /// Per body: never moves (its trees are kept between searches).
+    pub fixed: Vec<bool>,
+    /// Per body, its boundary tets (a face on its surface).
     pub boundary: Vec<Vec<u32>>,
-    /// Per body, its other tets, ascending (contactors of the thermal
-    /// contact only: a face that penetrates deeply lies in them).
+    /// Per body, its other tets (contactors of the thermal contact only: a
+    /// face that penetrates deeply lies in them).
     pub interior: Vec<Vec<u32>>,
     /// Per body, the positions in `boundary` of the tets this rank owns:
     /// the ones it searches from.
     pub owned: Vec<Vec<u32>>,
 }
 
+/// What the search needs to know of one tet.
+#[derive(Debug, Clone, Copy)]
+pub struct TetRole {
+    /// Global body id.
+    pub body: u32,
+    /// Whether it has a face on its body's boundary.
+    pub boundary: bool,
+    /// Whether this rank searches from it (owns it).
+    pub owned: bool,
+}
+
 impl BodyTets {
-    /// The lists of `mesh` with `bodies` bodies; this rank owns the tets
-    /// for which `owns` holds.
+    /// The lists of tets `0..n` with roles `role(handle)`; `held(body)` and
+    /// `fixed(body)` by global body id.
     pub fn new(
-        mesh: &TetMesh,
-        bt: &BoundaryTets,
-        bodies: usize,
-        owns: impl Fn(u32) -> bool,
+        n: u32,
+        role: impl Fn(u32) -> TetRole,
+        held: impl Fn(u32) -> bool,
+        fixed: impl Fn(u32) -> bool,
     ) -> BodyTets {
+        let roles: Vec<TetRole> = (0..n).map(&role).collect();
+        let mut body: Vec<u32> = roles.iter().map(|r| r.body).collect();
+        body.sort_unstable();
+        body.dedup();
+        let nb = body.len();
         let mut l = BodyTets {
-            boundary: vec![Vec::new(); bodies],
-            interior: vec![Vec::new(); bodies],
-            owned: vec![Vec::new(); bodies],
+            held: body.iter().map(|&b| held(b)).collect(),
+            fixed: body.iter().map(|&b| fixed(b)).collect(),
+            boundary: vec![Vec::new(); nb],
+            interior: vec![Vec::new(); nb],
+            owned: vec![Vec::new(); nb],
+            body,
         };
-        let mut is_boundary = vec![false; mesh.tets.len()];
-        for &e in &bt.elems {
-            is_boundary[e as usize] = true;
-        }
-        for (e, &b) in mesh.body.iter().enumerate() {
-            let (b, e32) = (b as usize, e as u32);
-            if is_boundary[e] {
-                if owns(e32) {
+        for (h, r) in roles.iter().enumerate() {
+            let b = l.body.binary_search(&r.body).expect("listed");
+            if r.boundary {
+                if r.owned {
                     l.owned[b].push(l.boundary[b].len() as u32);
                 }
-                l.boundary[b].push(e32);
+                l.boundary[b].push(h as u32);
             } else {
-                l.interior[b].push(e32);
+                l.interior[b].push(h as u32);
             }
         }
         l
+    }
+
+    /// The lists of a whole mesh's element ids, this rank owning the tets
+    /// for which `owns` holds (bodies free unless `held` says otherwise).
+    pub fn of_mesh(
+        mesh: &TetMesh,
+        bt: &BoundaryTets,
+        owns: impl Fn(u32) -> bool,
+        held: impl Fn(u32) -> bool,
+        fixed: impl Fn(u32) -> bool,
+    ) -> BodyTets {
+        BodyTets::new(
+            mesh.tets.len() as u32,
+            |e| TetRole {
+                body: mesh.body[e as usize],
+                boundary: bt.mask[e as usize] != 0,
+                owned: owns(e),
+            },
+            held,
+            fixed,
+        )
     }
 }
 
@@ -150,42 +196,45 @@ impl Tree {
     }
 }
 
+/// A fingerprint of a tet list (by the tets' ids), so a kept tree is
+/// reused only for the same tets.
+fn fingerprint(list: &[u32], id: &impl Fn(u32) -> u32) -> u64 {
+    list.iter()
+        .fold(0xcbf2_9ce4_8422_2325u64 ^ list.len() as u64, |h, &t| {
+            (h ^ u64::from(id(t))).wrapping_mul(0x0000_0100_0000_01b3)
+        })
+}
+
 /// The contact search, with the trees of the bodies that never move kept
 /// between searches.
 #[derive(Default)]
 pub struct ContactSearch {
-    boundary_trees: Vec<Option<Tree>>,
-    interior_trees: Vec<Option<Tree>>,
+    /// Per global body id: (fingerprint of the tets, tree) of its boundary
+    /// and of its interior tets.
+    boundary_trees: HashMap<u32, (u64, Tree)>,
+    interior_trees: HashMap<u32, (u64, Tree)>,
 }
 
 impl ContactSearch {
-    /// A search over `bodies` bodies.
-    pub fn new(bodies: usize) -> ContactSearch {
-        ContactSearch {
-            boundary_trees: (0..bodies).map(|_| None).collect(),
-            interior_trees: (0..bodies).map(|_| None).collect(),
-        }
+    /// A new search (no trees kept yet).
+    pub fn new() -> ContactSearch {
+        ContactSearch::default()
     }
 
     /// The candidate pairs this rank finds: each owned boundary tet of a
     /// body against the tets of every other body it searches (see
-    /// [`finds_pair`]) whose boxes come within the margin. `corners(e)`
-    /// are the current corners of tet `e`; `held[b]` whether body b is
-    /// held (fixed or moved kinematically), `fixed[b]` whether it never
-    /// moves (its trees are kept). Candidates come grouped by searching
-    /// body, then by the other body, both ascending.
+    /// [`finds_pair`]) whose boxes come within the margin. `corners(h)`
+    /// are the current corners of tet `h`, `id(h)` a stable id (kept trees
+    /// are matched by it). Candidates come grouped by searching body, then
+    /// by the other body, both ascending.
     pub fn find(
         &mut self,
         tets: &BodyTets,
         corners: impl Fn(u32) -> [[f64; 3]; 4],
-        held: &[bool],
-        fixed: &[bool],
+        id: impl Fn(u32) -> u32,
         opts: SearchOptions,
     ) -> Vec<Candidate> {
-        let nb = tets.boundary.len();
-        if self.boundary_trees.len() != nb {
-            *self = ContactSearch::new(nb);
-        }
+        let nb = tets.body.len();
         let (pad, margin) = (opts.pad, opts.margin);
         let bounds = |e: u32| grown(tet_bounds(&corners(e)), pad, 0.0);
         // Boxes of every boundary tet, and each body's box from them.
@@ -217,6 +266,22 @@ impl ContactSearch {
             .map(|&b| aabb(&body_box[b as usize], 0.0))
             .collect();
         let body_tree = Bvh::from_leaves(BvhBuildStrategy::Binned, &leaves);
+        // Kept trees of fixed bodies, dropped when their tets changed.
+        for (i, &b) in tets.body.iter().enumerate() {
+            if !tets.fixed[i] {
+                continue;
+            }
+            for (kept, list) in [
+                (&mut self.boundary_trees, &tets.boundary[i]),
+                (&mut self.interior_trees, &tets.interior[i]),
+            ] {
+                if let Some((key, _)) = kept.get(&b) {
+                    if *key != fingerprint(list, &id) {
+                        kept.remove(&b);
+                    }
+                }
+            }
+        }
         let mut moving: Vec<Option<Tree>> = (0..nb).map(|_| None).collect();
         let mut moving_interior: Vec<Option<Tree>> = (0..nb).map(|_| None).collect();
         let mut found = Vec::new();
@@ -224,9 +289,11 @@ impl ContactSearch {
             if tets.owned[ba].is_empty() {
                 continue;
             }
+            let (gb_a, held_a) = (tets.body[ba], tets.held[ba]);
             let pairs_with = |bb: usize| {
-                let allowed = opts.held_pairs || !(held[ba] && held[bb]);
-                let boundary = allowed && finds_pair(ba as u32, held[ba], bb as u32, held[bb]);
+                let held_b = tets.held[bb];
+                let allowed = opts.held_pairs || !(held_a && held_b);
+                let boundary = allowed && finds_pair(gb_a, held_a, tets.body[bb], held_b);
                 let interior = allowed && opts.interior && !tets.interior[bb].is_empty();
                 (boundary, interior)
             };
@@ -238,19 +305,23 @@ impl ContactSearch {
             near.sort_unstable();
             for bb in near {
                 let (with_boundary, with_interior) = pairs_with(bb);
-                if with_boundary && fixed[bb] && self.boundary_trees[bb].is_none() {
-                    self.boundary_trees[bb] = Some(Tree::new(boxes[bb].clone()));
+                let gb = tets.body[bb];
+                if with_boundary && tets.fixed[bb] && !self.boundary_trees.contains_key(&gb) {
+                    let key = fingerprint(&tets.boundary[bb], &id);
+                    let tree = Tree::new(boxes[bb].clone());
+                    self.boundary_trees.insert(gb, (key, tree));
                 }
-                if with_interior && fixed[bb] && self.interior_trees[bb].is_none() {
+                if with_interior && tets.fixed[bb] && !self.interior_trees.contains_key(&gb) {
+                    let key = fingerprint(&tets.interior[bb], &id);
                     let b: Vec<_> = tets.interior[bb].iter().map(|&e| bounds(e)).collect();
-                    self.interior_trees[bb] = Some(Tree::new(b));
+                    self.interior_trees.insert(gb, (key, Tree::new(b)));
                 }
-                let tree_b = with_boundary.then(|| match &self.boundary_trees[bb] {
-                    Some(t) => t,
+                let tree_b = with_boundary.then(|| match self.boundary_trees.get(&gb) {
+                    Some((_, t)) => t,
                     None => moving[bb].get_or_insert_with(|| Tree::new(boxes[bb].clone())),
                 });
-                let tree_i = with_interior.then(|| match &self.interior_trees[bb] {
-                    Some(t) => t,
+                let tree_i = with_interior.then(|| match self.interior_trees.get(&gb) {
+                    Some((_, t)) => t,
                     None => moving_interior[bb].get_or_insert_with(|| {
                         Tree::new(tets.interior[bb].iter().map(|&e| bounds(e)).collect())
                     }),
@@ -287,18 +358,17 @@ impl ContactSearch {
 /// (padded by `pad` of their size), as (lower, higher) element id,
 /// sorted: the links that keep touching bodies on one rank when the mesh
 /// is partitioned. Every tet is searched from (one process).
-pub fn touching_pairs(mesh: &TetMesh, bodies: usize, pad: f64) -> Vec<(u32, u32)> {
+pub fn touching_pairs(mesh: &TetMesh, pad: f64) -> Vec<(u32, u32)> {
     let bt = BoundaryTets::new(mesh);
-    let tets = BodyTets::new(mesh, &bt, bodies, |_| true);
-    let all = vec![false; bodies];
+    let tets = BodyTets::of_mesh(mesh, &bt, |_| true, |_| false, |_| false);
     let opts = SearchOptions {
         margin: 0.0,
         pad,
         interior: false,
         held_pairs: true,
     };
-    let mut pairs: Vec<(u32, u32)> = ContactSearch::new(bodies)
-        .find(&tets, |e| mesh.element_coords(e as usize), &all, &all, opts)
+    let mut pairs: Vec<(u32, u32)> = ContactSearch::new()
+        .find(&tets, |e| mesh.element_coords(e as usize), |e| e, opts)
         .into_iter()
         .map(|c| (c.a.min(c.b), c.a.max(c.b)))
         .collect();
@@ -324,19 +394,15 @@ mod tests {
     /// Every pair of tets of different bodies whose boxes come within
     /// `margin`, with at least one boundary tet: the brute-force answer.
     fn brute(m: &TetMesh, bt: &BoundaryTets, margin: f64, interior: bool) -> Vec<(u32, u32)> {
-        let boundary: Vec<bool> = {
-            let mut b = vec![false; m.tets.len()];
-            bt.elems.iter().for_each(|&e| b[e as usize] = true);
-            b
-        };
+        let boundary = |e: usize| bt.mask[e] != 0;
         let mut out = Vec::new();
         for x in 0..m.tets.len() {
             for y in x + 1..m.tets.len() {
                 if m.body[x] == m.body[y] {
                     continue;
                 }
-                let both = boundary[x] && boundary[y];
-                let one = boundary[x] || boundary[y];
+                let both = boundary(x) && boundary(y);
+                let one = boundary(x) || boundary(y);
                 if !(both || (interior && one)) {
                     continue;
                 }
@@ -356,7 +422,8 @@ mod tests {
     fn finds_every_pair_once_over_any_split() {
         let m = row(3, 0.1);
         let bt = BoundaryTets::new(&m);
-        let (held, fixed) = (vec![true, false, false], vec![true, false, false]);
+        let held = |b: u32| b == 0;
+        let corners = |e: u32| m.element_coords(e as usize);
         for interior in [false, true] {
             let opts = SearchOptions {
                 margin: 0.05,
@@ -364,14 +431,8 @@ mod tests {
                 interior,
                 held_pairs: true,
             };
-            let corners = |e: u32| m.element_coords(e as usize);
-            let all = ContactSearch::new(3).find(
-                &BodyTets::new(&m, &bt, 3, |_| true),
-                corners,
-                &held,
-                &fixed,
-                opts,
-            );
+            let tets = BodyTets::of_mesh(&m, &bt, |_| true, held, held);
+            let all = ContactSearch::new().find(&tets, corners, |e| e, opts);
             let mut got: Vec<(u32, u32)> =
                 all.iter().map(|c| (c.a.min(c.b), c.a.max(c.b))).collect();
             got.sort_unstable();
@@ -382,16 +443,16 @@ mod tests {
             // The searching tet is a boundary tet, of the body the rule names.
             for c in &all {
                 let (ba, bb) = (m.body[c.a as usize], m.body[c.b as usize]);
-                assert!(bt.elems.binary_search(&c.a).is_ok());
+                assert!(bt.mask[c.a as usize] != 0);
                 if c.b_boundary {
-                    assert!(finds_pair(ba, held[ba as usize], bb, held[bb as usize]));
+                    assert!(finds_pair(ba, held(ba), bb, held(bb)));
                 }
             }
             // Split over three "ranks": the same pairs, each once.
             let mut split: Vec<Candidate> = (0..3)
                 .flat_map(|r| {
-                    let tets = BodyTets::new(&m, &bt, 3, |e| e % 3 == r);
-                    ContactSearch::new(3).find(&tets, corners, &held, &fixed, opts)
+                    let tets = BodyTets::of_mesh(&m, &bt, |e| e % 3 == r, held, held);
+                    ContactSearch::new().find(&tets, corners, |e| e, opts)
                 })
                 .collect();
             let mut whole = all.clone();
@@ -406,37 +467,38 @@ mod tests {
     fn held_pairs_and_kept_trees() {
         let m = row(2, 0.1);
         let bt = BoundaryTets::new(&m);
-        let tets = BodyTets::new(&m, &bt, 2, |_| true);
+        let tets = BodyTets::of_mesh(&m, &bt, |_| true, |_| true, |_| true);
         let corners = |e: u32| m.element_coords(e as usize);
-        let both_held = [true, true];
         let mut opts = SearchOptions {
             margin: 0.0,
             pad: 1e-9,
             interior: false,
             held_pairs: false,
         };
-        let mut s = ContactSearch::new(2);
-        assert!(s
-            .find(&tets, corners, &both_held, &both_held, opts)
-            .is_empty());
+        let mut s = ContactSearch::new();
+        assert!(s.find(&tets, corners, |e| e, opts).is_empty());
         opts.held_pairs = true;
-        let first = s.find(&tets, corners, &both_held, &both_held, opts);
+        let first = s.find(&tets, corners, |e| e, opts);
         assert!(!first.is_empty());
-        // The fixed bodies' trees are kept and give the same answer.
-        assert!(s.boundary_trees.iter().any(Option::is_some));
-        assert_eq!(s.find(&tets, corners, &both_held, &both_held, opts), first);
+        // The fixed bodies' trees are kept and give the same answer; a
+        // different tet list (other ids) is not served a kept tree.
+        assert!(!s.boundary_trees.is_empty());
+        assert_eq!(s.find(&tets, corners, |e| e, opts), first);
+        let key = s.boundary_trees.values().next().unwrap().0;
+        s.find(&tets, corners, |e| e + 1, opts);
+        assert_ne!(s.boundary_trees.values().next().unwrap().0, key);
         // Pairs with a hot flag overlap without the margin.
         assert!(first.iter().all(|c| c.hot));
     }
 
     #[test]
     fn touching_pairs_link_only_touching_bodies() {
-        let near = touching_pairs(&row(2, 0.001), 2, 1e-9);
+        let near = touching_pairs(&row(2, 0.001), 1e-9);
         assert!(!near.is_empty());
         let m = row(2, 0.001);
         assert!(near
             .iter()
             .all(|&(a, b)| a < b && m.body[a as usize] != m.body[b as usize]));
-        assert!(touching_pairs(&row(2, -0.01), 2, 1e-9).is_empty());
+        assert!(touching_pairs(&row(2, -0.01), 1e-9).is_empty());
     }
 }

@@ -1,24 +1,30 @@
 //! Contact candidates of the explicit dynamics: the one contact search
-//! ([`crate::contact::search`]) at each detection, the penalty candidates
-//! pruned by face planes and their balancing over the ranks
-//! (`balance_pairs`), the thermal-only candidates of a coupled run, the
-//! ghosts and halo they need, and the thermal narrow phase on them
-//! (`thermal_contacts`, seed 000 sec 3.1). The penalty potential itself is
-//! `contact::penalty`.
+//! ([`crate::contact::search`]) at each detection over this rank's tets and
+//! the ghost copies of other ranks' tets within the margin
+//! ([`crate::parallel::ghosts`]), the penalty candidates pruned by face
+//! planes and their balancing over the ranks (`balance_pairs`), the
+//! thermal-only candidates of a coupled run, the ghosts and halo they
+//! need, and the thermal narrow phase on them (`thermal_contacts`, seed 000
+//! sec 3.1). The penalty potential itself is `contact::penalty`.
+
+use std::collections::HashMap;
 
 use mpi::collective::SystemOperation;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
 use nalgebra::Matrix3;
 
-use super::{ExplicitDomain, NONE};
+use super::domain::PairTet;
+use super::ExplicitDomain;
 use crate::contact::penalty::pair_stiffness;
-use crate::contact::{tet_pair_contact, ContactPair, SearchOptions};
+use crate::contact::{
+    tet_pair_contact, ContactPair, OwnAndGhosts, PairDofs, SearchOptions, TetFaces,
+};
 use crate::error::{Error, Result};
 use crate::geometry::{face_planes, planes_within, TetPlanes};
 use crate::mechanics::MechElement;
-use crate::model::Model;
-use crate::parallel::{Halo, Part};
+use crate::parallel::exchange::all_to_all;
+use crate::parallel::Halo;
 
 /// Substeps the fastest node should need before contact re-detection.
 const DETECT_EVERY: f64 = 10.0;
@@ -45,108 +51,183 @@ pub(super) struct Candidate {
     pub(super) reduced_mass: f64,
 }
 
+/// A tet of a pair as it travels between ranks: what the pair's rank
+/// keeps of it, and its nodes (global id, owner, PETSc number).
+#[derive(Debug, Clone, Copy, Default)]
+struct TetRecord {
+    info: PairTet,
+    nodes: [[u32; 3]; 4],
+}
+
+/// Values per tet record and per pair record in an `f64` message.
+const TET_F64S: usize = 5 + 12;
+const PAIR_F64S: usize = 2 + 2 * TET_F64S;
+
+impl TetRecord {
+    fn of(og: &OwnAndGhosts, h: u32) -> TetRecord {
+        let n = og.own.len() as u32;
+        let (s, t) = if h < n {
+            (og.own, h as usize)
+        } else {
+            (og.ghosts, (h - n) as usize)
+        };
+        TetRecord {
+            info: PairTet {
+                gid: s.gid[t],
+                body: s.body[t],
+                material: s.material[t],
+                mask: s.mask[t],
+                bits: s.node_bits(t),
+            },
+            nodes: s.tets[t].map(|k| {
+                let k = k as usize;
+                [s.node_gid[k], s.node_owner[k], s.node_petsc[k]]
+            }),
+        }
+    }
+
+    fn push(&self, out: &mut Vec<f64>) {
+        let i = &self.info;
+        out.extend_from_slice(&[
+            f64::from(i.gid),
+            f64::from(i.body),
+            f64::from(i.material),
+            f64::from(i.mask),
+            f64::from(i.bits),
+        ]);
+        for n in &self.nodes {
+            out.extend(n.iter().map(|&v| f64::from(v)));
+        }
+    }
+
+    fn read(v: &[f64]) -> TetRecord {
+        let mut r = TetRecord {
+            info: PairTet {
+                gid: v[0] as u32,
+                body: v[1] as u32,
+                material: v[2] as u32,
+                mask: v[3] as u8,
+                bits: v[4] as u8,
+            },
+            ..Default::default()
+        };
+        for k in 0..4 {
+            for j in 0..3 {
+                r.nodes[k][j] = v[5 + 3 * k + j] as u32;
+            }
+        }
+        r
+    }
+}
+
+/// A penalty pair as it travels: its two tets, stiffness and reduced mass.
+#[derive(Debug, Clone, Copy)]
+struct PairRecord {
+    a: TetRecord,
+    b: TetRecord,
+    stiffness: f64,
+    reduced_mass: f64,
+}
+
+/// Local index of a node of the part by global id (`gids`: owned ones
+/// ascending, then ghosts ascending, `n_owned` of them owned).
+fn part_local(gids: &[u32], n_owned: usize, gid: u32) -> Option<u32> {
+    let (owned, ghosts) = gids.split_at(n_owned);
+    owned
+        .binary_search(&gid)
+        .map(|i| i as u32)
+        .or_else(|_| ghosts.binary_search(&gid).map(|i| (n_owned + i) as u32))
+        .ok()
+}
+
+/// Tets listed once each, by global id, with their local nodes.
+#[derive(Default)]
+struct TetSlots {
+    slots: HashMap<u32, u32>,
+    tets: Vec<[u32; 4]>,
+    info: Vec<PairTet>,
+}
+
+impl TetSlots {
+    /// The slot of tet `t`, listed now if new.
+    fn slot(&mut self, t: &TetRecord, local: &impl Fn(u32) -> u32) -> u32 {
+        let (tets, info) = (&mut self.tets, &mut self.info);
+        *self.slots.entry(t.info.gid).or_insert_with(|| {
+            tets.push(t.nodes.map(|n| local(n[0])));
+            info.push(t.info);
+            (tets.len() - 1) as u32
+        })
+    }
+}
+
 impl ExplicitDomain {
-    /// Collective. Refresh every node's position, rebuild the contact
-    /// candidates, the ghost list and the halo; reorder elements so those
-    /// touching the halo come first.
-    pub(super) fn detect(
-        &mut self,
-        comm: &SimpleCommunicator,
-        model: &Model,
-        part: &Part,
-    ) -> Result<()> {
+    /// Collective. Rebuild the contact candidates from the one contact
+    /// search over this rank's tets and the ghost copies of the tets of
+    /// other ranks within the margin, the contact ghosts and the halo;
+    /// reorder elements so those touching the halo come first.
+    pub(super) fn detect(&mut self, comm: &SimpleCommunicator) -> Result<()> {
         let clock = std::time::Instant::now();
-        let mesh = &model.mesh;
-        // Every node's current position.
-        self.gather_positions(comm);
-        // Candidate pairs.
         self.candidates.clear();
         self.thermal_only.clear();
         self.margin = self.adapted_margin(comm);
+        // The contact ghosts of the last detection go.
+        let np = self.n_part_nodes;
+        self.node_gid.truncate(np);
+        self.node_owner.truncate(np);
+        self.node_petsc.truncate(np);
+        self.contact_local.clear();
+        self.x.truncate(np);
+        self.v.truncate(np);
+        let mut penalty_pairs: Vec<PairRecord> = Vec::new();
+        let mut thermal_pairs: Vec<(TetRecord, TetRecord)> = Vec::new();
         if self.penalty.is_some() || self.thermal {
-            let weights = self.find_pairs(model);
-            if let Some((_, penalty)) = self.penalty {
-                self.balance_pairs(comm, model, penalty, &weights);
+            for (p, x) in self.part_tets.x.iter_mut().zip(&self.x) {
+                *p = [x.x, x.y, x.z];
             }
+            let own = std::mem::take(&mut self.part_tets);
+            let ghosts =
+                crate::parallel::ghosts::exchange_ghosts(comm, &own, self.margin, self.thermal);
+            let og = OwnAndGhosts {
+                own: &own,
+                ghosts: &ghosts,
+            };
+            let (kept, weights) = self.find_pairs(&og, &mut thermal_pairs);
+            penalty_pairs = self.balance_pairs(comm, &og, &kept, &weights);
+            self.part_tets = own;
         }
-        // Ghosts: those of the elements, then those of the contacts, in
-        // ascending node order. The tets of the pairs are listed once each
-        // (their corners and planes are built once per substep, not once
-        // per pair). Marks instead of sorting the ~8 nodes per pair.
-        for &n in &self.node_of_local[self.n_owned + self.n_elem_ghosts..] {
-            self.local_of[n as usize] = NONE;
-        }
-        self.node_of_local
-            .truncate(self.n_owned + self.n_elem_ghosts);
-        let mut tets: Vec<u32> = Vec::new();
-        let mut contact_nodes: Vec<u32> = Vec::new();
-        for c in self.candidates.iter_mut() {
-            for (e, slot) in [(c.a, &mut c.ta), (c.b, &mut c.tb)] {
-                let s = &mut self.tet_slot[e as usize];
-                if *s == NONE {
-                    *s = tets.len() as u32;
-                    tets.push(e);
-                    for &n in &mesh.tets[e as usize] {
-                        if self.local_of[n as usize] == NONE {
-                            // Marked as taken until numbered below.
-                            self.local_of[n as usize] = NONE - 1;
-                            contact_nodes.push(n);
-                        }
-                    }
-                }
-                *slot = *s;
-            }
-        }
-        for &e in &tets {
-            self.tet_slot[e as usize] = NONE;
-        }
-        // The thermal-only candidates' nodes are ghosts too (their
-        // corners are read at thermal detections).
-        for &(a, b) in &self.thermal_only {
-            for e in [a, b] {
-                for &n in &mesh.tets[e as usize] {
-                    if self.local_of[n as usize] == NONE {
-                        self.local_of[n as usize] = NONE - 1;
-                        contact_nodes.push(n);
-                    }
-                }
-            }
-        }
-        contact_nodes.sort_unstable();
-        for n in contact_nodes {
-            self.local_of[n as usize] = self.node_of_local.len() as u32;
-            self.node_of_local.push(n);
-        }
+        self.install(&penalty_pairs, &thermal_pairs);
         self.refresh_local_arrays();
-        self.pair_tets = tets
-            .iter()
-            .map(|&e| mesh.tets[e as usize].map(|n| self.local_of[n as usize]))
-            .collect();
         // Fresh candidates: planes rebuilt on demand, no linearisations.
-        self.pair_planes = vec![TetPlanes::new(&[[0.0; 3]; 4]); tets.len()];
-        self.planes_stamp = vec![0; tets.len()];
-        self.lin_of = vec![NONE; self.candidates.len()];
+        let nt = self.pair_tets.len();
+        self.pair_planes = vec![TetPlanes::new(&[[0.0; 3]; 4]); nt];
+        self.planes_stamp = vec![0; nt];
+        self.lin_of = vec![super::NONE; self.candidates.len()];
         self.linearized.clear();
         self.witness = vec![0; self.candidates.len()];
-        let ghosts: Vec<(u32, u32, u32)> = (self.n_owned..self.node_of_local.len())
-            .map(|l| {
-                let n = self.node_of_local[l];
-                (n, part.whole().node_owner[n as usize], l as u32)
-            })
+        let ghosts: Vec<(u32, u32, u32)> = (self.n_owned..self.node_gid.len())
+            .map(|l| (self.node_gid[l], self.node_owner[l], l as u32))
             .collect();
-        let n_owned = self.n_owned as u32;
-        let local_of = &self.local_of;
+        let owned = &self.node_gid[..self.n_owned];
         let halo = Halo::new(comm, &ghosts, |g| {
-            let l = local_of[g as usize];
-            (l < n_owned).then_some(l)
+            owned.binary_search(&g).ok().map(|i| i as u32)
         });
         self.halo = crate::parallel::agree(comm, halo.map_err(Error::Partition))?;
         // Ghost positions and velocities from their owners.
         self.forward_state(comm);
-        // Elements touching a ghost node first (their contributions are
-        // sent), each group by element id: the two id-ordered groups of the
-        // last detection merged back into id order, then split anew, in
-        // linear time.
+        self.order_elements();
+        self.build_assembly(comm);
+        self.x_detect = self.x[..self.n_owned].to_vec();
+        self.detected_at = Some(self.counters.substeps);
+        self.counters.detections += 1;
+        self.counters.detect_time += clock.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    /// Elements touching a ghost node first (their contributions are
+    /// sent), each group by element id: the two id-ordered groups of the
+    /// last detection merged back into id order, then split anew, in
+    /// linear time.
+    fn order_elements(&mut self) {
         let n_owned = self.n_owned;
         let touches = |el: &MechElement| el.nodes.iter().any(|&l| l as usize >= n_owned);
         let (ids, ne, nb_old) = (&self.elem_ids, self.elem_ids.len(), self.n_boundary);
@@ -185,101 +266,90 @@ impl ExplicitDomain {
         }
         // Every substep writes every element's stress: no need to permute it.
         self.stress.resize(self.elements.len(), Matrix3::zeros());
-        self.build_assembly(comm, part);
-        self.x_detect = self.x[..self.n_owned].to_vec();
-        self.detected_at = Some(self.counters.substeps);
-        self.counters.detections += 1;
-        self.counters.detect_time += clock.elapsed().as_secs_f64();
-        Ok(())
     }
 
-    /// This rank's candidates from the one contact search
-    /// ([`crate::contact::search`]), with their estimated costs (see
+    /// This rank's candidates from the one contact search over own and
+    /// ghost tets (handles of `og`), with their estimated costs (see
     /// [`Self::balance_pairs`]). Pairs of two boundary tets of bodies not
     /// both held are the penalty candidates, pruned by face planes; when
     /// the thermal contact is coupled, the search also returns a boundary
     /// tet against another body's interior tets and pairs of two held
-    /// bodies, kept for the thermal contact only.
-    fn find_pairs(&mut self, model: &Model) -> Vec<u64> {
-        let mesh = &model.mesh;
+    /// bodies, kept for the thermal contact only (`thermal`).
+    fn find_pairs(
+        &mut self,
+        og: &OwnAndGhosts,
+        thermal: &mut Vec<(TetRecord, TetRecord)>,
+    ) -> (Vec<(u32, u32)>, Vec<u64>) {
         let margin = self.margin;
-        let x_all = &self.x_all;
-        let corners = |e: u32| mesh.tets[e as usize].map(|n| x_all[n as usize]);
         let opts = SearchOptions {
             margin,
             pad: 0.0,
             interior: self.thermal,
             held_pairs: self.thermal,
         };
-        let found = self.search.find(
-            &self.body_tets,
-            corners,
-            &self.body_held,
-            &self.body_fixed,
-            opts,
-        );
+        let (held, fixed) = (&self.body_held, &self.body_fixed);
+        let tets = og.body_tets(|b| held[b as usize], |b| fixed[b as usize]);
+        let found = og.search(&mut self.search, &tets, opts);
         // Not in the seeds: the penalty potential sums over pairs of
         // boundary tets (a face on the surface), like the contact
         // surface of seed 000 sec 3.1; a tet that meets the surface only
         // at an edge or corner overlaps a shallow intruder by O(δ²).
-        let penalty = self.penalty.map(|(_, pn)| pn);
-        let bt = &self.boundary;
-        let planes: Vec<[[f64; 4]; 4]> = match penalty {
-            Some(_) => bt.elems.iter().map(|&e| face_planes(&corners(e))).collect(),
-            None => Vec::new(),
+        let penalty = self.penalty.is_some();
+        let mut planes: Vec<Option<[[f64; 4]; 4]>> = vec![None; og.len()];
+        let mut plane = |h: u32| -> [[f64; 4]; 4] {
+            *planes[h as usize].get_or_insert_with(|| face_planes(&og.corners(h)))
         };
-        let mut kept: Vec<(u32, u32, bool)> = Vec::new();
+        let body_of = |h: u32| {
+            let n = og.own.len() as u32;
+            if h < n {
+                og.own.body[h as usize]
+            } else {
+                og.ghosts.body[(h - n) as usize]
+            }
+        };
+        let mut kept: Vec<(u32, u32)> = Vec::new();
+        let mut weights: Vec<u64> = Vec::new();
         for c in found {
-            let held = |e: u32| self.body_held[mesh.body[e as usize] as usize];
-            if penalty.is_some() && c.b_boundary && !(held(c.a) && held(c.b)) {
-                let (ia, ib) = (bt.index[c.a as usize], bt.index[c.b as usize]);
-                if planes_within(
-                    (&corners(c.a), &planes[ia as usize]),
-                    (&corners(c.b), &planes[ib as usize]),
-                    margin,
-                ) {
-                    kept.push((c.a, c.b, c.hot));
+            let both_held = held[body_of(c.a) as usize] && held[body_of(c.b) as usize];
+            if penalty && c.b_boundary && !both_held {
+                let (pa, pb) = (plane(c.a), plane(c.b));
+                if planes_within((&og.corners(c.a), &pa), (&og.corners(c.b), &pb), margin) {
+                    kept.push((c.a, c.b));
+                    weights.push(if c.hot { HOT_PAIR_WEIGHT } else { 1 });
                 }
             } else if self.thermal {
-                self.thermal_only.push((c.a, c.b));
+                thermal.push((TetRecord::of(og, c.a), TetRecord::of(og, c.b)));
             }
         }
-        if let Some(pn) = penalty {
-            self.candidates = kept
-                .iter()
-                .map(|&(a, b, _)| self.candidate(model, pn, a, b))
-                .collect();
-        }
-        kept.iter()
-            .map(|&(_, _, hot)| if hot { HOT_PAIR_WEIGHT } else { 1 })
-            .collect()
+        (kept, weights)
     }
 
-    /// The candidate pair of boundary tets `a` (of a free body) and `b`.
-    fn candidate(&self, model: &Model, penalty: f64, a: u32, b: u32) -> Candidate {
-        let mesh = &model.mesh;
-        let (ba, bb) = (mesh.body[a as usize], mesh.body[b as usize]);
-        let (va, vb) = (
-            mesh.element_volume(a as usize),
-            mesh.element_volume(b as usize),
-        );
+    /// The penalty pair of tets `a` (of a free body) and `b`, handles of `og`.
+    fn pair_record(&self, og: &OwnAndGhosts, a: u32, b: u32) -> PairRecord {
+        let (ra, rb) = (TetRecord::of(og, a), TetRecord::of(og, b));
+        let volume = |h: u32| {
+            let n = og.own.len() as u32;
+            if h < n {
+                og.own.volume0[h as usize]
+            } else {
+                og.ghosts.volume0[(h - n) as usize]
+            }
+        };
+        let (va, vb) = (volume(a), volume(b));
         let (ma, mb) = (
-            model.material_of(a as usize).density * va,
-            model.material_of(b as usize).density * vb,
+            self.density[ra.info.material as usize] * va,
+            self.density[rb.info.material as usize] * vb,
         );
         // a is never held (held bodies do not search).
-        let reduced_mass = if self.body_held[bb as usize] {
+        let reduced_mass = if self.body_held[rb.info.body as usize] {
             ma
         } else {
             ma * mb / (ma + mb)
         };
-        Candidate {
-            a,
-            b,
-            ta: NONE,
-            tb: NONE,
-            body_a: ba,
-            body_b: bb,
+        let penalty = self.penalty.map_or(0.0, |(_, pn)| pn);
+        PairRecord {
+            a: ra,
+            b: rb,
             stiffness: pair_stiffness(penalty, va, vb),
             reduced_mass,
         }
@@ -294,101 +364,179 @@ impl ExplicitDomain {
     /// moves to the next ranks as one contiguous, spatially coherent run
     /// (the pair's nodes become ghosts there). The forces do not depend
     /// on which rank evaluates a pair (they are summed by pair key).
+    /// Returns the pairs this rank evaluates.
     fn balance_pairs(
-        &mut self,
+        &self,
         comm: &SimpleCommunicator,
-        model: &Model,
-        penalty: f64,
+        og: &OwnAndGhosts,
+        kept: &[(u32, u32)],
         weights: &[u64],
-    ) {
+    ) -> Vec<PairRecord> {
         let size = comm.size() as usize;
+        let rank = comm.rank() as usize;
+        let all_here = || {
+            kept.iter()
+                .map(|&(a, b)| self.pair_record(og, a, b))
+                .collect()
+        };
         if size == 1 {
-            return;
+            return all_here();
         }
         let mine: u64 = weights.iter().sum();
         let mut all = vec![0u64; size];
         comm.all_gather_into(&mine, &mut all[..]);
         let total: u64 = all.iter().sum();
         if total == 0 {
-            return;
+            return all_here();
         }
-        let mut at: u64 = all[..self.rank as usize].iter().sum();
-        let mut out: Vec<Vec<u32>> = vec![Vec::new(); size];
-        let mut keep = Vec::with_capacity(self.candidates.len());
-        for (c, &w) in self.candidates.iter().zip(weights) {
+        let mut at: u64 = all[..rank].iter().sum();
+        let mut out: Vec<Vec<f64>> = vec![Vec::new(); size];
+        let mut keep = Vec::with_capacity(kept.len());
+        for (&(a, b), &w) in kept.iter().zip(weights) {
             // The rank whose equal share holds the pair's mid-point.
             let mid = 2 * u128::from(at) + u128::from(w);
             let dest = ((mid * size as u128) / (2 * u128::from(total))).min(size as u128 - 1);
             at += w;
-            if dest == u128::from(self.rank) {
-                keep.push(*c);
+            let r = self.pair_record(og, a, b);
+            if dest as usize == rank {
+                keep.push(r);
             } else {
-                out[dest as usize].extend_from_slice(&[c.a, c.b]);
+                let o = &mut out[dest as usize];
+                o.extend_from_slice(&[r.stiffness, r.reduced_mass]);
+                r.a.push(o);
+                r.b.push(o);
             }
         }
-        let send_counts: Vec<i32> = out.iter().map(|v| v.len() as i32).collect();
-        let mut recv_counts = vec![0i32; size];
-        comm.all_to_all_into(&send_counts[..], &mut recv_counts[..]);
-        let displs = |c: &[i32]| -> Vec<i32> {
-            c.iter()
-                .scan(0, |acc, &x| {
-                    let d = *acc;
-                    *acc += x;
-                    Some(d)
-                })
-                .collect()
-        };
-        let send: Vec<u32> = out.concat();
-        let mut recv = vec![0u32; recv_counts.iter().sum::<i32>() as usize];
+        for rec in all_to_all(comm, &out)
+            .iter()
+            .flat_map(|v| v.chunks_exact(PAIR_F64S))
         {
-            let send =
-                mpi::datatype::Partition::new(&send[..], send_counts.clone(), displs(&send_counts));
-            let mut part = mpi::datatype::PartitionMut::new(
-                &mut recv[..],
-                recv_counts.clone(),
-                displs(&recv_counts),
-            );
-            comm.all_to_all_varcount_into(&send, &mut part);
+            keep.push(PairRecord {
+                stiffness: rec[0],
+                reduced_mass: rec[1],
+                a: TetRecord::read(&rec[2..2 + TET_F64S]),
+                b: TetRecord::read(&rec[2 + TET_F64S..]),
+            });
         }
-        for ab in recv.chunks_exact(2) {
-            keep.push(self.candidate(model, penalty, ab[0], ab[1]));
+        keep
+    }
+
+    /// Install the pairs this rank evaluates: their tets (each once), the
+    /// contact ghosts their nodes need (ascending global id), and the
+    /// candidates.
+    fn install(&mut self, penalty: &[PairRecord], thermal: &[(TetRecord, TetRecord)]) {
+        // Contact ghosts: the nodes of the pairs' tets that the part lacks.
+        let (np, no) = (self.n_part_nodes, self.n_owned);
+        let mut extra: Vec<[u32; 3]> = penalty
+            .iter()
+            .flat_map(|p| [p.a, p.b])
+            .chain(thermal.iter().flat_map(|&(a, b)| [a, b]))
+            .flat_map(|t| t.nodes)
+            .filter(|n| part_local(&self.node_gid[..np], no, n[0]).is_none())
+            .collect();
+        extra.sort_unstable_by_key(|n| n[0]);
+        extra.dedup_by_key(|n| n[0]);
+        for n in &extra {
+            self.contact_local.insert(n[0], self.node_gid.len() as u32);
+            self.node_gid.push(n[0]);
+            self.node_owner.push(n[1]);
+            self.node_petsc.push(n[2]);
         }
-        self.candidates = keep;
+        let (gids, contact) = (&self.node_gid[..np], &self.contact_local);
+        let local = |gid: u32| part_local(gids, no, gid).unwrap_or_else(|| contact[&gid]);
+        // The tets, each once, in the order the pairs name them.
+        let mut pt = TetSlots::default();
+        let candidates: Vec<Candidate> = penalty
+            .iter()
+            .map(|p| Candidate {
+                a: p.a.info.gid,
+                b: p.b.info.gid,
+                ta: pt.slot(&p.a, &local),
+                tb: pt.slot(&p.b, &local),
+                body_a: p.a.info.body,
+                body_b: p.b.info.body,
+                stiffness: p.stiffness,
+                reduced_mass: p.reduced_mass,
+            })
+            .collect();
+        let mut tt = TetSlots::default();
+        let thermal_only: Vec<(u32, u32)> = thermal
+            .iter()
+            .map(|(a, b)| (tt.slot(a, &local), tt.slot(b, &local)))
+            .collect();
+        self.candidates = candidates;
+        self.pair_tets = pt.tets;
+        self.pair_info = pt.info;
+        self.thermal_only = thermal_only;
+        self.thermal_tets = tt.tets;
+        self.thermal_info = tt.info;
     }
 
     /// Collective. The thermal contact pairs this rank holds at the
-    /// current positions (seed 000 sec 3.1): the narrow phase on its
-    /// candidates, penalty and thermal-only, so a coupled run searches
-    /// once per detection. When the candidates are due for renewal (a node
-    /// has used up half the margin) they are renewed first, as the next
-    /// substep would; every pair of tets that overlaps now is among them.
+    /// current positions (seed 000 sec 3.1), each with its dofs: the
+    /// narrow phase on its candidates, penalty and thermal-only, so a
+    /// coupled run searches once per detection. When the candidates are
+    /// due for renewal (a node has used up half the margin) they are
+    /// renewed first, as the next substep would; every pair of tets that
+    /// overlaps now is among them.
     pub fn thermal_contacts(
         &mut self,
         comm: &SimpleCommunicator,
-        model: &Model,
-        part: &Part,
-    ) -> Result<Vec<ContactPair>> {
+    ) -> Result<Vec<(ContactPair, PairDofs)>> {
         if self.redetect {
-            self.detect(comm, model, part)?;
+            self.detect(comm)?;
             self.redetect = false;
         }
-        let mesh = &model.mesh;
-        let corners = |e: u32| {
-            mesh.tets[e as usize].map(|n| {
-                let p = &self.x[self.local_of[n as usize] as usize];
+        let x = &self.x;
+        let corners = |t: &[u32; 4]| {
+            t.map(|l| {
+                let p = &x[l as usize];
                 [p.x, p.y, p.z]
             })
         };
-        let mut pairs: Vec<ContactPair> = self
+        let petsc = &self.node_petsc;
+        let one = |(ta, ia): (&[u32; 4], &PairTet), (tb, ib): (&[u32; 4], &PairTet)| {
+            let faces = |i: &PairTet| TetFaces {
+                id: i.gid,
+                mask: i.mask,
+                bits: i.bits,
+            };
+            let p = tet_pair_contact((faces(ia), &corners(ta)), (faces(ib), &corners(tb)))?;
+            let ((tt, it), (tc, ic)) = if ia.gid < ib.gid {
+                ((ta, ia), (tb, ib))
+            } else {
+                ((tb, ib), (ta, ia))
+            };
+            let mut d = PairDofs {
+                materials: [it.material, ic.material],
+                bodies: [it.body, ic.body],
+                ..Default::default()
+            };
+            for j in 0..4 {
+                d.petsc[j] = petsc[tt[j] as usize];
+                d.petsc[4 + j] = petsc[tc[j] as usize];
+            }
+            Some((p, d))
+        };
+        let mut pairs: Vec<(ContactPair, PairDofs)> = self
             .candidates
             .iter()
-            .map(|c| (c.a, c.b))
-            .chain(self.thermal_only.iter().copied())
-            .filter_map(|(a, b)| {
-                tet_pair_contact(mesh, &self.boundary, (a, &corners(a)), (b, &corners(b)))
+            .filter_map(|c| {
+                let (a, b) = (c.ta as usize, c.tb as usize);
+                one(
+                    (&self.pair_tets[a], &self.pair_info[a]),
+                    (&self.pair_tets[b], &self.pair_info[b]),
+                )
             })
+            .chain(self.thermal_only.iter().filter_map(|&(a, b)| {
+                let (a, b) = (a as usize, b as usize);
+                one(
+                    (&self.thermal_tets[a], &self.thermal_info[a]),
+                    (&self.thermal_tets[b], &self.thermal_info[b]),
+                )
+            }))
             .collect();
-        pairs.sort_by_key(|p| (p.target, p.contactor));
+        pairs.sort_by_key(|(p, _)| (p.target, p.contactor));
         Ok(pairs)
     }
 

@@ -9,36 +9,58 @@ use super::candidates::Candidate;
 use super::state::MechanicsCounters;
 use super::substep::TetGeometry;
 use super::time_step::time_step;
-use super::NONE;
 use crate::contact::penalty::{LinearizedOverlap, PenaltyParams};
-use crate::contact::{BodyTets, BoundaryTets, ContactSearch};
+use std::collections::HashMap;
+
+use crate::contact::{ContactSearch, ContactTets};
 use crate::error::{Error, Result};
 use crate::geometry::TetPlanes;
 use crate::mechanics::{ElasticMaterial, MechElement, Tet4Reference, VelocityBc};
 use crate::model::{Body, Model};
 use crate::parallel::{Halo, Part};
 
+/// A tet of a contact pair, as the pair's rank keeps it.
+#[derive(Debug, Clone, Copy, Default)]
+pub(super) struct PairTet {
+    /// Global element id.
+    pub(super) gid: u32,
+    /// Global body id.
+    pub(super) body: u32,
+    /// Material.
+    pub(super) material: u32,
+    /// Its faces on its body's boundary.
+    pub(super) mask: u8,
+    /// Its nodes on its body's boundary.
+    pub(super) bits: u8,
+}
+
 /// One rank's part of the explicit mechanics.
 pub struct ExplicitDomain {
-    pub(super) rank: u32,
     pub(super) n_owned: usize,
-    /// Original node id of every local node.
-    pub(super) node_of_local: Vec<u32>,
-    pub(super) n_elem_ghosts: usize,
-    /// Local index of every original node (NONE if not local).
-    pub(super) local_of: Vec<u32>,
+    /// Global id of every local node: the part's (owned, then the ghosts
+    /// its elements touch), then the ghosts only contacts need.
+    pub(super) node_gid: Vec<u32>,
+    /// Owner and PETSc number of every local node.
+    pub(super) node_owner: Vec<u32>,
+    pub(super) node_petsc: Vec<u32>,
+    /// Number of the part's nodes (the first ones).
+    pub(super) n_part_nodes: usize,
+    /// Local index of every contact ghost, by global id.
+    pub(super) contact_local: HashMap<u32, u32>,
     pub(super) halo: Halo,
     pub(super) elements: Vec<MechElement>,
     pub(super) elem_ids: Vec<u32>,
     pub(super) elem_tref: Vec<f64>,
     pub(super) n_boundary: usize,
     pub(super) materials: Vec<ElasticMaterial>,
-    pub(super) global_mass: Vec<f64>,
-    pub(super) global_bc: Vec<VelocityBc>,
+    /// Material densities (for the pairs' masses).
+    pub(super) density: Vec<f64>,
+    /// Lumped mass of every owned node.
     pub(super) mass: Vec<f64>,
     pub(super) x: Vec<Vector3<f64>>,
     pub(super) v: Vec<Vector3<f64>>,
     pub(super) x0: Vec<Vector3<f64>>,
+    /// Velocity conditions of every owned node.
     pub(super) bc: Vec<VelocityBc>,
     pub(super) ext: Vec<Vector3<f64>>,
     pub(super) f: Vec<Vector3<f64>>,
@@ -46,37 +68,34 @@ pub struct ExplicitDomain {
     pub(super) node_t: Vec<f64>,
     pub(super) elem_dt: Vec<f64>,
     pub(super) elem_rate: Vec<f64>,
-    /// Positions of every node, refreshed at each detection.
-    pub(super) x_all: Vec<[f64; 3]>,
-    pub(super) orig_of_global: Vec<u32>,
-    /// Whole bodies held (fixed or kinematic).
+    /// Whole bodies held (fixed or kinematic), by global body id.
     pub(super) body_held: Vec<bool>,
-    pub(super) boundary: BoundaryTets,
-    /// Per body, its boundary and interior tets, and the boundary tets
-    /// this rank owns (it searches from them).
-    pub(super) body_tets: BodyTets,
     /// Whole bodies that never move (their search trees are kept).
     pub(super) body_fixed: Vec<bool>,
+    /// The part's tets as the contact search reads them (positions
+    /// refreshed at each detection).
+    pub(super) part_tets: ContactTets,
     /// The contact search.
     pub(super) search: ContactSearch,
     /// Whether the thermal contact reads the candidates (a coupled run).
     pub(super) thermal: bool,
-    /// Candidates for the thermal contact only: a boundary tet against an
-    /// interior tet, or two held bodies' tets.
+    /// Candidates for the thermal contact only (a boundary tet against an
+    /// interior tet, or two held bodies' tets), as slots in `thermal_tets`.
     pub(super) thermal_only: Vec<(u32, u32)>,
+    pub(super) thermal_tets: Vec<[u32; 4]>,
+    pub(super) thermal_info: Vec<PairTet>,
     /// Substep count at the last detection.
     pub(super) detected_at: Option<u64>,
-    /// Per element, its index in `pair_tets` while the lists are built
-    /// (NONE otherwise).
-    pub(super) tet_slot: Vec<u32>,
     pub(super) penalty: Option<(PenaltyParams, f64)>,
     /// Search margin (m) of the current candidates, between `margin_min`
     /// and [`MARGIN_GROWTH`] × `margin_min`, chosen at each detection.
     pub(super) margin: f64,
     pub(super) margin_min: f64,
     pub(super) candidates: Vec<Candidate>,
-    /// Local nodes of the tets of the candidate pairs, each tet once.
+    /// Local nodes of the tets of the candidate pairs, each tet once, and
+    /// what the thermal contact needs of them.
     pub(super) pair_tets: Vec<[u32; 4]>,
+    pub(super) pair_info: Vec<PairTet>,
     /// Per substep: corners and bounding box of each of `pair_tets`.
     pub(super) pair_geometry: Vec<TetGeometry>,
     /// Planes of each of `pair_tets`, built when an exact evaluation
@@ -138,8 +157,6 @@ impl ExplicitDomain {
         coupling_dt: f64,
     ) -> Result<(ExplicitDomain, u64)> {
         let mm = model.mechanics.as_ref().expect("mechanics model");
-        let mesh = &model.mesh;
-        let nn = mesh.nodes.len();
         let materials: Vec<ElasticMaterial> = model
             .materials
             .iter()
@@ -159,39 +176,31 @@ impl ExplicitDomain {
             })?;
         }
         let body_held: Vec<bool> = model.bodies.iter().map(Body::is_held).collect();
-        // Lumped masses of every node from the replicated mesh (no messages).
-        let mut global_mass = vec![0.0; nn];
-        let mut refs: Vec<Option<Tet4Reference>> = vec![None; mesh.tets.len()];
+        let pm = &part.mesh;
+        let mut refs: Vec<Option<Tet4Reference>> = vec![None; part.num_elements()];
         let mut local_error = None;
-        for &e in &part.elem_gid {
-            let e = e as usize;
-            match Tet4Reference::from_coords(&mesh.element_coords(e)) {
-                Ok(r) => refs[e] = Some(r),
+        for (e, r) in refs.iter_mut().enumerate() {
+            match Tet4Reference::from_coords(&pm.element_coords(e)) {
+                Ok(x) => *r = Some(x),
                 Err(err) => {
-                    local_error.get_or_insert(Error::Mechanics(format!("element {e}: {err}")));
+                    local_error.get_or_insert(Error::Mechanics(format!(
+                        "element {}: {err}",
+                        part.elem_gid[e]
+                    )));
                 }
             }
         }
         crate::parallel::agree(comm, local_error.map_or(Ok(()), Err))?;
-        for (e, t) in mesh.tets.iter().enumerate() {
-            // Not numbered in the seeds: row-sum lumped mass ρ V0/4 per node of a Tet4.
-            let share = model.material_of(e).density * mesh.element_volume(e) / 4.0;
-            for &n in t {
-                global_mass[n as usize] += share;
-            }
-        }
-        let rank = part.rank as u32;
-        let mut elem_ids = Vec::new();
-        for &e in &part.elem_gid {
-            if !body_held[mesh.body[e as usize] as usize] {
-                elem_ids.push(e);
-            }
-        }
-        let mut orig_of_global = vec![0u32; nn];
-        for (n, &g) in part.whole().petsc_of.iter().enumerate() {
-            orig_of_global[g as usize] = n as u32;
-        }
-        let x_all = mesh.nodes.clone();
+        // Lumped masses of the owned nodes, summed in element order over
+        // the ranks (the same bits on any rank count).
+        // Not numbered in the seeds: row-sum lumped mass ρ V0/4 per node of a Tet4.
+        let mass = part.sum_to_owned_in_order(comm, |e| {
+            model.materials[part.elem_material[e] as usize].density * pm.element_volume(e) / 4.0
+        });
+        let free: Vec<usize> = (0..part.num_elements())
+            .filter(|&e| !body_held[pm.body[e] as usize])
+            .collect();
+        let elem_ids: Vec<u32> = free.iter().map(|&e| part.elem_gid[e]).collect();
         let penalty = mm.contact.as_ref().map(|c| {
             (
                 PenaltyParams {
@@ -213,48 +222,72 @@ impl ExplicitDomain {
             .as_ref()
             .and_then(|c| c.margin)
             .unwrap_or(0.5 * min_len_all);
-        let global_bc = mm.bc.clone();
+        let n_owned = part.num_owned();
+        let np = part.node_gid.len();
         let mut dom = ExplicitDomain {
-            rank,
-            n_owned: part.owned_gids().len(),
-            node_of_local: Vec::new(),
-            n_elem_ghosts: 0,
-            local_of: vec![NONE; nn],
+            n_owned,
+            node_gid: part.node_gid.clone(),
+            node_owner: part.node_owner.clone(),
+            node_petsc: part.petsc.clone(),
+            n_part_nodes: np,
+            contact_local: HashMap::new(),
             halo: Halo::default(),
-            elements: Vec::new(),
+            elements: free
+                .iter()
+                .map(|&e| MechElement {
+                    nodes: pm.tets[e],
+                    reference: refs[e].expect("checked above"),
+                    material: part.elem_material[e],
+                })
+                .collect(),
+            elem_tref: free
+                .iter()
+                .map(|&e| model.bodies[pm.body[e] as usize].reference_temperature)
+                .collect(),
             elem_ids,
-            elem_tref: Vec::new(),
             n_boundary: 0,
+            density: materials.iter().map(|m| m.density).collect(),
             materials,
-            global_mass,
-            global_bc,
-            mass: Vec::new(),
-            x: Vec::new(),
-            v: Vec::new(),
-            x0: Vec::new(),
-            bc: Vec::new(),
-            ext: Vec::new(),
-            f: Vec::new(),
+            mass,
+            x: pm.nodes.iter().map(|&p| Vector3::from(p)).collect(),
+            v: part
+                .node_gid
+                .iter()
+                .map(|&n| {
+                    let b = &model.bodies[model.body_of_node(n)];
+                    if b.velocity != [0.0; 3] {
+                        Vector3::from(b.velocity)
+                    } else {
+                        Vector3::from(b.initial_velocity)
+                    }
+                })
+                .collect(),
+            x0: pm.nodes[..n_owned]
+                .iter()
+                .map(|&p| Vector3::from(p))
+                .collect(),
+            bc: part.bc.velocity[..n_owned].to_vec(),
+            ext: part.bc.traction.iter().map(|&t| Vector3::from(t)).collect(),
+            f: vec![Vector3::zeros(); np],
             stress: Vec::new(),
-            node_t: Vec::new(),
+            node_t: part.bc.initial_t.clone(),
             elem_dt: Vec::new(),
             elem_rate: Vec::new(),
-            x_all,
-            orig_of_global,
-            body_held,
-            boundary: BoundaryTets::new(mesh),
-            body_tets: BodyTets::default(),
             body_fixed: model.bodies.iter().map(|b| b.fixed).collect(),
-            search: ContactSearch::new(model.bodies.len()),
+            body_held,
+            part_tets: part.contact_tets(None),
+            search: ContactSearch::new(),
             thermal: model.thermal_active && model.contact.is_some(),
             thermal_only: Vec::new(),
+            thermal_tets: Vec::new(),
+            thermal_info: Vec::new(),
             detected_at: None,
-            tet_slot: vec![NONE; mesh.tets.len()],
             penalty,
             margin,
             margin_min: margin,
             candidates: Vec::new(),
             pair_tets: Vec::new(),
+            pair_info: Vec::new(),
             pair_geometry: Vec::new(),
             pair_planes: Vec::new(),
             planes_stamp: Vec::new(),
@@ -287,107 +320,19 @@ impl ExplicitDomain {
             redetect: false,
             counters: MechanicsCounters::default(),
         };
-        // Owned nodes, then the ghosts of the owned elements.
-        dom.node_of_local = part.owned_gids().to_vec();
-        for (i, &n) in part.owned_gids().iter().enumerate() {
-            dom.local_of[n as usize] = i as u32;
-        }
-        let mut ghosts: Vec<u32> = dom
-            .elem_ids
-            .iter()
-            .flat_map(|&e| mesh.tets[e as usize])
-            .filter(|&n| part.whole().node_owner[n as usize] != rank)
-            .collect();
-        ghosts.sort_unstable();
-        ghosts.dedup();
-        for &n in &ghosts {
-            dom.local_of[n as usize] = dom.node_of_local.len() as u32;
-            dom.node_of_local.push(n);
-        }
-        dom.n_elem_ghosts = ghosts.len();
-        let nl = dom.node_of_local.len();
-        dom.x = dom
-            .node_of_local
-            .iter()
-            .map(|&n| Vector3::from(mesh.nodes[n as usize]))
-            .collect();
-        dom.x0 = dom.x.clone();
-        dom.v = dom
-            .node_of_local
-            .iter()
-            .map(|&n| {
-                let b = &model.bodies[model.body_of_node(n)];
-                if b.velocity != [0.0; 3] {
-                    Vector3::from(b.velocity)
-                } else {
-                    Vector3::from(b.initial_velocity)
-                }
-            })
-            .collect();
-        dom.ext = (0..nl)
-            .map(|i| {
-                if i < dom.n_owned {
-                    Vector3::from(mm.traction[dom.node_of_local[i] as usize])
-                } else {
-                    Vector3::zeros()
-                }
-            })
-            .collect();
-        dom.node_t = dom
-            .node_of_local
-            .iter()
-            .map(|&n| model.thermal.initial[n as usize])
-            .collect();
-        dom.elem_tref = dom
-            .elem_ids
-            .iter()
-            .map(|&e| model.bodies[mesh.body[e as usize] as usize].reference_temperature)
-            .collect();
-        dom.elements = dom
-            .elem_ids
-            .iter()
-            .map(|&e| MechElement {
-                nodes: mesh.tets[e as usize].map(|n| dom.local_of[n as usize]),
-                reference: refs[e as usize].expect("owned element"),
-                material: model.elem_material[e as usize],
-            })
-            .collect();
-        dom.body_tets = BodyTets::new(mesh, &dom.boundary, model.bodies.len(), |e| {
-            part.whole().elem_part[e as usize] == rank
-        });
-        dom.refresh_local_arrays();
-        dom.detect(comm, model, part)?;
+        dom.detect(comm)?;
         dom.update_element_temperatures(None);
         Ok((dom, substeps))
     }
 
-    /// Arrays sized by the local node count, after the numbering changed.
+    /// Arrays sized by the local node count, after the contact ghosts
+    /// changed (their values arrive with the next forward).
     pub(super) fn refresh_local_arrays(&mut self) {
-        let nl = self.node_of_local.len();
-        self.mass = self
-            .node_of_local
-            .iter()
-            .map(|&n| self.global_mass[n as usize])
-            .collect();
-        self.bc = self
-            .node_of_local
-            .iter()
-            .map(|&n| self.global_bc[n as usize])
-            .collect();
+        let nl = self.node_gid.len();
         self.f.resize(nl, Vector3::zeros());
-        self.ext.resize(nl, Vector3::zeros());
-        let old = self.x.len();
-        for i in old..nl {
-            let p = self.x_all[self.node_of_local[i] as usize];
-            self.x.push(Vector3::from(p));
-            self.v.push(Vector3::zeros());
-            self.x0.push(Vector3::zeros());
-            self.node_t.push(0.0);
-        }
-        self.x.truncate(nl);
-        self.v.truncate(nl);
-        self.x0.truncate(nl);
-        self.node_t.truncate(nl);
+        self.x.resize(nl, Vector3::zeros());
+        self.v.resize(nl, Vector3::zeros());
+        self.node_t.resize(nl, 0.0);
     }
 
     pub(super) fn forward_state(&mut self, comm: &SimpleCommunicator) {

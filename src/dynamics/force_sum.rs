@@ -7,7 +7,6 @@ use mpi::topology::SimpleCommunicator;
 use nalgebra::Vector3;
 
 use super::ExplicitDomain;
-use crate::parallel::Part;
 
 impl ExplicitDomain {
     /// Collective over the neighbours. The order in which each owned
@@ -16,7 +15,7 @@ impl ExplicitDomain {
     /// rank computed them. Ghost contributions travel one by one, not
     /// pre-summed, so the sums, and hence the trajectories, are bitwise
     /// the same on any number of ranks.
-    pub(super) fn build_assembly(&mut self, comm: &SimpleCommunicator, part: &Part) {
+    pub(super) fn build_assembly(&mut self, comm: &SimpleCommunicator) {
         const PAIR: u64 = 1 << 63;
         let ne = self.elements.len();
         let pair_base = 4 * ne;
@@ -28,8 +27,8 @@ impl ExplicitDomain {
             if l < n_owned {
                 owned.push((l, key, slot as u32));
             } else {
-                let g = self.node_of_local[l as usize];
-                let r = part.whole().node_owner[g as usize] as i32;
+                let g = self.node_gid[l as usize];
+                let r = self.node_owner[l as usize] as i32;
                 let i = nbrs
                     .binary_search(&r)
                     .expect("owner of a ghost is a neighbour");
@@ -83,8 +82,11 @@ impl ExplicitDomain {
             .map(|keys| {
                 let start = next;
                 for (i, pair) in keys.chunks_exact(2).enumerate() {
-                    let g = pair[0].to_bits() as usize;
-                    let l = self.local_of[g];
+                    let g = pair[0].to_bits() as u32;
+                    let l = self.node_gid[..self.n_owned]
+                        .binary_search(&g)
+                        .expect("contributions arrive for owned nodes")
+                        as u32;
                     debug_assert!(l < n_owned);
                     owned.push((l, pair[1].to_bits(), (start + i) as u32));
                 }

@@ -9,8 +9,6 @@ use nalgebra::{Matrix3, Vector3};
 
 use super::ExplicitDomain;
 use crate::error::Result;
-use crate::model::Model;
-use crate::parallel::Part;
 
 /// The motion a checkpoint saves, every node in the original numbering.
 #[derive(Debug, Clone, Copy)]
@@ -144,56 +142,41 @@ impl ExplicitDomain {
             .collect()
     }
 
-    /// Current positions of every node, as of the last detection or
-    /// [`Self::gather_positions`].
-    pub fn positions(&self) -> &[[f64; 3]] {
-        &self.x_all
-    }
-
-    /// Collective. Refresh [`Self::positions`] from the owners (gathered in
-    /// PETSc order).
-    pub fn gather_positions(&mut self, comm: &SimpleCommunicator) {
-        let owned: Vec<f64> = self.x[..self.n_owned]
+    /// Collective. Every node's value of `field` (owned nodes, three
+    /// values each), by global id, gathered on every rank (the checkpoint
+    /// still writes the whole state from one rank).
+    fn gather_by_gid(&self, comm: &SimpleCommunicator, field: &[Vector3<f64>]) -> Vec<[f64; 3]> {
+        let owned: Vec<f64> = field[..self.n_owned]
             .iter()
-            .flat_map(|p| [p.x, p.y, p.z])
+            .zip(&self.node_gid)
+            .flat_map(|(p, &g)| [f64::from(g), p.x, p.y, p.z])
             .collect();
         let all = crate::parallel::all_gather_f64(comm, &owned);
-        for (g, c) in all.chunks_exact(3).enumerate() {
-            self.x_all[self.orig_of_global[g] as usize] = [c[0], c[1], c[2]];
+        let mut out = vec![[0.0; 3]; all.len() / 4];
+        for c in all.chunks_exact(4) {
+            out[c[0] as usize] = [c[1], c[2], c[3]];
         }
+        out
     }
 
-    /// Collective. The velocities of the substep before the last (original
-    /// numbering), `None` before the first substep (or right after a
+    /// Collective. Positions of every node, by global id.
+    pub fn gather_positions(&self, comm: &SimpleCommunicator) -> Vec<[f64; 3]> {
+        self.gather_by_gid(comm, &self.x)
+    }
+
+    /// Collective. The velocities of the substep before the last (by
+    /// global id), `None` before the first substep (or right after a
     /// restore that had none).
     pub fn gather_velocities_prev(&self, comm: &SimpleCommunicator) -> Option<Vec<[f64; 3]>> {
         let mut have = i32::from(self.v_prev.len() >= self.n_owned);
         let mine = have;
         comm.all_reduce_into(&mine, &mut have, SystemOperation::min());
-        if have == 0 {
-            return None;
-        }
-        let owned: Vec<f64> = self.v_prev[..self.n_owned]
-            .iter()
-            .flat_map(|v| [v.x, v.y, v.z])
-            .collect();
-        let all = crate::parallel::all_gather_f64(comm, &owned);
-        let mut out = vec![[0.0; 3]; self.x_all.len()];
-        for (g, c) in all.chunks_exact(3).enumerate() {
-            out[self.orig_of_global[g] as usize] = [c[0], c[1], c[2]];
-        }
-        Some(out)
+        (have != 0).then(|| self.gather_by_gid(comm, &self.v_prev))
     }
 
-    /// Collective. Velocities of every node (original numbering).
+    /// Collective. Velocities of every node, by global id.
     pub fn gather_velocities(&self, comm: &SimpleCommunicator) -> Vec<[f64; 3]> {
-        let owned = self.velocity();
-        let all = crate::parallel::all_gather_f64(comm, &owned);
-        let mut out = vec![[0.0; 3]; self.x_all.len()];
-        for (g, c) in all.chunks_exact(3).enumerate() {
-            out[self.orig_of_global[g] as usize] = [c[0], c[1], c[2]];
-        }
-        out
+        self.gather_by_gid(comm, &self.v)
     }
 
     /// Collective. Continue from a saved state ([`SavedMotion`]): positions and velocities
@@ -201,13 +184,7 @@ impl ExplicitDomain {
     /// far. Contact candidates are detected afresh; forces depend only on
     /// the overlapping pairs and are summed in a fixed order, so the
     /// trajectory continues exactly as it would have.
-    pub fn restore(
-        &mut self,
-        comm: &SimpleCommunicator,
-        model: &Model,
-        part: &Part,
-        saved: SavedMotion,
-    ) -> Result<()> {
+    pub fn restore(&mut self, comm: &SimpleCommunicator, saved: SavedMotion) -> Result<()> {
         let SavedMotion {
             positions,
             velocities,
@@ -215,10 +192,10 @@ impl ExplicitDomain {
             dissipated,
             dissipated_per_rank,
         } = saved;
-        self.x_all.copy_from_slice(positions);
-        for (i, &n) in self.node_of_local.iter().enumerate() {
-            self.x[i] = Vector3::from(positions[n as usize]);
-            self.v[i] = Vector3::from(velocities[n as usize]);
+        for i in 0..self.n_part_nodes {
+            let n = self.node_gid[i] as usize;
+            self.x[i] = Vector3::from(positions[n]);
+            self.v[i] = Vector3::from(velocities[n]);
         }
         self.dissipated = match dissipated_per_rank {
             Some(d) if d.len() == comm.size() as usize => d[comm.rank() as usize],
@@ -228,12 +205,12 @@ impl ExplicitDomain {
         self.v_prev.clear();
         if let Some(vp) = velocities_prev {
             self.v_prev.extend(
-                self.node_of_local[..self.n_owned]
+                self.node_gid[..self.n_owned]
                     .iter()
                     .map(|&n| Vector3::from(vp[n as usize])),
             );
         }
-        self.detect(comm, model, part)?;
+        self.detect(comm)?;
         self.redetect = false;
         Ok(())
     }

@@ -15,21 +15,13 @@ use crate::contact::penalty::{overlap_state, penalty_forces, LinearizedOverlap, 
 use crate::error::{Error, Result};
 use crate::geometry::{separated_along, separating_axis, tet_bounds, TetPlanes};
 use crate::mechanics::explicit::{element_forces, update_nodes_damped, NodeUpdate, ThermalLoad};
-use crate::model::Model;
-use crate::parallel::Part;
 
 /// Corners of a tet and its bounding box (low, high corner).
 pub(super) type TetGeometry = ([[f64; 3]; 4], [f64; 3], [f64; 3]);
 
 impl ExplicitDomain {
     /// Collective. Advance by `n` substeps.
-    pub fn advance(
-        &mut self,
-        comm: &SimpleCommunicator,
-        model: &Model,
-        part: &Part,
-        n: u64,
-    ) -> Result<()> {
+    pub fn advance(&mut self, comm: &SimpleCommunicator, n: u64) -> Result<()> {
         // Linearised pairs depend on when their models were made: starting
         // every step with fresh candidates (and models) makes a restart,
         // which detects afresh, repeat the run bitwise.
@@ -45,7 +37,7 @@ impl ExplicitDomain {
                 self.v_prev.extend_from_slice(&self.v[..self.n_owned]);
             }
             if self.redetect {
-                self.detect(comm, model, part)?;
+                self.detect(comm)?;
                 self.redetect = false;
             }
             let local = self.substep(comm);
@@ -291,7 +283,7 @@ impl ExplicitDomain {
                 crate::mechanics::MechanicsError::NonFinite { node } => format!(
                     "node {} became non-finite (NaN or infinite): the explicit step \
                      is unstable or a contact exploded; reduce mechanics.dt or mechanics.safety",
-                    self.node_of_local[node]
+                    self.node_gid[node]
                 ),
                 other => other.to_string(),
             };

@@ -8,6 +8,7 @@
 //! [start_r, end_r), sorted by global id.
 
 pub mod exchange;
+pub mod ghosts;
 mod halo;
 mod part;
 mod partition;

@@ -153,6 +153,89 @@ impl Part {
         w
     }
 
+    /// Collective. Per owned node, the sum over all its elements (on any
+    /// rank) of `share(e)`, added in ascending element id: the same bits on
+    /// any number of ranks. Shares of ghost nodes travel to their owners
+    /// one by one, not pre-summed.
+    pub fn sum_to_owned_in_order<C: mpi::traits::Communicator>(
+        &self,
+        comm: &C,
+        share: impl Fn(usize) -> f64,
+    ) -> Vec<f64> {
+        let mut w = vec![0.0; self.n_owned];
+        // Local elements ascend by id, so each owned node's local shares
+        // arrive in id order; remote ones are merged in below.
+        let mut ghost_terms: Vec<Vec<f64>> = vec![Vec::new(); self.size];
+        let mut local_terms: Vec<(u32, u32, f64)> = Vec::new();
+        let shared = self.shared_owned(comm);
+        for e in 0..self.num_elements() {
+            let x = share(e);
+            for &l in &self.mesh.tets[e] {
+                let l = l as usize;
+                if l >= self.n_owned {
+                    let o = self.node_owner[l] as usize;
+                    ghost_terms[o].extend_from_slice(&[
+                        f64::from(self.node_gid[l]),
+                        f64::from(self.elem_gid[e]),
+                        x,
+                    ]);
+                } else if shared[l] {
+                    local_terms.push((l as u32, self.elem_gid[e], x));
+                } else {
+                    w[l] += x;
+                }
+            }
+        }
+        let received = super::exchange::all_to_all(comm, &ghost_terms);
+        for rec in received.iter().flat_map(|r| r.chunks_exact(3)) {
+            let l = self
+                .local_node(rec[0] as u32)
+                .expect("a ghost's owner holds it");
+            local_terms.push((l, rec[1] as u32, rec[2]));
+        }
+        local_terms.sort_by_key(|&(l, e, _)| (l, e));
+        for (l, _, x) in local_terms {
+            w[l as usize] += x;
+        }
+        w
+    }
+
+    /// Collective. Per owned node, whether another rank ghosts it.
+    fn shared_owned<C: mpi::traits::Communicator>(&self, comm: &C) -> Vec<bool> {
+        let mut ask: Vec<Vec<u32>> = vec![Vec::new(); self.size];
+        for l in self.n_owned..self.node_gid.len() {
+            ask[self.node_owner[l] as usize].push(self.node_gid[l]);
+        }
+        let asked = super::exchange::all_to_all(comm, &ask);
+        let mut shared = vec![false; self.n_owned];
+        for &g in asked.iter().flatten() {
+            if let Some(l) = self.local_node(g) {
+                shared[l as usize] = true;
+            }
+        }
+        shared
+    }
+
+    /// The part's tets as the contact search reads them, with the local
+    /// nodes at positions `x` (the reference ones when `None`).
+    pub fn contact_tets(&self, x: Option<&[[f64; 3]]>) -> crate::contact::ContactTets {
+        crate::contact::ContactTets {
+            gid: self.elem_gid.clone(),
+            body: self.mesh.body.clone(),
+            material: self.elem_material.clone(),
+            mask: self.face_mask.clone(),
+            volume0: (0..self.num_elements())
+                .map(|e| self.mesh.element_volume(e))
+                .collect(),
+            tets: self.mesh.tets.clone(),
+            node_gid: self.node_gid.clone(),
+            node_owner: self.node_owner.clone(),
+            node_petsc: self.petsc.clone(),
+            node_boundary: self.boundary_node.clone(),
+            x: x.map_or_else(|| self.mesh.nodes.clone(), <[[f64; 3]]>::to_vec),
+        }
+    }
+
     /// The boundary tets of the part from the face masks: local element
     /// indices, their masks, and the boundary nodes.
     pub fn boundary_tets(&self) -> crate::contact::BoundaryTets {

@@ -81,8 +81,6 @@ fn missing(restart: &Path, message: &str) -> Error {
 /// Collective. Put the mechanical state of the checkpoint into the domain.
 pub(super) fn restore_mechanics(
     comm: &SimpleCommunicator,
-    model: &Model,
-    part: &Part,
     restart: &Restart,
     mech: &mut Mechanics,
 ) -> Result<()> {
@@ -101,7 +99,7 @@ pub(super) fn restore_mechanics(
         dissipated: ck.dissipated,
         dissipated_per_rank: ck.dissipated_per_rank.as_deref(),
     };
-    m.restore(comm, model, part, saved)?;
+    m.restore(comm, saved)?;
     m.counters.substeps = ck.substeps;
     Ok(())
 }
@@ -189,8 +187,7 @@ pub(super) fn save_checkpoint(
         ..Default::default()
     };
     if let Some(Mechanics { domain: m, .. }) = mech {
-        m.gather_positions(comm);
-        ck.positions = Some(m.positions().to_vec());
+        ck.positions = Some(m.gather_positions(comm));
         ck.velocities = Some(m.gather_velocities(comm));
         ck.velocities_prev = m.gather_velocities_prev(comm);
         ck.dissipated = m.state(comm).dissipated;

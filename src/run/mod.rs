@@ -369,7 +369,7 @@ impl Stages<'_, '_> {
                         .collect();
                     m.set_temperatures(comm, &t, Some(span));
                 }
-                m.advance(comm, model, part, *n)?;
+                m.advance(comm, *n)?;
                 self.times.mechanics += clock.elapsed().as_secs_f64();
             }
             step += 1;

@@ -12,13 +12,13 @@ use mpi::collective::SystemOperation;
 use mpi::traits::*;
 
 use crate::contact::{
-    contact_pairs, BodyTets, BoundaryTets, ContactPair, ContactSearch, ContactSet, PairDofs,
-    THERMAL_SEARCH,
+    ContactPair, ContactSearch, ContactSet, ContactTets, OwnAndGhosts, PairDofs, THERMAL_SEARCH,
 };
 use crate::dynamics::ExplicitDomain;
 use crate::error::{Error, Result};
 use crate::io::checkpoint::Checkpoint;
 use crate::model::Model;
+use crate::parallel::ghosts::exchange_ghosts;
 use crate::parallel::Part;
 use crate::petsc::Petsc;
 use crate::thermal::ThermalSystem;
@@ -55,7 +55,7 @@ pub(super) fn partition(
     let bodies = model.bodies.len();
     let links = |mesh: &crate::mesh::TetMesh| {
         if bodies > 1 {
-            crate::contact::search::touching_pairs(mesh, bodies, crate::contact::THERMAL_SEARCH.pad)
+            crate::contact::search::touching_pairs(mesh, crate::contact::THERMAL_SEARCH.pad)
         } else {
             Vec::new()
         }
@@ -95,7 +95,7 @@ pub(super) fn mechanics(
         None => None,
     };
     if let (Some(r), Some(m)) = (restart, mech.as_mut()) {
-        checkpoint::restore_mechanics(comm, model, part, r, m)?;
+        checkpoint::restore_mechanics(comm, r, m)?;
     }
     times.mechanics = clock.elapsed().as_secs_f64();
     times.mechanics_setup = times.mechanics;
@@ -113,16 +113,15 @@ enum Source {
     Search(Box<ThermalSearch>),
 }
 
-/// A thermal run's own contact search.
+/// A thermal run's own contact search: this rank's tets at their current
+/// positions, and the search (its trees of bodies that never move kept).
 struct ThermalSearch {
-    bt: BoundaryTets,
-    tets: BodyTets,
+    own: ContactTets,
     search: ContactSearch,
-    held: Vec<bool>,
-    /// Bodies that never move.
-    fixed: Vec<bool>,
-    /// Current positions of every node when something moves.
-    positions: Option<Vec<[f64; 3]>>,
+    /// Whether bodies move (at their prescribed velocities).
+    moving: bool,
+    /// Margin of the ghost exchange: above the search's padding of any tet.
+    exchange_margin: f64,
 }
 
 /// Thermal contact detection: where the pairs come from, and the pairs
@@ -156,29 +155,34 @@ impl Contacts {
         } else if mech.is_some() {
             Source::Mechanics
         } else {
-            let bt = BoundaryTets::new(&model.mesh);
-            let rank = part.rank as u32;
-            let tets = BodyTets::new(&model.mesh, &bt, model.bodies.len(), |e| {
-                part.whole().elem_part[e as usize] == rank
-            });
-            let mut positions = model.has_motion().then(|| model.mesh.nodes.clone());
-            if let (Some(ck), Some(x)) = (restart, positions.as_mut()) {
-                match &ck.positions {
-                    Some(p) => x.copy_from_slice(p),
-                    None => model.positions_at(ck.time, x),
+            let mut own = part.contact_tets(None);
+            let moving = model.has_motion();
+            if moving {
+                match restart {
+                    Some(Checkpoint {
+                        positions: Some(p), ..
+                    }) => {
+                        for (x, &g) in own.x.iter_mut().zip(&part.node_gid) {
+                            *x = p[g as usize];
+                        }
+                    }
+                    Some(ck) => moved_positions(model, part, ck.time, &mut own.x),
+                    None => {}
                 }
             }
+            let ext = (0..own.len())
+                .map(|t| {
+                    let (lo, hi) = crate::geometry::tet_bounds(&own.corners(t));
+                    (0..3).map(|d| hi[d] - lo[d]).fold(0.0, f64::max)
+                })
+                .fold(0.0, f64::max);
+            let mut max_ext = 0.0;
+            comm.all_reduce_into(&ext, &mut max_ext, SystemOperation::max());
             Source::Search(Box::new(ThermalSearch {
-                bt,
-                tets,
-                search: ContactSearch::new(model.bodies.len()),
-                held: model.bodies.iter().map(|b| b.is_held()).collect(),
-                fixed: model
-                    .bodies
-                    .iter()
-                    .map(|b| b.velocity == [0.0; 3])
-                    .collect(),
-                positions,
+                own,
+                search: ContactSearch::new(),
+                moving,
+                exchange_margin: 1e-6 * max_ext,
             }))
         };
         let mut contacts = Contacts {
@@ -190,7 +194,7 @@ impl Contacts {
             surface_time: 0.0,
         };
         if !matches!(contacts.source, Source::None) {
-            contacts.set = contacts.find(comm, model, part, mech)?;
+            contacts.set = contacts.find(comm, model, mech)?;
             contacts.detections = 1;
         }
         Ok(contacts)
@@ -207,11 +211,11 @@ impl Contacts {
         step: u64,
     ) -> Result<Option<ContactSet>> {
         if let Source::Search(ts) = &mut self.source {
-            if let Some(x) = ts.positions.as_mut() {
-                model.positions_at(step as f64 * model.dt, x);
+            if ts.moving {
+                moved_positions(model, part, step as f64 * model.dt, &mut ts.own.x);
             }
         }
-        let found = self.find(comm, model, part, mech)?;
+        let found = self.find(comm, model, mech)?;
         self.detections += 1;
         // Changed when any rank's pairs changed.
         let mine = i32::from(!found.same_local(&self.set, 1e-12));
@@ -226,7 +230,6 @@ impl Contacts {
         &mut self,
         comm: &SimpleCommunicator,
         model: &Model,
-        part: &Part,
         mech: Option<&mut Mechanics>,
     ) -> Result<ContactSet> {
         let clock = Instant::now();
@@ -236,62 +239,49 @@ impl Contacts {
             (Source::None, _) => return Ok(ContactSet::default()),
             (Source::Mechanics, Some(m)) => {
                 let before = m.domain.counters.detect_time;
-                let pairs = m.domain.thermal_contacts(comm, model, part)?;
+                let pairs = m.domain.thermal_contacts(comm)?;
                 searched = m.domain.counters.detect_time - before;
                 pairs
             }
             (Source::Mechanics, None) => unreachable!("a coupled run has mechanics"),
             (Source::Search(ts), _) => {
-                let ThermalSearch {
-                    bt,
-                    tets,
-                    search,
-                    held,
-                    fixed,
-                    positions,
-                } = ts.as_mut();
-                let mesh = &model.mesh;
-                let x = positions.as_deref().unwrap_or(&mesh.nodes);
-                let corners = |e: u32| mesh.tets[e as usize].map(|n| x[n as usize]);
                 let t = Instant::now();
-                let candidates = search.find(tets, corners, held, fixed, THERMAL_SEARCH);
+                let ghosts = exchange_ghosts(comm, &ts.own, ts.exchange_margin, true);
+                let og = OwnAndGhosts {
+                    own: &ts.own,
+                    ghosts: &ghosts,
+                };
+                let bodies = &model.bodies;
+                let tets = og.body_tets(
+                    |b| bodies[b as usize].is_held(),
+                    |b| bodies[b as usize].velocity == [0.0; 3],
+                );
+                let candidates = og.search(&mut ts.search, &tets, THERMAL_SEARCH);
                 searched = t.elapsed().as_secs_f64();
                 self.search_time += searched;
                 self.searches += 1;
-                contact_pairs(mesh, bt, &candidates, corners)
+                og.contact_pairs(&candidates)
             }
         };
-        let set = contact_set(comm, model, part, local);
+        let set = contact_set(comm, local);
         self.surface_time += clock.elapsed().as_secs_f64() - searched;
         Ok(set)
     }
 }
 
-/// Collective. The contact set of this rank's `local` pairs: each with its
-/// nodes' PETSc numbers, materials and bodies, and the totals over the ranks.
-fn contact_set(
-    comm: &SimpleCommunicator,
-    model: &Model,
-    part: &Part,
-    local: Vec<ContactPair>,
-) -> ContactSet {
-    let whole = part.whole();
-    let dofs = local
-        .iter()
-        .map(|p| {
-            let (t, c) = (p.target as usize, p.contactor as usize);
-            let mut petsc = [0u32; 8];
-            for i in 0..4 {
-                petsc[i] = whole.petsc_of[model.mesh.tets[t][i] as usize];
-                petsc[4 + i] = whole.petsc_of[model.mesh.tets[c][i] as usize];
-            }
-            PairDofs {
-                petsc,
-                materials: [model.elem_material[t], model.elem_material[c]],
-                bodies: [model.mesh.body[t], model.mesh.body[c]],
-            }
-        })
-        .collect();
+/// Positions of the part's nodes at time `t`: the reference ones, each
+/// body translated by its prescribed velocity.
+fn moved_positions(model: &Model, part: &Part, t: f64, x: &mut [[f64; 3]]) {
+    for ((p, &g), x0) in x.iter_mut().zip(&part.node_gid).zip(&part.mesh.nodes) {
+        let v = model.bodies[model.body_of_node(g)].velocity;
+        *p = [x0[0] + v[0] * t, x0[1] + v[1] * t, x0[2] + v[2] * t];
+    }
+}
+
+/// Collective. The contact set of this rank's `local` pairs (each with its
+/// nodes' PETSc numbers, materials and bodies), and the totals over the ranks.
+fn contact_set(comm: &SimpleCommunicator, local: Vec<(ContactPair, PairDofs)>) -> ContactSet {
+    let (local, dofs): (Vec<ContactPair>, Vec<PairDofs>) = local.into_iter().unzip();
     let mine = [
         local.len() as f64,
         local.iter().map(ContactPair::area).sum::<f64>(),

@@ -25,6 +25,7 @@ PKGS=(
   libopenmpi-dev
   openmpi-bin
   libmetis-dev
+  libtrilinos-zoltan-dev  # Zoltan: recursive coordinate bisection (parallel/rcb.rs)
   libhdf5-openmpi-dev
   hdf5-tools          # h5dump, used by tests to check output files
   bc                  # arithmetic in scripts/bench.sh

@@ -33,5 +33,7 @@ pub mod parallel;
 pub mod petsc;
 pub mod run;
 pub mod scenario;
+#[cfg(test)]
+mod testutil;
 pub mod thermal;
 pub mod validation;

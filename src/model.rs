@@ -703,10 +703,10 @@ impl Model {
             .map_or(f64::INFINITY, |c| c.resistance[a as usize][b as usize])
     }
 
-    /// Prescribed temperature of node `n` at time `t` (runs without a
-    /// thermal problem): the initial value, ramped by the body's heating.
-    pub fn prescribed_temperature(&self, n: u32, t: f64) -> f64 {
-        let t0 = self.thermal.initial[n as usize];
+    /// Prescribed temperature at time `t` of node `n` (global id) whose
+    /// initial temperature is `t0` (runs without a thermal problem): the
+    /// initial value, ramped by the body's heating.
+    pub fn prescribed_temperature(&self, n: u32, t0: f64, t: f64) -> f64 {
         match self.bodies[self.body_of_node(n)].heating {
             None => t0,
             Some((to, over)) => {
@@ -714,6 +714,13 @@ impl Model {
                 t0 + (to - t0) * f
             }
         }
+    }
+
+    /// Nodes and elements of the whole model (the bodies' ranges end there).
+    pub fn totals(&self) -> (u64, u64) {
+        self.bodies.last().map_or((0, 0), |b| {
+            (u64::from(b.node_range.1), u64::from(b.elem_range.1))
+        })
     }
 
     /// Whether any body has a prescribed heating.

@@ -10,14 +10,14 @@ use nalgebra::{Matrix3, Vector3};
 use super::ExplicitDomain;
 use crate::error::Result;
 
-/// The motion a checkpoint saves, every node in the original numbering.
+/// The motion a checkpoint saves, for this rank's part.
 #[derive(Debug, Clone, Copy)]
 pub struct SavedMotion<'a> {
-    /// Positions x^n.
+    /// Positions x^n of the part's nodes (part order).
     pub positions: &'a [[f64; 3]],
-    /// Velocities of the last substep.
+    /// Velocities of the last substep, of the part's nodes.
     pub velocities: &'a [[f64; 3]],
-    /// Velocities of the substep before, when saved.
+    /// Velocities of the substep before, of the owned nodes, when saved.
     pub velocities_prev: Option<&'a [[f64; 3]]>,
     /// Energy dissipated so far (J).
     pub dissipated: f64,
@@ -142,41 +142,35 @@ impl ExplicitDomain {
             .collect()
     }
 
-    /// Collective. Every node's value of `field` (owned nodes, three
-    /// values each), by global id, gathered on every rank (the checkpoint
-    /// still writes the whole state from one rank).
-    fn gather_by_gid(&self, comm: &SimpleCommunicator, field: &[Vector3<f64>]) -> Vec<[f64; 3]> {
-        let owned: Vec<f64> = field[..self.n_owned]
+    /// Positions of the owned nodes (part order).
+    pub fn owned_positions(&self) -> Vec<[f64; 3]> {
+        self.x[..self.n_owned]
             .iter()
-            .zip(&self.node_gid)
-            .flat_map(|(p, &g)| [f64::from(g), p.x, p.y, p.z])
-            .collect();
-        let all = crate::parallel::all_gather_f64(comm, &owned);
-        let mut out = vec![[0.0; 3]; all.len() / 4];
-        for c in all.chunks_exact(4) {
-            out[c[0] as usize] = [c[1], c[2], c[3]];
-        }
-        out
+            .map(|p| [p.x, p.y, p.z])
+            .collect()
     }
 
-    /// Collective. Positions of every node, by global id.
-    pub fn gather_positions(&self, comm: &SimpleCommunicator) -> Vec<[f64; 3]> {
-        self.gather_by_gid(comm, &self.x)
+    /// Velocities of the owned nodes (part order).
+    pub fn owned_velocities(&self) -> Vec<[f64; 3]> {
+        self.v[..self.n_owned]
+            .iter()
+            .map(|p| [p.x, p.y, p.z])
+            .collect()
     }
 
-    /// Collective. The velocities of the substep before the last (by
-    /// global id), `None` before the first substep (or right after a
-    /// restore that had none).
-    pub fn gather_velocities_prev(&self, comm: &SimpleCommunicator) -> Option<Vec<[f64; 3]>> {
+    /// Collective. The velocities of the owned nodes at the substep before
+    /// the last, `None` on every rank before the first substep (or right
+    /// after a restore that had none).
+    pub fn owned_velocities_prev(&self, comm: &SimpleCommunicator) -> Option<Vec<[f64; 3]>> {
         let mut have = i32::from(self.v_prev.len() >= self.n_owned);
         let mine = have;
         comm.all_reduce_into(&mine, &mut have, SystemOperation::min());
-        (have != 0).then(|| self.gather_by_gid(comm, &self.v_prev))
-    }
-
-    /// Collective. Velocities of every node, by global id.
-    pub fn gather_velocities(&self, comm: &SimpleCommunicator) -> Vec<[f64; 3]> {
-        self.gather_by_gid(comm, &self.v)
+        (have != 0).then(|| {
+            self.v_prev[..self.n_owned]
+                .iter()
+                .map(|p| [p.x, p.y, p.z])
+                .collect()
+        })
     }
 
     /// Collective. Continue from a saved state ([`SavedMotion`]): positions and velocities
@@ -193,9 +187,8 @@ impl ExplicitDomain {
             dissipated_per_rank,
         } = saved;
         for i in 0..self.n_part_nodes {
-            let n = self.node_gid[i] as usize;
-            self.x[i] = Vector3::from(positions[n]);
-            self.v[i] = Vector3::from(velocities[n]);
+            self.x[i] = Vector3::from(positions[i]);
+            self.v[i] = Vector3::from(velocities[i]);
         }
         self.dissipated = match dissipated_per_rank {
             Some(d) if d.len() == comm.size() as usize => d[comm.rank() as usize],
@@ -204,11 +197,7 @@ impl ExplicitDomain {
         };
         self.v_prev.clear();
         if let Some(vp) = velocities_prev {
-            self.v_prev.extend(
-                self.node_gid[..self.n_owned]
-                    .iter()
-                    .map(|&n| Vector3::from(vp[n as usize])),
-            );
+            self.v_prev.extend(vp.iter().map(|&p| Vector3::from(p)));
         }
         self.detect(comm)?;
         self.redetect = false;

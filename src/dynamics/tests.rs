@@ -5,11 +5,8 @@
 //! three jobs of the domain: the substep, the force order, the candidates.
 
 use std::path::Path;
-use std::sync::{Mutex, OnceLock, PoisonError};
 
-use mpi::environment::Universe;
 use mpi::topology::SimpleCommunicator;
-use mpi::Threading;
 use nalgebra::{Matrix3, Vector3};
 
 use super::{ExplicitDomain, SavedMotion};
@@ -18,21 +15,7 @@ use crate::mechanics::frequency::body_max_frequency;
 use crate::mechanics::ElasticMaterial;
 use crate::model::Model;
 use crate::parallel::Part;
-
-/// Runs `f` on a one-process communicator. MPI is initialised once per
-/// test process and kept (MPI cannot be initialised twice); the tests
-/// that use it run one at a time.
-fn on_one_rank<R>(f: impl FnOnce(&SimpleCommunicator) -> R) -> R {
-    static LOCK: Mutex<()> = Mutex::new(());
-    static UNIVERSE: OnceLock<Universe> = OnceLock::new();
-    let _one_at_a_time = LOCK.lock().unwrap_or_else(PoisonError::into_inner);
-    UNIVERSE.get_or_init(|| {
-        mpi::initialize_with_threading(Threading::Serialized)
-            .expect("MPI initialises")
-            .0
-    });
-    f(&SimpleCommunicator::self_comm())
-}
+use crate::testutil::on_one_rank;
 
 /// Seed 004 Table 1 (E, ν); density not in the table (concrete, 2400 kg/m³).
 fn concrete(alpha: f64) -> ElasticMaterial {

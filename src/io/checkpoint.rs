@@ -16,6 +16,9 @@
 use std::path::{Path, PathBuf};
 
 use hdf5::{File, H5Type};
+use mpi::collective::SystemOperation;
+use mpi::topology::SimpleCommunicator;
+use mpi::traits::*;
 
 use super::IoError;
 
@@ -98,26 +101,6 @@ fn tmp_path(path: &Path) -> PathBuf {
     PathBuf::from(s)
 }
 
-fn put<T: H5Type + Copy>(
-    file: &File,
-    path: &Path,
-    name: &str,
-    data: &[T],
-    cols: usize,
-) -> Result<(), IoError> {
-    let rows = data.len() / cols.max(1);
-    let shape: Vec<usize> = if cols == 1 {
-        vec![rows]
-    } else {
-        vec![rows, cols]
-    };
-    file.new_dataset::<T>()
-        .shape(shape)
-        .create(name)
-        .and_then(|d| d.write_raw(data))
-        .map_err(|e| IoError::hdf5(path, format!("writing {name}"), e))
-}
-
 fn get<T: H5Type + Copy>(
     file: &File,
     path: &Path,
@@ -142,10 +125,6 @@ fn get<T: H5Type + Copy>(
         .map_err(|e| IoError::hdf5(path, format!("reading {name}"), e))
 }
 
-fn flat3<T: Copy>(v: &[[T; 3]]) -> Vec<T> {
-    v.iter().flatten().copied().collect()
-}
-
 fn rows<T: Copy + Default, const C: usize>(v: Vec<T>) -> Vec<[T; C]> {
     v.chunks_exact(C)
         .map(|c| {
@@ -157,92 +136,6 @@ fn rows<T: Copy + Default, const C: usize>(v: Vec<T>) -> Vec<[T; C]> {
 }
 
 impl Checkpoint {
-    /// Write the checkpoint (serial: call on one rank).
-    pub fn write(&self, path: &Path) -> Result<(), IoError> {
-        let tmp = tmp_path(path);
-        let result = self.write_to(&tmp);
-        if let Err(e) = result {
-            let _ = std::fs::remove_file(&tmp);
-            return Err(e);
-        }
-        std::fs::rename(&tmp, path).map_err(|e| IoError::io(path, "renaming the checkpoint", e))
-    }
-
-    fn write_to(&self, path: &Path) -> Result<(), IoError> {
-        let file = File::create(path).map_err(|e| IoError::hdf5(path, "creating", e))?;
-        let attr = |name: &str, v: &[u8]| -> Result<(), IoError> {
-            file.new_attr::<u8>()
-                .shape([v.len()])
-                .create(name)
-                .and_then(|a| a.write_raw(v))
-                .map_err(|e| IoError::hdf5(path, format!("writing attribute {name}"), e))
-        };
-        attr("format", FORMAT.as_bytes())?;
-        attr("version", &VERSION.to_le_bytes())?;
-        for g in ["mesh", "bodies", "state"] {
-            file.create_group(g)
-                .map_err(|e| IoError::hdf5(path, format!("creating group {g}"), e))?;
-        }
-        put(&file, path, "mesh/reference", &flat3(&self.reference), 3)?;
-        let tets: Vec<u32> = self.tets.iter().flatten().copied().collect();
-        put(&file, path, "mesh/tets", &tets, 4)?;
-        put(&file, path, "mesh/body", &self.elem_body, 1)?;
-        put(
-            &file,
-            path,
-            "bodies/names",
-            self.body_names.join("\n").as_bytes(),
-            1,
-        )?;
-        put(
-            &file,
-            path,
-            "bodies/templates",
-            self.body_templates.join("\n").as_bytes(),
-            1,
-        )?;
-        let bn: Vec<u32> = self.body_nodes.iter().flatten().copied().collect();
-        let be: Vec<u32> = self.body_elems.iter().flatten().copied().collect();
-        put(&file, path, "bodies/nodes", &bn, 2)?;
-        put(&file, path, "bodies/elems", &be, 2)?;
-        if let Some(x) = &self.positions {
-            put(&file, path, "state/positions", &flat3(x), 3)?;
-        }
-        if let Some(v) = &self.velocities {
-            put(&file, path, "state/velocities", &flat3(v), 3)?;
-        }
-        if let Some(v) = &self.velocities_prev {
-            put(&file, path, "state/velocities_prev", &flat3(v), 3)?;
-        }
-        put(&file, path, "state/counters", &[self.ksp_iterations], 1)?;
-        if let Some(d) = &self.dissipated_per_rank {
-            put(&file, path, "state/dissipated_per_rank", d, 1)?;
-        }
-        if let Some(a) = &self.account {
-            put(&file, path, "state/account_base", &a.base, 1)?;
-            put(&file, path, "state/account_steps", &[a.steps], 1)?;
-            put(&file, path, "state/account_t0", &a.t0, 1)?;
-            put(&file, path, "state/account_t_sum", &a.t_sum, 1)?;
-        }
-        if let Some(ke) = self.settled {
-            put(&file, path, "state/settled", &[ke], 1)?;
-        }
-        if let Some(t) = &self.temperature {
-            put(&file, path, "state/temperature", t, 1)?;
-        }
-        let mut sc = [0.0; SCALARS];
-        sc[0] = self.step as f64;
-        sc[1] = self.time;
-        sc[2] = self.substeps as f64;
-        sc[3..8].copy_from_slice(&self.heat);
-        sc[8] = self.dissipated;
-        sc[9] = self.peak_kinetic;
-        sc[10] = self.thermal_contacts as f64;
-        put(&file, path, "state/scalars", &sc, 1)?;
-        file.flush()
-            .map_err(|e| IoError::hdf5(path, "flushing the checkpoint", e))
-    }
-
     /// Read a checkpoint (serial).
     pub fn read(path: &Path) -> Result<Checkpoint, IoError> {
         if !path.is_file() {
@@ -409,6 +302,576 @@ impl Checkpoint {
     }
 }
 
+/// The part of a checkpoint every rank reads whole: scalars, counters and
+/// the body table (O(bodies)).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct CheckpointHead {
+    /// Thermal (outer) steps done.
+    pub step: u64,
+    /// Time (s).
+    pub time: f64,
+    /// Explicit substeps done.
+    pub substeps: u64,
+    /// Nodes and elements of the whole mesh.
+    pub nodes: u64,
+    /// Elements.
+    pub elems: u64,
+    /// Body names.
+    pub body_names: Vec<String>,
+    /// The scenario entry each body came from.
+    pub body_templates: Vec<String>,
+    /// Node range of every body.
+    pub body_nodes: Vec<[u32; 2]>,
+    /// Element range of every body.
+    pub body_elems: Vec<[u32; 2]>,
+    /// Krylov iterations so far.
+    pub ksp_iterations: u64,
+    /// Heat account: stored, stored change, Dirichlet in, flux in, convection in.
+    pub heat: [f64; 5],
+    /// Energy dissipated by contact damping and friction (J).
+    pub dissipated: f64,
+    /// Largest kinetic energy seen (J).
+    pub peak_kinetic: f64,
+    /// Thermal contact pairs at the checkpoint (information).
+    pub thermal_contacts: u64,
+    /// Each rank's share of `dissipated`.
+    pub dissipated_per_rank: Option<Vec<f64>>,
+    /// The heat account's base and steps since the last assembly, when saved.
+    pub account: Option<([f64; 5], u64)>,
+    /// The kinetic energy at which the run settled, for a settled run.
+    pub settled: Option<f64>,
+    /// Which node fields the file holds.
+    pub has_positions: bool,
+    /// Velocities v^{n−½}.
+    pub has_velocities: bool,
+    /// Velocities of the substep before.
+    pub has_velocities_prev: bool,
+    /// Temperatures.
+    pub has_temperature: bool,
+}
+
+impl CheckpointHead {
+    /// Indices of the bodies that came from scenario entry `template`.
+    pub fn bodies_of(&self, template: &str) -> Vec<usize> {
+        (0..self.body_names.len())
+            .filter(|&b| self.body_templates[b] == template)
+            .collect()
+    }
+}
+
+/// One rank's rows of a checkpoint, by global id: the nodes it owns and
+/// the elements it owns (every id on exactly one rank).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct CheckpointRows<'a> {
+    /// Global ids of the nodes.
+    pub node_gid: &'a [u32],
+    /// Their reference coordinates.
+    pub reference: &'a [[f64; 3]],
+    /// Global ids of the elements.
+    pub elem_gid: &'a [u32],
+    /// Their nodes (global ids).
+    pub tets: &'a [[u32; 4]],
+    /// Their bodies.
+    pub elem_body: &'a [u32],
+    /// Node fields, when saved (the same on every rank).
+    pub positions: Option<&'a [[f64; 3]]>,
+    /// Velocities.
+    pub velocities: Option<&'a [[f64; 3]]>,
+    /// Velocities of the substep before.
+    pub velocities_prev: Option<&'a [[f64; 3]]>,
+    /// Temperatures.
+    pub temperature: Option<&'a [f64]>,
+    /// Heat account: temperatures at the last assembly.
+    pub account_t0: Option<&'a [f64]>,
+    /// Heat account: sum of the step temperatures since.
+    pub account_t_sum: Option<&'a [f64]>,
+}
+
+/// Collective. Write a checkpoint: every rank its rows (moved to
+/// contiguous blocks by global id first), rank 0 the head, through MPI-IO
+/// into `<path>.tmp`, renamed once complete; no rank holds the whole mesh.
+/// The layout is that of [`Checkpoint::read`].
+pub fn write_parallel(
+    comm: &SimpleCommunicator,
+    path: &Path,
+    head: &CheckpointHead,
+    rows: &CheckpointRows,
+) -> Result<(), IoError> {
+    let tmp = tmp_path(path);
+    let result = write_parallel_to(comm, &tmp, head, rows);
+    // Agree before renaming: one rank's failure fails every rank.
+    let mine = i32::from(result.is_err());
+    let mut any = 0;
+    comm.all_reduce_into(&mine, &mut any, SystemOperation::max());
+    if any != 0 {
+        if comm.rank() == 0 {
+            let _ = std::fs::remove_file(&tmp);
+        }
+        return result.and(Err(IoError::invalid(path, "another rank failed writing")));
+    }
+    let renamed = if comm.rank() == 0 {
+        std::fs::rename(&tmp, path).map_err(|e| IoError::io(path, "renaming the checkpoint", e))
+    } else {
+        Ok(())
+    };
+    let mine = i32::from(renamed.is_err());
+    comm.all_reduce_into(&mine, &mut any, SystemOperation::max());
+    renamed?;
+    if any != 0 {
+        return Err(IoError::invalid(
+            path,
+            "rank 0 failed renaming the checkpoint",
+        ));
+    }
+    Ok(())
+}
+
+fn write_parallel_to(
+    comm: &SimpleCommunicator,
+    path: &Path,
+    head: &CheckpointHead,
+    rows: &CheckpointRows,
+) -> Result<(), IoError> {
+    let h5err = |what: &str| {
+        let what = what.to_string();
+        move |e| IoError::hdf5(path, what, e)
+    };
+    let call = |what: &str| {
+        let what = what.to_string();
+        move |call| IoError::Hdf5Call {
+            path: path.to_path_buf(),
+            call,
+            what,
+        }
+    };
+    let file = File::with_options()
+        .with_fapl(|p| p.mpio(comm.as_raw(), None))
+        .create(path)
+        .map_err(h5err("creating with the MPI-IO driver"))?;
+    let xfer = super::ffi::CollectiveXfer::new().map_err(call("a transfer property list"))?;
+    let attr = |name: &str, v: &[u8]| -> Result<(), IoError> {
+        file.new_attr::<u8>()
+            .shape([v.len()])
+            .create(name)
+            .and_then(|a| a.write_raw(v))
+            .map_err(|e| IoError::hdf5(path, format!("writing attribute {name}"), e))
+    };
+    attr("format", FORMAT.as_bytes())?;
+    attr("version", &VERSION.to_le_bytes())?;
+    for g in ["mesh", "bodies", "state"] {
+        file.create_group(g)
+            .map_err(h5err(&format!("creating group {g}")))?;
+    }
+    let root = comm.rank() == 0;
+    // A dataset of `rows` × `cols`, written by rank 0 alone (small ones).
+    let small = |name: &str, data: &[f64], cols: usize| -> Result<(), IoError> {
+        dataset_f64(
+            &file,
+            path,
+            name,
+            data.len() / cols.max(1),
+            cols,
+            &xfer,
+            0,
+            root.then_some(data),
+        )
+    };
+    let small_u = |name: &str, data: &[u64]| -> Result<(), IoError> {
+        let ds = file
+            .new_dataset::<u64>()
+            .shape([data.len()])
+            .create(name)
+            .map_err(h5err(&format!("creating {name}")))?;
+        let n = if root { data.len() as u64 } else { 0 };
+        super::ffi::write_block(&ds, &xfer, &[0], &[n], if root { data } else { &[] })
+            .map_err(call(&format!("writing {name}")))
+    };
+    let small_u32 = |name: &str, data: &[u32], cols: usize| -> Result<(), IoError> {
+        let r = (data.len() / cols) as u64;
+        let ds = file
+            .new_dataset::<u32>()
+            .shape([r as usize, cols])
+            .create(name)
+            .map_err(h5err(&format!("creating {name}")))?;
+        let n = if root { r } else { 0 };
+        super::ffi::write_block(
+            &ds,
+            &xfer,
+            &[0, 0],
+            &[n, cols as u64],
+            if root { data } else { &[] },
+        )
+        .map_err(call(&format!("writing {name}")))
+    };
+    let text = |name: &str, v: &[String]| -> Result<(), IoError> {
+        let b = v.join("\n").into_bytes();
+        let ds = file
+            .new_dataset::<u8>()
+            .shape([b.len()])
+            .create(name)
+            .map_err(h5err(&format!("creating {name}")))?;
+        let n = if root { b.len() as u64 } else { 0 };
+        super::ffi::write_block(&ds, &xfer, &[0], &[n], if root { &b[..] } else { &[] })
+            .map_err(call(&format!("writing {name}")))
+    };
+    // Node and element rows by global id, in blocks.
+    let nodes = |name: &str, v: &[f64], cols: usize| -> Result<(), IoError> {
+        let (lo, block) =
+            crate::parallel::exchange::to_blocks(comm, rows.node_gid, v, cols, head.nodes);
+        dataset_f64(
+            &file,
+            path,
+            name,
+            head.nodes as usize,
+            cols,
+            &xfer,
+            lo,
+            Some(&block),
+        )
+    };
+    let elems_u32 = |name: &str, v: &[u32], cols: usize| -> Result<(), IoError> {
+        let vf: Vec<f64> = v.iter().map(|&x| f64::from(x)).collect();
+        let (lo, block) =
+            crate::parallel::exchange::to_blocks(comm, rows.elem_gid, &vf, cols, head.elems);
+        let block: Vec<u32> = block.iter().map(|&x| x as u32).collect();
+        let ds = file
+            .new_dataset::<u32>()
+            .shape(if cols == 1 {
+                vec![head.elems as usize]
+            } else {
+                vec![head.elems as usize, cols]
+            })
+            .create(name)
+            .map_err(h5err(&format!("creating {name}")))?;
+        let n = (block.len() / cols) as u64;
+        let (start, count) = if cols == 1 {
+            (vec![lo], vec![n])
+        } else {
+            (vec![lo, 0], vec![n, cols as u64])
+        };
+        super::ffi::write_block(&ds, &xfer, &start, &count, &block)
+            .map_err(call(&format!("writing {name}")))
+    };
+    let flat = |v: &[[f64; 3]]| -> Vec<f64> { v.iter().flatten().copied().collect() };
+    nodes("mesh/reference", &flat(rows.reference), 3)?;
+    let tets: Vec<u32> = rows.tets.iter().flatten().copied().collect();
+    elems_u32("mesh/tets", &tets, 4)?;
+    elems_u32("mesh/body", rows.elem_body, 1)?;
+    text("bodies/names", &head.body_names)?;
+    text("bodies/templates", &head.body_templates)?;
+    let bn: Vec<u32> = head.body_nodes.iter().flatten().copied().collect();
+    let be: Vec<u32> = head.body_elems.iter().flatten().copied().collect();
+    small_u32("bodies/nodes", &bn, 2)?;
+    small_u32("bodies/elems", &be, 2)?;
+    if let Some(x) = rows.positions {
+        nodes("state/positions", &flat(x), 3)?;
+    }
+    if let Some(v) = rows.velocities {
+        nodes("state/velocities", &flat(v), 3)?;
+    }
+    if let Some(v) = rows.velocities_prev {
+        nodes("state/velocities_prev", &flat(v), 3)?;
+    }
+    small_u("state/counters", &[head.ksp_iterations])?;
+    if let Some(d) = &head.dissipated_per_rank {
+        small("state/dissipated_per_rank", d, 1)?;
+    }
+    if let (Some((base, steps)), Some(t0), Some(ts)) =
+        (head.account, rows.account_t0, rows.account_t_sum)
+    {
+        small("state/account_base", &base, 1)?;
+        small_u("state/account_steps", &[steps])?;
+        nodes("state/account_t0", t0, 1)?;
+        nodes("state/account_t_sum", ts, 1)?;
+    }
+    if let Some(ke) = head.settled {
+        small("state/settled", &[ke], 1)?;
+    }
+    if let Some(t) = rows.temperature {
+        nodes("state/temperature", t, 1)?;
+    }
+    let mut sc = [0.0; SCALARS];
+    sc[0] = head.step as f64;
+    sc[1] = head.time;
+    sc[2] = head.substeps as f64;
+    sc[3..8].copy_from_slice(&head.heat);
+    sc[8] = head.dissipated;
+    sc[9] = head.peak_kinetic;
+    sc[10] = head.thermal_contacts as f64;
+    small("state/scalars", &sc, 1)?;
+    super::ffi::flush_global(&file).map_err(call("flushing the checkpoint"))
+}
+
+/// Create `name` (`rows` × `cols` f64, 1-D when `cols` is 1) and write
+/// this rank's block of rows from `lo` (none when `data` is None).
+/// Collective.
+#[allow(clippy::too_many_arguments)]
+fn dataset_f64(
+    file: &File,
+    path: &Path,
+    name: &str,
+    rows: usize,
+    cols: usize,
+    xfer: &super::ffi::CollectiveXfer,
+    lo: u64,
+    data: Option<&[f64]>,
+) -> Result<(), IoError> {
+    let shape = if cols == 1 {
+        vec![rows]
+    } else {
+        vec![rows, cols]
+    };
+    let ds = file
+        .new_dataset::<f64>()
+        .shape(shape)
+        .create(name)
+        .map_err(|e| IoError::hdf5(path, format!("creating {name}"), e))?;
+    let data = data.unwrap_or(&[]);
+    let n = (data.len() / cols) as u64;
+    let (start, count) = if cols == 1 {
+        (vec![lo], vec![n])
+    } else {
+        (vec![lo, 0], vec![n, cols as u64])
+    };
+    super::ffi::write_block(&ds, xfer, &start, &count, data).map_err(|call| IoError::Hdf5Call {
+        path: path.to_path_buf(),
+        call,
+        what: format!("writing {name}"),
+    })
+}
+
+/// A checkpoint opened for reading in pieces: its head, and the rows of
+/// any nodes or elements by global id. Every rank opens it (read-only,
+/// serial driver) and reads only what it holds.
+pub struct CheckpointFile {
+    file: File,
+    path: PathBuf,
+    /// Scalars and the body table.
+    pub head: CheckpointHead,
+}
+
+impl CheckpointFile {
+    /// Open and read the head, checking the format, the version and the
+    /// sizes of the body table and of every node dataset.
+    pub fn open(path: &Path) -> Result<CheckpointFile, IoError> {
+        if !path.is_file() {
+            return Err(IoError::invalid(path, "checkpoint file not found"));
+        }
+        let file = File::open(path).map_err(|e| IoError::hdf5(path, "opening", e))?;
+        check_format(&file, path)?;
+        let text = |name: &str| -> Result<Vec<String>, IoError> {
+            let b = get::<u8>(&file, path, name, 1)?;
+            let s = String::from_utf8(b)
+                .map_err(|_| IoError::invalid(path, format!("{name} is not UTF-8")))?;
+            Ok(s.split('\n').map(str::to_string).collect())
+        };
+        let sc = get::<f64>(&file, path, "state/scalars", 1)?;
+        if sc.len() != SCALARS {
+            return Err(IoError::invalid(path, "state/scalars has the wrong length"));
+        }
+        let rows_of = |name: &str| -> Result<u64, IoError> {
+            let d = file
+                .dataset(name)
+                .map_err(|e| IoError::hdf5(path, format!("opening {name}"), e))?;
+            Ok(d.shape().first().copied().unwrap_or(0) as u64)
+        };
+        let nodes = rows_of("mesh/reference")?;
+        let elems = rows_of("mesh/tets")?;
+        let first = |name: &str| -> Result<Option<u64>, IoError> {
+            if file.link_exists(name) {
+                Ok(get::<u64>(&file, path, name, 1)?.first().copied())
+            } else {
+                Ok(None)
+            }
+        };
+        let account = if file.link_exists("state/account_base") {
+            let base = get::<f64>(&file, path, "state/account_base", 1)?;
+            let steps = first("state/account_steps")?;
+            match (<[f64; 5]>::try_from(base), steps) {
+                (Ok(b), Some(s)) => Some((b, s)),
+                _ => {
+                    return Err(IoError::invalid(
+                        path,
+                        "state/account_base or state/account_steps has the wrong length",
+                    ))
+                }
+            }
+        } else {
+            None
+        };
+        let head = CheckpointHead {
+            step: sc[0] as u64,
+            time: sc[1],
+            substeps: sc[2] as u64,
+            nodes,
+            elems,
+            body_names: text("bodies/names")?,
+            body_templates: text("bodies/templates")?,
+            body_nodes: rows::<u32, 2>(get(&file, path, "bodies/nodes", 2)?),
+            body_elems: rows::<u32, 2>(get(&file, path, "bodies/elems", 2)?),
+            ksp_iterations: first("state/counters")?.unwrap_or(0),
+            heat: [sc[3], sc[4], sc[5], sc[6], sc[7]],
+            dissipated: sc[8],
+            peak_kinetic: sc[9],
+            thermal_contacts: sc[10] as u64,
+            dissipated_per_rank: if file.link_exists("state/dissipated_per_rank") {
+                Some(get(&file, path, "state/dissipated_per_rank", 1)?)
+            } else {
+                None
+            },
+            account,
+            settled: if file.link_exists("state/settled") {
+                get::<f64>(&file, path, "state/settled", 1)?
+                    .first()
+                    .copied()
+            } else {
+                None
+            },
+            has_positions: file.link_exists("state/positions"),
+            has_velocities: file.link_exists("state/velocities"),
+            has_velocities_prev: file.link_exists("state/velocities_prev"),
+            has_temperature: file.link_exists("state/temperature"),
+        };
+        let bad = |m: String| Err(IoError::invalid(path, m));
+        let nb = head.body_names.len();
+        if head.body_templates.len() != nb
+            || head.body_nodes.len() != nb
+            || head.body_elems.len() != nb
+        {
+            return bad("the /bodies datasets differ in length".into());
+        }
+        if rows_of("mesh/body")? != elems {
+            return bad("mesh/body and mesh/tets differ in length".into());
+        }
+        for name in [
+            "state/positions",
+            "state/velocities",
+            "state/velocities_prev",
+            "state/temperature",
+            "state/account_t0",
+            "state/account_t_sum",
+        ] {
+            if file.link_exists(name) && rows_of(name)? != nodes {
+                return bad(format!(
+                    "{name} has {} rows for {nodes} nodes",
+                    rows_of(name)?
+                ));
+            }
+        }
+        if let Some((b, r)) = head
+            .body_nodes
+            .iter()
+            .chain(&head.body_elems)
+            .enumerate()
+            .find(|(_, r)| r[0] > r[1])
+        {
+            return bad(format!("body range {b} is reversed: {r:?}"));
+        }
+        Ok(CheckpointFile {
+            file,
+            path: path.to_path_buf(),
+            head,
+        })
+    }
+
+    /// The file's path.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Rows `ids` (any order) of the 2-D dataset `name` of `C` columns.
+    fn rows_of<T: H5Type + Copy + Default, const C: usize>(
+        &self,
+        name: &str,
+        ids: &[u32],
+        total: u64,
+    ) -> Result<Vec<[T; C]>, IoError> {
+        let d = self
+            .file
+            .dataset(name)
+            .map_err(|e| IoError::hdf5(&self.path, format!("opening {name}"), e))?;
+        let mut out = vec![[T::default(); C]; ids.len()];
+        for (start, run) in runs(ids) {
+            let end = start + run.len() as u64;
+            if end > total {
+                return Err(IoError::invalid(
+                    &self.path,
+                    format!("{name}: row {} beyond its {total} rows", end - 1),
+                ));
+            }
+            let block: Vec<T> = if C == 1 {
+                d.read_slice_1d::<T, _>(start as usize..end as usize)
+                    .map(|a| a.into_raw_vec_and_offset().0)
+            } else {
+                d.read_slice_2d::<T, _>((start as usize..end as usize, ..))
+                    .map(|a| a.into_raw_vec_and_offset().0)
+            }
+            .map_err(|e| IoError::hdf5(&self.path, format!("reading rows of {name}"), e))?;
+            for (k, &i) in run.iter().enumerate() {
+                out[i].copy_from_slice(&block[C * k..C * (k + 1)]);
+            }
+        }
+        Ok(out)
+    }
+
+    /// Node rows of a 3-column node dataset (`mesh/reference`,
+    /// `state/positions`, ...), for the nodes `ids`.
+    pub fn node_rows3(&self, name: &str, ids: &[u32]) -> Result<Vec<[f64; 3]>, IoError> {
+        self.rows_of::<f64, 3>(name, ids, self.head.nodes)
+    }
+
+    /// Node rows of a 1-column node dataset (`state/temperature`, ...).
+    pub fn node_rows1(&self, name: &str, ids: &[u32]) -> Result<Vec<f64>, IoError> {
+        Ok(self
+            .rows_of::<f64, 1>(name, ids, self.head.nodes)?
+            .into_iter()
+            .map(|[x]| x)
+            .collect())
+    }
+
+    /// The nodes (global ids) of elements `ids`.
+    pub fn elem_tets(&self, ids: &[u32]) -> Result<Vec<[u32; 4]>, IoError> {
+        self.rows_of::<u32, 4>("mesh/tets", ids, self.head.elems)
+    }
+}
+
+/// Runs of consecutive ids: (first id, positions in `ids` of the run's
+/// ids in ascending order).
+fn runs(ids: &[u32]) -> Vec<(u64, Vec<usize>)> {
+    let mut order: Vec<usize> = (0..ids.len()).collect();
+    order.sort_by_key(|&i| ids[i]);
+    let mut out: Vec<(u64, Vec<usize>)> = Vec::new();
+    for i in order {
+        let id = u64::from(ids[i]);
+        match out.last_mut() {
+            Some((start, run)) if *start + run.len() as u64 == id => run.push(i),
+            _ => out.push((id, vec![i])),
+        }
+    }
+    out
+}
+
+fn check_format(file: &File, path: &Path) -> Result<(), IoError> {
+    let format = file
+        .attr("format")
+        .and_then(|a| a.read_raw::<u8>())
+        .map_err(|_| IoError::invalid(path, "not an fdem checkpoint (no `format` attribute)"))?;
+    if format != FORMAT.as_bytes() {
+        return Err(IoError::invalid(path, "not an fdem checkpoint"));
+    }
+    let version = file
+        .attr("version")
+        .and_then(|a| a.read_raw::<u8>())
+        .map_err(|e| IoError::hdf5(path, "reading the version", e))?;
+    if version != VERSION.to_le_bytes() {
+        return Err(IoError::invalid(
+            path,
+            format!("checkpoint version {version:?}, this fdem reads version {VERSION}"),
+        ));
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -445,12 +908,71 @@ mod tests {
         }
     }
 
+    /// Write `c` as a run on one rank would.
+    fn write(c: &Checkpoint, p: &Path) -> Result<(), IoError> {
+        let head = CheckpointHead {
+            step: c.step,
+            time: c.time,
+            substeps: c.substeps,
+            nodes: c.reference.len() as u64,
+            elems: c.tets.len() as u64,
+            body_names: c.body_names.clone(),
+            body_templates: c.body_templates.clone(),
+            body_nodes: c.body_nodes.clone(),
+            body_elems: c.body_elems.clone(),
+            ksp_iterations: c.ksp_iterations,
+            heat: c.heat,
+            dissipated: c.dissipated,
+            peak_kinetic: c.peak_kinetic,
+            thermal_contacts: c.thermal_contacts,
+            dissipated_per_rank: c.dissipated_per_rank.clone(),
+            account: c.account.as_ref().map(|a| (a.base, a.steps)),
+            settled: c.settled,
+            ..Default::default()
+        };
+        let node_gid: Vec<u32> = (0..c.reference.len() as u32).collect();
+        let elem_gid: Vec<u32> = (0..c.tets.len() as u32).collect();
+        let rows = CheckpointRows {
+            node_gid: &node_gid,
+            reference: &c.reference,
+            elem_gid: &elem_gid,
+            tets: &c.tets,
+            elem_body: &c.elem_body,
+            positions: c.positions.as_deref(),
+            velocities: c.velocities.as_deref(),
+            velocities_prev: c.velocities_prev.as_deref(),
+            temperature: c.temperature.as_deref(),
+            account_t0: c.account.as_ref().map(|a| &a.t0[..]),
+            account_t_sum: c.account.as_ref().map(|a| &a.t_sum[..]),
+        };
+        crate::testutil::on_one_rank(|comm| write_parallel(comm, p, &head, &rows))
+    }
+
+    #[test]
+    fn partial_reads_are_the_rows() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("c.h5");
+        let c = sample();
+        write(&c, &p).unwrap();
+        let f = CheckpointFile::open(&p).unwrap();
+        assert_eq!(f.head.nodes, 4);
+        assert_eq!(f.head.bodies_of("nut"), vec![0]);
+        let ids = [3u32, 0, 1];
+        let x = f.node_rows3("mesh/reference", &ids).unwrap();
+        assert_eq!(x, ids.map(|i| c.reference[i as usize]).to_vec());
+        let t = f.node_rows1("state/temperature", &ids).unwrap();
+        let ct = c.temperature.as_ref().unwrap();
+        assert_eq!(t, ids.map(|i| ct[i as usize]).to_vec());
+        assert_eq!(f.elem_tets(&[0]).unwrap(), c.tets);
+        assert!(f.node_rows3("mesh/reference", &[4]).is_err());
+    }
+
     #[test]
     fn round_trip_is_bitwise() {
         let dir = tempfile::tempdir().unwrap();
         let p = dir.path().join("c.h5");
         let c = sample();
-        c.write(&p).unwrap();
+        write(&c, &p).unwrap();
         assert!(!tmp_path(&p).exists());
         let r = Checkpoint::read(&p).unwrap();
         assert_eq!(r, c);
@@ -458,7 +980,7 @@ mod tests {
         let mut m = c.clone();
         m.temperature = None;
         m.positions = None;
-        m.write(&p).unwrap();
+        write(&m, &p).unwrap();
         assert_eq!(Checkpoint::read(&p).unwrap(), m);
     }
 
@@ -475,7 +997,7 @@ mod tests {
         let mut c = sample();
         c.tets[0][3] = 9;
         let r = dir.path().join("bad.h5");
-        c.write(&r).unwrap();
+        write(&c, &r).unwrap();
         let e = Checkpoint::read(&r).unwrap_err().to_string();
         assert!(e.contains("element 0"), "{e}");
     }

@@ -69,9 +69,75 @@ where
     out
 }
 
+/// The block of `total` rows that rank `r` of `size` holds: rows
+/// [r·total/size, (r+1)·total/size).
+pub fn block(total: u64, size: usize, r: usize) -> (u64, u64) {
+    let at = |k: usize| (u128::from(total) * k as u128 / size as u128) as u64;
+    (at(r), at(r + 1))
+}
+
+/// The rank whose block (see [`block`]) holds row `row` of `total`.
+pub fn block_owner(row: u64, total: u64, size: usize) -> usize {
+    // The largest r with r·total/size ≤ row.
+    let mut r = ((u128::from(row) * size as u128) / u128::from(total.max(1))) as usize;
+    r = r.min(size - 1);
+    while r + 1 < size && block(total, size, r + 1).0 <= row {
+        r += 1;
+    }
+    while r > 0 && block(total, size, r).0 > row {
+        r -= 1;
+    }
+    r
+}
+
+/// Collective. Rows keyed by global id (`ids[i]` with `width` values at
+/// `values[width·i..]`), one rank each, moved to contiguous blocks of the
+/// `total` ids ([`block`]): returns this rank's block start and its rows
+/// in id order. Every id below `total` must be given by exactly one rank.
+pub fn to_blocks<C: Communicator>(
+    comm: &C,
+    ids: &[u32],
+    values: &[f64],
+    width: usize,
+    total: u64,
+) -> (u64, Vec<f64>) {
+    let size = comm.size() as usize;
+    let mut send: Vec<Vec<f64>> = vec![Vec::new(); size];
+    for (i, &g) in ids.iter().enumerate() {
+        let r = block_owner(u64::from(g), total, size);
+        send[r].push(f64::from(g));
+        send[r].extend_from_slice(&values[width * i..width * (i + 1)]);
+    }
+    let got = all_to_all(comm, &send);
+    let (lo, hi) = block(total, size, comm.rank() as usize);
+    let mut out = vec![0.0; (hi - lo) as usize * width];
+    for rec in got.iter().flat_map(|v| v.chunks_exact(width + 1)) {
+        let row = (rec[0] as u64 - lo) as usize;
+        out[width * row..width * (row + 1)].copy_from_slice(&rec[1..]);
+    }
+    (lo, out)
+}
+
 #[cfg(test)]
 mod tests {
     use super::displacements;
+
+    #[test]
+    fn blocks_tile_the_rows_and_owners_find_them() {
+        for (total, size) in [(0u64, 1usize), (10, 3), (7, 4), (3, 5), (1000, 7)] {
+            let mut next = 0;
+            for r in 0..size {
+                let (lo, hi) = super::block(total, size, r);
+                assert_eq!(lo, next);
+                assert!(hi >= lo);
+                for row in lo..hi {
+                    assert_eq!(super::block_owner(row, total, size), r);
+                }
+                next = hi;
+            }
+            assert_eq!(next, total);
+        }
+    }
 
     #[test]
     fn displacements_are_prefix_sums() {

@@ -12,6 +12,7 @@ pub mod ghosts;
 mod halo;
 mod part;
 mod partition;
+pub mod rcb;
 
 pub use halo::Halo;
 pub use part::{GlobalBcs, LocalBcs, Part, WholeMaps};

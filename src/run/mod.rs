@@ -26,7 +26,7 @@ use mpi::traits::*;
 
 use crate::dynamics::ExplicitDomain;
 use crate::error::{Error, Result};
-use crate::io::checkpoint::Checkpoint;
+use crate::io::checkpoint::CheckpointHead;
 use crate::model::Model;
 use crate::parallel::Part;
 use crate::petsc::Petsc;
@@ -82,7 +82,7 @@ pub fn run(
         None => None,
     };
     let mut st = Stages::set_up(petsc, comm, &model, restart.as_ref(), opts, times)?;
-    let ck = restart.as_ref().map(|r| &r.checkpoint);
+    let ck = restart.as_ref().map(|r| &r.file.head);
     // Output: only now that the input is known good are files created.
     let mut out = st.start_output(opts.output_dir.as_deref(), ck)?;
     let show = opts.progress && comm.rank() == 0;
@@ -113,7 +113,7 @@ impl Position {
     /// At the start (the checkpoint's step on a restart).
     fn new(
         model: &Model,
-        ck: Option<&Checkpoint>,
+        ck: Option<&CheckpointHead>,
         out: &Output,
         heat: bool,
         mechanics: bool,
@@ -185,9 +185,9 @@ impl<'a, 'p> Stages<'a, 'p> {
         mut times: PhaseTimes,
     ) -> Result<Self> {
         let part = setup::partition(comm, model, &mut times)?;
-        let ck = restart.map(|r| &r.checkpoint);
+        let ck = restart.map(|r| &r.file.head);
         let mut mech = setup::mechanics(comm, model, &part, restart, &mut times)?;
-        let contacts = Contacts::new(comm, model, &part, ck, mech.as_mut())?;
+        let contacts = Contacts::new(comm, model, &part, restart, mech.as_mut())?;
         let sys = setup::thermal(
             petsc,
             comm,
@@ -216,7 +216,7 @@ impl Stages<'_, '_> {
     /// Collective. Open the output (continued after the checkpoint on a
     /// restart in place) and write the start: its fields unless the
     /// series continues, and its particle statistics.
-    fn start_output(&mut self, dir: Option<&Path>, ck: Option<&Checkpoint>) -> Result<Output> {
+    fn start_output(&mut self, dir: Option<&Path>, ck: Option<&CheckpointHead>) -> Result<Output> {
         let clock = Instant::now();
         let start_step = ck.map_or(0, |c| c.step);
         let mut out = self.open_output(dir, ck)?;
@@ -290,7 +290,7 @@ impl Stages<'_, '_> {
     }
 
     /// Collective. Open the output files.
-    fn open_output(&self, dir: Option<&Path>, restart: Option<&Checkpoint>) -> Result<Output> {
+    fn open_output(&self, dir: Option<&Path>, restart: Option<&CheckpointHead>) -> Result<Output> {
         let (heat, mechanics) = (self.sys.is_some(), self.mech.is_some());
         Output::open(
             self.comm, self.model, &self.part, dir, heat, mechanics, restart,
@@ -365,7 +365,8 @@ impl Stages<'_, '_> {
                     let t: Vec<f64> = part
                         .owned_gids()
                         .iter()
-                        .map(|&n| model.prescribed_temperature(n, time))
+                        .zip(&part.bc.initial_t)
+                        .map(|(&n, &t0)| model.prescribed_temperature(n, t0, time))
                         .collect();
                     m.set_temperatures(comm, &t, Some(span));
                 }

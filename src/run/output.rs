@@ -12,7 +12,7 @@ use mpi::traits::*;
 
 use crate::contact::ContactSet;
 use crate::error::{Error, Result};
-use crate::io::checkpoint::Checkpoint;
+use crate::io::checkpoint::CheckpointHead;
 use crate::io::particles::ParticleReport;
 use crate::io::{HistoryWriter, MeshPart, TimeSeriesWriter};
 use crate::model::Model;
@@ -52,7 +52,7 @@ impl Output {
         output_dir: Option<&Path>,
         heat: bool,
         mechanics: bool,
-        restart: Option<&Checkpoint>,
+        restart: Option<&CheckpointHead>,
     ) -> Result<Output> {
         let rank = comm.rank();
         let stem = model.output.stem.clone();

@@ -4,7 +4,7 @@
 
 use mpi::topology::SimpleCommunicator;
 
-use crate::io::checkpoint::Checkpoint;
+use crate::io::checkpoint::CheckpointHead;
 use crate::model::Model;
 use crate::scenario::SettleSpec;
 
@@ -22,7 +22,7 @@ pub(super) struct Settling {
 }
 
 impl Settling {
-    pub fn new(model: &Model, restart: Option<&Checkpoint>) -> Settling {
+    pub fn new(model: &Model, restart: Option<&CheckpointHead>) -> Settling {
         let free_mass: f64 = (0..model.mesh.tets.len())
             .filter(|&e| !model.bodies[model.mesh.body[e] as usize].is_held())
             .map(|e| model.material_of(e).density * model.mesh.element_volume(e))

@@ -16,10 +16,10 @@ use crate::contact::{
 };
 use crate::dynamics::ExplicitDomain;
 use crate::error::{Error, Result};
-use crate::io::checkpoint::Checkpoint;
+use crate::io::checkpoint::CheckpointHead;
 use crate::model::Model;
 use crate::parallel::ghosts::exchange_ghosts;
-use crate::parallel::Part;
+use crate::parallel::{agree, Part};
 use crate::petsc::Petsc;
 use crate::thermal::ThermalSystem;
 
@@ -94,8 +94,11 @@ pub(super) fn mechanics(
         }
         None => None,
     };
+    if let Some(r) = restart {
+        r.check_part(comm, part)?;
+    }
     if let (Some(r), Some(m)) = (restart, mech.as_mut()) {
-        checkpoint::restore_mechanics(comm, r, m)?;
+        checkpoint::restore_mechanics(comm, part, r, m)?;
     }
     times.mechanics = clock.elapsed().as_secs_f64();
     times.mechanics_setup = times.mechanics;
@@ -147,7 +150,7 @@ impl Contacts {
         comm: &SimpleCommunicator,
         model: &Model,
         part: &Part,
-        restart: Option<&Checkpoint>,
+        restart: Option<&Restart>,
         mech: Option<&mut Mechanics>,
     ) -> Result<Contacts> {
         let source = if !(model.thermal_active && model.contact.is_some()) {
@@ -157,17 +160,12 @@ impl Contacts {
         } else {
             let mut own = part.contact_tets(None);
             let moving = model.has_motion();
-            if moving {
-                match restart {
-                    Some(Checkpoint {
-                        positions: Some(p), ..
-                    }) => {
-                        for (x, &g) in own.x.iter_mut().zip(&part.node_gid) {
-                            *x = p[g as usize];
-                        }
-                    }
-                    Some(ck) => moved_positions(model, part, ck.time, &mut own.x),
-                    None => {}
+            if let (true, Some(r)) = (moving, restart) {
+                if r.file.head.has_positions {
+                    let x = r.file.node_rows3("state/positions", &part.node_gid);
+                    own.x = agree(comm, x.map_err(Error::from))?;
+                } else {
+                    moved_positions(model, part, r.file.head.time, &mut own.x);
                 }
             }
             let ext = (0..own.len())
@@ -333,7 +331,7 @@ pub(super) fn thermal<'p>(
         }
     }
     if let (Some(r), Some(s)) = (restart, sys.as_mut()) {
-        checkpoint::restore_thermal(part, r, s)?;
+        checkpoint::restore_thermal(comm, part, r, s)?;
     }
     Ok(sys)
 }
@@ -346,7 +344,7 @@ pub(super) fn couple_temperatures(
     part: &Part,
     sys: Option<&ThermalSystem>,
     mech: Option<&mut Mechanics>,
-    restart: Option<&Checkpoint>,
+    restart: Option<&CheckpointHead>,
 ) -> Result<()> {
     let Some(Mechanics { domain: m, .. }) = mech else {
         return Ok(());
@@ -359,7 +357,8 @@ pub(super) fn couple_temperatures(
             let t: Vec<f64> = part
                 .owned_gids()
                 .iter()
-                .map(|&n| model.prescribed_temperature(n, ck.time))
+                .zip(&part.bc.initial_t)
+                .map(|(&n, &t0)| model.prescribed_temperature(n, t0, ck.time))
                 .collect();
             m.set_temperatures(comm, &t, None);
         }

@@ -255,8 +255,11 @@ fn dispatch(
                 sc.take_checkpoints_from(d)?;
             }
             let model = Model::from_scenario(&sc)?;
+            // Every body made on this process: the meshes, sets and
+            // conditions checked as a run would make them.
+            let whole = model.whole_mesh()?;
             if rank == 0 {
-                let q = model.mesh.min_quality();
+                let q = whole.mesh.min_quality();
                 println!("{}: ok", path.display());
                 let scheme = if model.thermal_active {
                     format!("theta = {}", model.thermal.theta)
@@ -266,8 +269,8 @@ fn dispatch(
                 println!(
                     "  {} bodies, {} nodes, {} Tet4, {} steps of {} s ({scheme})",
                     model.bodies.len(),
-                    model.mesh.nodes.len(),
-                    model.mesh.tets.len(),
+                    whole.mesh.nodes.len(),
+                    whole.mesh.tets.len(),
                     model.steps,
                     model.dt,
                 );
@@ -277,9 +280,9 @@ fn dispatch(
                 if model.thermal_active {
                     println!(
                         "  {} prescribed-temperature nodes, {} flux faces, {} convection faces",
-                        model.thermal.dirichlet.len(),
-                        model.thermal.flux.len(),
-                        model.thermal.convection.len()
+                        whole.dirichlet.len(),
+                        whole.flux.len(),
+                        whole.convection.len()
                     );
                 }
             }

@@ -1,6 +1,6 @@
-//! Particle packs (seed 000 sec 6): copies of one particle template placed
-//! above a container for a deposition run, and bodies taken back from a
-//! checkpoint for the next stage. Builds meshes only; no MPI or PETSc.
+//! Particle packs (seed 000 sec 6): where the copies of one particle
+//! template go above a container for a deposition run (a rigid motion per
+//! copy; the meshes are made by the ranks that hold them). No MPI or PETSc.
 //!
 //! Checks made before any work, each naming the scenario entry: the
 //! template is a closed volume, the container is wide enough for one
@@ -15,8 +15,8 @@ use crate::geometry::placement::{
     centroid_and_radius, column_sites, drop_sites, random_rotations, Column,
 };
 use crate::geometry::tet_tet_intersection;
-use crate::io::checkpoint::Checkpoint;
 use crate::mesh::TetMesh;
+use crate::model::Motion;
 use crate::scenario::{MeshSpec, PackSpec, Placement as PlacementKind};
 
 /// Where a particle goes: its centroid and its rotation.
@@ -55,17 +55,17 @@ impl ContainerInterior {
     }
 }
 
-/// The placed copies of a particle template: `(name, mesh)` per particle.
-/// `template` is the particle's mesh as the scenario gives it; it is
-/// rotated about its centroid and moved to each site. `base` resolves a
-/// positions file.
+/// The placed copies of a particle template: `(name, motion)` per
+/// particle. `template` is the particle's mesh as the scenario gives it;
+/// each copy is it rotated about its centroid and moved to a site
+/// ([`Motion::apply`]). `base` resolves a positions file.
 pub fn place(
     name: &str,
     template: &TetMesh,
     spec: &PackSpec,
     container: &ContainerInterior,
     base: &dyn Fn(&str) -> std::path::PathBuf,
-) -> Result<Vec<(String, TetMesh)>, String> {
+) -> Result<Vec<(String, Motion)>, String> {
     template
         .check_closed_volume()
         .map_err(|e| format!("the particle template: {e}"))?;
@@ -125,22 +125,35 @@ pub fn place(
         }
     };
     let c = Vector3::from(c);
-    let copies: Vec<(String, TetMesh)> = placements
+    let copies: Vec<(String, Motion)> = placements
         .iter()
         .enumerate()
         .map(|(i, (site, rot))| {
-            let mut m = template.clone();
-            for p in m.nodes.iter_mut() {
-                let q = site + rot * (Vector3::from(*p) - c);
-                *p = [q.x, q.y, q.z];
-            }
-            (format!("{name}_{i}"), m)
+            let motion = Motion::Place {
+                rotation: *rot,
+                center: c,
+                site: *site,
+            };
+            (format!("{name}_{i}"), motion)
         })
         .collect();
     if spec.positions.is_some() {
-        check_no_overlap(&copies, r)?;
+        let meshes: Vec<(String, TetMesh)> = copies
+            .iter()
+            .map(|(n, m)| (n.clone(), moved(template, m)))
+            .collect();
+        check_no_overlap(&meshes, r)?;
     }
     Ok(copies)
+}
+
+/// `template` moved by `motion`.
+pub fn moved(template: &TetMesh, motion: &Motion) -> TetMesh {
+    let mut m = template.clone();
+    for p in m.nodes.iter_mut() {
+        *p = motion.apply(*p);
+    }
+    m
 }
 
 /// Particles given as `x, y, z, rx, ry, rz` lines (rotations in degrees
@@ -226,39 +239,6 @@ pub fn overlap_volume(a: &TetMesh, b: &TetMesh) -> Option<f64> {
     None
 }
 
-/// The bodies of a checkpoint that came from scenario entry `template`,
-/// each as `(name, mesh)` at its checkpoint positions.
-pub fn from_checkpoint(ck: &Checkpoint, template: &str) -> Result<Vec<(String, TetMesh)>, String> {
-    let ids = ck.bodies_of(template);
-    if ids.is_empty() {
-        let mut t: Vec<&str> = ck.body_templates.iter().map(String::as_str).collect();
-        t.sort_unstable();
-        t.dedup();
-        return Err(format!(
-            "the checkpoint has no bodies from the entry `{template}`; it has: {}",
-            t.join(", ")
-        ));
-    }
-    let x = ck.positions.as_ref().unwrap_or(&ck.reference);
-    Ok(ids
-        .into_iter()
-        .map(|b| {
-            let [n0, n1] = ck.body_nodes[b];
-            let [e0, e1] = ck.body_elems[b];
-            let m = TetMesh {
-                nodes: x[n0 as usize..n1 as usize].to_vec(),
-                tets: ck.tets[e0 as usize..e1 as usize]
-                    .iter()
-                    .map(|t| t.map(|n| n - n0))
-                    .collect(),
-                body: vec![0; (e1 - e0) as usize],
-                ..Default::default()
-            };
-            (ck.body_names[b].clone(), m)
-        })
-        .collect())
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -288,24 +268,30 @@ mod tests {
         let nut = nut_mesh_default([0.0; 3]).unwrap();
         let mut column = spec(60);
         column.placement = PlacementKind::Column;
-        let stacked = place("nut", &nut, &column, &BOX, &|s| s.into()).unwrap();
+        let meshes = |placed: Vec<(String, Motion)>| -> Vec<(String, TetMesh)> {
+            placed
+                .iter()
+                .map(|(n, m)| (n.clone(), moved(&nut, m)))
+                .collect()
+        };
+        let stacked = meshes(place("nut", &nut, &column, &BOX, &|s| s.into()).unwrap());
         for i in 0..8 {
             for j in 0..i {
                 assert!(overlap_volume(&stacked[i].1, &stacked[j].1).is_none());
             }
         }
-        let copies = place("nut", &nut, &spec(60), &BOX, &|s| s.into()).unwrap();
+        let copies = meshes(place("nut", &nut, &spec(60), &BOX, &|s| s.into()).unwrap());
         assert_eq!(copies.len(), 60);
         for (_, m) in &copies {
             assert!((m.total_volume() - nut.total_volume()).abs() < 1e-12 * nut.total_volume());
             m.validate().unwrap();
         }
         // Same seed, same placement; another seed, another.
-        let again = place("nut", &nut, &spec(60), &BOX, &|s| s.into()).unwrap();
+        let again = meshes(place("nut", &nut, &spec(60), &BOX, &|s| s.into()).unwrap());
         assert_eq!(copies, again);
         let mut s2 = spec(60);
         s2.seed = 4;
-        let other = place("nut", &nut, &s2, &BOX, &|s| s.into()).unwrap();
+        let other = meshes(place("nut", &nut, &s2, &BOX, &|s| s.into()).unwrap());
         assert_ne!(copies[0].1.nodes, other[0].1.nodes);
         // Dropped: every pair of the first 20 (they touch within the gap).
         for i in 0..20 {

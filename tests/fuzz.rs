@@ -678,7 +678,8 @@ fn mutate_scenario(base: &str, rng: &mut Pcg64, cap: Option<&dyn Fn(&mut Value)>
 /// Parse, validate and build the model, as `fdem check` does.
 fn check_in_process(text: &str, path: &Path, sets: &[String]) -> Result<(), String> {
     let sc = fdem::scenario::parse_str(text, path, sets).map_err(|e| e.to_string())?;
-    fdem::model::Model::from_scenario(&sc).map_err(|e| e.to_string())?;
+    let model = fdem::model::Model::from_scenario(&sc).map_err(|e| e.to_string())?;
+    model.whole_mesh().map_err(|e| e.to_string())?;
     Ok(())
 }
 

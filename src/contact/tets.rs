@@ -68,6 +68,11 @@ pub struct OwnAndGhosts<'a> {
 }
 
 impl OwnAndGhosts<'_> {
+    /// The tets and the index in them of handle `h`.
+    pub fn locate(&self, h: u32) -> (&ContactTets, usize) {
+        self.at(h)
+    }
+
     fn at(&self, h: u32) -> (&ContactTets, usize) {
         let n = self.own.len() as u32;
         if h < n {

@@ -15,7 +15,7 @@ use mpi::traits::*;
 use nalgebra::Matrix3;
 
 use super::domain::PairTet;
-use super::ExplicitDomain;
+use super::{ExplicitDomain, NONE};
 use crate::contact::penalty::pair_stiffness;
 use crate::contact::{
     tet_pair_contact, ContactPair, OwnAndGhosts, PairDofs, SearchOptions, TetFaces,
@@ -24,6 +24,7 @@ use crate::error::{Error, Result};
 use crate::geometry::{face_planes, planes_within, TetPlanes};
 use crate::mechanics::MechElement;
 use crate::parallel::exchange::all_to_all;
+use crate::parallel::ghosts::exchange_ghosts;
 use crate::parallel::Halo;
 
 /// Substeps the fastest node should need before contact re-detection.
@@ -140,23 +141,20 @@ fn part_local(gids: &[u32], n_owned: usize, gid: u32) -> Option<u32> {
         .ok()
 }
 
-/// Tets listed once each, by global id, with their local nodes.
+/// The tets of the pairs with their local nodes and what the narrow
+/// phase needs of them.
 #[derive(Default)]
 struct TetSlots {
-    slots: HashMap<u32, u32>,
     tets: Vec<[u32; 4]>,
     info: Vec<PairTet>,
 }
 
 impl TetSlots {
-    /// The slot of tet `t`, listed now if new.
-    fn slot(&mut self, t: &TetRecord, local: &impl Fn(u32) -> u32) -> u32 {
-        let (tets, info) = (&mut self.tets, &mut self.info);
-        *self.slots.entry(t.info.gid).or_insert_with(|| {
-            tets.push(t.nodes.map(|n| local(n[0])));
-            info.push(t.info);
-            (tets.len() - 1) as u32
-        })
+    /// List a tet; its slot.
+    fn push(&mut self, nodes: [u32; 4], info: PairTet) -> u32 {
+        self.tets.push(nodes);
+        self.info.push(info);
+        (self.tets.len() - 1) as u32
     }
 }
 
@@ -178,24 +176,23 @@ impl ExplicitDomain {
         self.contact_local.clear();
         self.x.truncate(np);
         self.v.truncate(np);
-        let mut penalty_pairs: Vec<PairRecord> = Vec::new();
-        let mut thermal_pairs: Vec<(TetRecord, TetRecord)> = Vec::new();
         if self.penalty.is_some() || self.thermal {
             for (p, x) in self.part_tets.x.iter_mut().zip(&self.x) {
                 *p = [x.x, x.y, x.z];
             }
             let own = std::mem::take(&mut self.part_tets);
-            let ghosts =
-                crate::parallel::ghosts::exchange_ghosts(comm, &own, self.margin, self.thermal);
+            let ghosts = exchange_ghosts(comm, &own, &mut self.pieces, self.margin, self.thermal);
             let og = OwnAndGhosts {
                 own: &own,
                 ghosts: &ghosts,
             };
-            let (kept, weights) = self.find_pairs(&og, &mut thermal_pairs);
-            penalty_pairs = self.balance_pairs(comm, &og, &kept, &weights);
+            let (kept, weights, thermal) = self.find_pairs(&og);
+            let (here, received) = self.balance_pairs(comm, &og, &kept, &weights);
+            self.install(&og, &here, &received, &thermal);
             self.part_tets = own;
+        } else {
+            self.install_none();
         }
-        self.install(&penalty_pairs, &thermal_pairs);
         self.refresh_local_arrays();
         // Fresh candidates: planes rebuilt on demand, no linearisations.
         let nt = self.pair_tets.len();
@@ -275,11 +272,8 @@ impl ExplicitDomain {
     /// the thermal contact is coupled, the search also returns a boundary
     /// tet against another body's interior tets and pairs of two held
     /// bodies, kept for the thermal contact only (`thermal`).
-    fn find_pairs(
-        &mut self,
-        og: &OwnAndGhosts,
-        thermal: &mut Vec<(TetRecord, TetRecord)>,
-    ) -> (Vec<(u32, u32)>, Vec<u64>) {
+    #[allow(clippy::type_complexity)]
+    fn find_pairs(&mut self, og: &OwnAndGhosts) -> (Vec<(u32, u32)>, Vec<u64>, Vec<(u32, u32)>) {
         let margin = self.margin;
         let opts = SearchOptions {
             margin,
@@ -295,9 +289,16 @@ impl ExplicitDomain {
         // surface of seed 000 sec 3.1; a tet that meets the surface only
         // at an edge or corner overlaps a shallow intruder by O(δ²).
         let penalty = self.penalty.is_some();
-        let mut planes: Vec<Option<[[f64; 4]; 4]>> = vec![None; og.len()];
+        // Each tet's face planes, built once (on first use).
+        let mut plane_at: Vec<u32> = vec![NONE; og.len()];
+        let mut planes: Vec<[[f64; 4]; 4]> = Vec::new();
         let mut plane = |h: u32| -> [[f64; 4]; 4] {
-            *planes[h as usize].get_or_insert_with(|| face_planes(&og.corners(h)))
+            let at = &mut plane_at[h as usize];
+            if *at == NONE {
+                *at = planes.len() as u32;
+                planes.push(face_planes(&og.corners(h)));
+            }
+            planes[*at as usize]
         };
         let body_of = |h: u32| {
             let n = og.own.len() as u32;
@@ -309,6 +310,7 @@ impl ExplicitDomain {
         };
         let mut kept: Vec<(u32, u32)> = Vec::new();
         let mut weights: Vec<u64> = Vec::new();
+        let mut thermal: Vec<(u32, u32)> = Vec::new();
         for c in found {
             let both_held = held[body_of(c.a) as usize] && held[body_of(c.b) as usize];
             if penalty && c.b_boundary && !both_held {
@@ -318,41 +320,46 @@ impl ExplicitDomain {
                     weights.push(if c.hot { HOT_PAIR_WEIGHT } else { 1 });
                 }
             } else if self.thermal {
-                thermal.push((TetRecord::of(og, c.a), TetRecord::of(og, c.b)));
+                thermal.push((c.a, c.b));
             }
         }
-        (kept, weights)
+        (kept, weights, thermal)
     }
 
-    /// The penalty pair of tets `a` (of a free body) and `b`, handles of `og`.
+    /// The penalty pair of tets `a` (of a free body) and `b`, handles of
+    /// `og`, as it travels.
     fn pair_record(&self, og: &OwnAndGhosts, a: u32, b: u32) -> PairRecord {
-        let (ra, rb) = (TetRecord::of(og, a), TetRecord::of(og, b));
-        let volume = |h: u32| {
-            let n = og.own.len() as u32;
-            if h < n {
-                og.own.volume0[h as usize]
-            } else {
-                og.ghosts.volume0[(h - n) as usize]
-            }
-        };
-        let (va, vb) = (volume(a), volume(b));
+        let (_, _, stiffness, reduced_mass) = self.pair_record_values(og, a, b);
+        PairRecord {
+            a: TetRecord::of(og, a),
+            b: TetRecord::of(og, b),
+            stiffness,
+            reduced_mass,
+        }
+    }
+
+    /// The bodies, stiffness and reduced mass of the penalty pair of tets
+    /// `a` (of a free body) and `b`, handles of `og`.
+    fn pair_record_values(&self, og: &OwnAndGhosts, a: u32, b: u32) -> (u32, u32, f64, f64) {
+        let (sa, ia) = og.locate(a);
+        let (sb, ib) = og.locate(b);
+        let (ra, rb) = (
+            (sa.body[ia], sa.material[ia]),
+            (sb.body[ib], sb.material[ib]),
+        );
+        let (va, vb) = (sa.volume0[ia], sb.volume0[ib]);
         let (ma, mb) = (
-            self.density[ra.info.material as usize] * va,
-            self.density[rb.info.material as usize] * vb,
+            self.density[ra.1 as usize] * va,
+            self.density[rb.1 as usize] * vb,
         );
         // a is never held (held bodies do not search).
-        let reduced_mass = if self.body_held[rb.info.body as usize] {
+        let reduced_mass = if self.body_held[rb.0 as usize] {
             ma
         } else {
             ma * mb / (ma + mb)
         };
         let penalty = self.penalty.map_or(0.0, |(_, pn)| pn);
-        PairRecord {
-            a: ra,
-            b: rb,
-            stiffness: pair_stiffness(penalty, va, vb),
-            reduced_mass,
-        }
+        (ra.0, rb.0, pair_stiffness(penalty, va, vb), reduced_mass)
     }
 
     /// Collective. Share the pair work evenly over the ranks. Each rank
@@ -365,111 +372,184 @@ impl ExplicitDomain {
     /// (the pair's nodes become ghosts there). The forces do not depend
     /// on which rank evaluates a pair (they are summed by pair key).
     /// Returns the pairs this rank evaluates.
+    #[allow(clippy::type_complexity)]
     fn balance_pairs(
         &self,
         comm: &SimpleCommunicator,
         og: &OwnAndGhosts,
         kept: &[(u32, u32)],
         weights: &[u64],
-    ) -> Vec<PairRecord> {
+    ) -> (Vec<(u32, u32)>, Vec<PairRecord>) {
         let size = comm.size() as usize;
         let rank = comm.rank() as usize;
-        let all_here = || {
-            kept.iter()
-                .map(|&(a, b)| self.pair_record(og, a, b))
-                .collect()
-        };
         if size == 1 {
-            return all_here();
+            return (kept.to_vec(), Vec::new());
         }
         let mine: u64 = weights.iter().sum();
         let mut all = vec![0u64; size];
         comm.all_gather_into(&mine, &mut all[..]);
         let total: u64 = all.iter().sum();
         if total == 0 {
-            return all_here();
+            return (kept.to_vec(), Vec::new());
         }
         let mut at: u64 = all[..rank].iter().sum();
         let mut out: Vec<Vec<f64>> = vec![Vec::new(); size];
-        let mut keep = Vec::with_capacity(kept.len());
+        let mut here = Vec::with_capacity(kept.len());
         for (&(a, b), &w) in kept.iter().zip(weights) {
             // The rank whose equal share holds the pair's mid-point.
             let mid = 2 * u128::from(at) + u128::from(w);
             let dest = ((mid * size as u128) / (2 * u128::from(total))).min(size as u128 - 1);
             at += w;
-            let r = self.pair_record(og, a, b);
             if dest as usize == rank {
-                keep.push(r);
+                here.push((a, b));
             } else {
+                let r = self.pair_record(og, a, b);
                 let o = &mut out[dest as usize];
                 o.extend_from_slice(&[r.stiffness, r.reduced_mass]);
                 r.a.push(o);
                 r.b.push(o);
             }
         }
-        for rec in all_to_all(comm, &out)
+        let received = all_to_all(comm, &out)
             .iter()
             .flat_map(|v| v.chunks_exact(PAIR_F64S))
-        {
-            keep.push(PairRecord {
+            .map(|rec| PairRecord {
                 stiffness: rec[0],
                 reduced_mass: rec[1],
                 a: TetRecord::read(&rec[2..2 + TET_F64S]),
                 b: TetRecord::read(&rec[2 + TET_F64S..]),
-            });
-        }
-        keep
+            })
+            .collect();
+        (here, received)
     }
 
-    /// Install the pairs this rank evaluates: their tets (each once), the
-    /// contact ghosts their nodes need (ascending global id), and the
-    /// candidates.
-    fn install(&mut self, penalty: &[PairRecord], thermal: &[(TetRecord, TetRecord)]) {
-        // Contact ghosts: the nodes of the pairs' tets that the part lacks.
+    /// No contact: no pairs, no contact ghosts.
+    fn install_none(&mut self) {
+        self.candidates.clear();
+        self.pair_tets.clear();
+        self.pair_info.clear();
+        self.thermal_only.clear();
+        self.thermal_tets.clear();
+        self.thermal_info.clear();
+    }
+
+    /// Install the pairs this rank evaluates: its own (`here`, handles of
+    /// `og`), those other ranks passed it (`received`), and the
+    /// thermal-only ones; their tets (each once per source), the contact
+    /// ghosts their nodes need, and the candidates.
+    fn install(
+        &mut self,
+        og: &OwnAndGhosts,
+        here: &[(u32, u32)],
+        received: &[PairRecord],
+        thermal: &[(u32, u32)],
+    ) {
         let (np, no) = (self.n_part_nodes, self.n_owned);
-        let mut extra: Vec<[u32; 3]> = penalty
-            .iter()
-            .flat_map(|p| [p.a, p.b])
-            .chain(thermal.iter().flat_map(|&(a, b)| [a, b]))
-            .flat_map(|t| t.nodes)
-            .filter(|n| part_local(&self.node_gid[..np], no, n[0]).is_none())
-            .collect();
-        extra.sort_unstable_by_key(|n| n[0]);
-        extra.dedup_by_key(|n| n[0]);
-        for n in &extra {
-            self.contact_local.insert(n[0], self.node_gid.len() as u32);
-            self.node_gid.push(n[0]);
-            self.node_owner.push(n[1]);
-            self.node_petsc.push(n[2]);
-        }
-        let (gids, contact) = (&self.node_gid[..np], &self.contact_local);
-        let local = |gid: u32| part_local(gids, no, gid).unwrap_or_else(|| contact[&gid]);
-        // The tets, each once, in the order the pairs name them.
+        let n_own = og.own.len() as u32;
+        // Local node of each ghost tet node, made on first use.
+        let mut ghost_local: Vec<u32> = vec![NONE; og.ghosts.node_gid.len()];
+        let mut node_of = |dom: &mut ExplicitDomain, g: usize| -> u32 {
+            if ghost_local[g] == NONE {
+                let gid = og.ghosts.node_gid[g];
+                ghost_local[g] = match part_local(&dom.node_gid[..np], no, gid) {
+                    Some(l) => l,
+                    None => {
+                        dom.contact_ghost(gid, og.ghosts.node_owner[g], og.ghosts.node_petsc[g])
+                    }
+                };
+            }
+            ghost_local[g]
+        };
+        let mut slot_of: Vec<u32> = vec![NONE; og.len()];
         let mut pt = TetSlots::default();
-        let candidates: Vec<Candidate> = penalty
-            .iter()
-            .map(|p| Candidate {
+        let mut slot = |dom: &mut ExplicitDomain, h: u32, pt: &mut TetSlots| -> u32 {
+            if slot_of[h as usize] == NONE {
+                let nodes = if h < n_own {
+                    og.own.tets[h as usize]
+                } else {
+                    og.ghosts.tets[(h - n_own) as usize].map(|g| node_of(dom, g as usize))
+                };
+                slot_of[h as usize] = pt.push(nodes, TetRecord::of(og, h).info);
+            }
+            slot_of[h as usize]
+        };
+        let mut candidates: Vec<Candidate> = Vec::with_capacity(here.len() + received.len());
+        for &(a, b) in here {
+            let r = self.pair_record_values(og, a, b);
+            let (ta, tb) = (slot(self, a, &mut pt), slot(self, b, &mut pt));
+            candidates.push(Candidate {
+                a: og.gid(a),
+                b: og.gid(b),
+                ta,
+                tb,
+                body_a: r.0,
+                body_b: r.1,
+                stiffness: r.2,
+                reduced_mass: r.3,
+            });
+        }
+        // Pairs from other ranks: their tets by global id.
+        let mut by_gid: HashMap<u32, u32> = HashMap::new();
+        for p in received {
+            let mut tslot = |dom: &mut ExplicitDomain, t: &TetRecord| -> u32 {
+                *by_gid.entry(t.info.gid).or_insert_with(|| {
+                    let nodes = t.nodes.map(|[gid, owner, petsc]| {
+                        part_local(&dom.node_gid[..np], no, gid).unwrap_or_else(|| {
+                            match dom.contact_local.get(&gid) {
+                                Some(&l) => l,
+                                None => dom.contact_ghost(gid, owner, petsc),
+                            }
+                        })
+                    });
+                    pt.push(nodes, t.info)
+                })
+            };
+            let (ta, tb) = (tslot(self, &p.a), tslot(self, &p.b));
+            candidates.push(Candidate {
                 a: p.a.info.gid,
                 b: p.b.info.gid,
-                ta: pt.slot(&p.a, &local),
-                tb: pt.slot(&p.b, &local),
+                ta,
+                tb,
                 body_a: p.a.info.body,
                 body_b: p.b.info.body,
                 stiffness: p.stiffness,
                 reduced_mass: p.reduced_mass,
-            })
-            .collect();
+            });
+        }
         let mut tt = TetSlots::default();
-        let thermal_only: Vec<(u32, u32)> = thermal
-            .iter()
-            .map(|(a, b)| (tt.slot(a, &local), tt.slot(b, &local)))
-            .collect();
+        let mut tslot_of: Vec<u32> = vec![NONE; og.len()];
+        let mut thermal_only = Vec::with_capacity(thermal.len());
+        for &(a, b) in thermal {
+            let mut one = |h: u32, dom: &mut ExplicitDomain| -> u32 {
+                if tslot_of[h as usize] == NONE {
+                    let nodes = if h < n_own {
+                        og.own.tets[h as usize]
+                    } else {
+                        og.ghosts.tets[(h - n_own) as usize].map(|g| node_of(dom, g as usize))
+                    };
+                    tslot_of[h as usize] = tt.push(nodes, TetRecord::of(og, h).info);
+                }
+                tslot_of[h as usize]
+            };
+            let (ta, tb) = (one(a, self), one(b, self));
+            thermal_only.push((ta, tb));
+        }
         self.candidates = candidates;
         self.pair_tets = pt.tets;
         self.pair_info = pt.info;
         self.thermal_only = thermal_only;
         self.thermal_tets = tt.tets;
         self.thermal_info = tt.info;
+    }
+
+    /// A new contact ghost node; its local index.
+    fn contact_ghost(&mut self, gid: u32, owner: u32, petsc: u32) -> u32 {
+        let l = self.node_gid.len() as u32;
+        self.contact_local.insert(gid, l);
+        self.node_gid.push(gid);
+        self.node_owner.push(owner);
+        self.node_petsc.push(petsc);
+        l
     }
 
     /// Collective. The thermal contact pairs this rank holds at the

@@ -17,6 +17,7 @@ use crate::error::{Error, Result};
 use crate::geometry::TetPlanes;
 use crate::mechanics::{ElasticMaterial, MechElement, Tet4Reference, VelocityBc};
 use crate::model::{Body, Model};
+use crate::parallel::ghosts::Pieces;
 use crate::parallel::{Halo, Part};
 
 /// A tet of a contact pair, as the pair's rank keeps it.
@@ -75,6 +76,8 @@ pub struct ExplicitDomain {
     /// The part's tets as the contact search reads them (positions
     /// refreshed at each detection).
     pub(super) part_tets: ContactTets,
+    /// The part's tets grouped by body for the ghost exchange.
+    pub(super) pieces: Pieces,
     /// The contact search.
     pub(super) search: ContactSearch,
     /// Whether the thermal contact reads the candidates (a coupled run).
@@ -216,7 +219,7 @@ impl ExplicitDomain {
         });
         let pn = penalty.as_ref().map(|(_, pn)| *pn);
         let (dt, substeps, min_len_all) =
-            time_step(comm, model, &materials, &elem_ids, pn, coupling_dt)?;
+            time_step(comm, model, part, &materials, &free, pn, coupling_dt)?;
         let margin = mm
             .contact
             .as_ref()
@@ -276,6 +279,7 @@ impl ExplicitDomain {
             body_fixed: model.bodies.iter().map(|b| b.fixed).collect(),
             body_held,
             part_tets: part.contact_tets(None),
+            pieces: Pieces::default(),
             search: ContactSearch::new(),
             thermal: model.thermal_active && model.contact.is_some(),
             thermal_only: Vec::new(),
@@ -320,6 +324,7 @@ impl ExplicitDomain {
             redetect: false,
             counters: MechanicsCounters::default(),
         };
+        dom.pieces = Pieces::new(&dom.part_tets);
         dom.detect(comm)?;
         dom.update_element_temperatures(None);
         Ok((dom, substeps))

@@ -52,9 +52,15 @@ fn cube(alpha: f64, h: f64, mechanics: &str) -> Model {
     boxes(alpha, h, &[([0.0; 3], [1.0; 3])], mechanics)
 }
 
+/// Every body of the model made on this process.
+fn whole(model: &Model) -> crate::model::WholeMesh {
+    model.whole_mesh().unwrap()
+}
+
 /// Every element on rank 0 of 1.
 fn one_rank_layout(model: &Model) -> Part {
-    Part::from_model(model, &vec![0; model.mesh.tets.len()], 0, 1)
+    let w = whole(model);
+    Part::from_whole(&w, &vec![0; w.mesh.tets.len()], 0, 1)
 }
 
 fn domain(comm: &SimpleCommunicator, model: &Model, part: &Part) -> ExplicitDomain {
@@ -62,11 +68,10 @@ fn domain(comm: &SimpleCommunicator, model: &Model, part: &Part) -> ExplicitDoma
 }
 
 /// Velocity boundary condition `value` on component `d` of node set `set`.
-fn set_bc(model: &mut Model, set: &str, d: usize, value: Option<f64>) {
-    let nodes = model.mesh.node_sets[set].clone();
-    let bc = &mut model.mechanics.as_mut().unwrap().bc;
-    for n in nodes {
-        bc[n as usize][d] = value;
+fn set_bc(model: &Model, part: &mut Part, set: &str, d: usize, value: Option<f64>) {
+    for &n in &whole(model).mesh.node_sets[set] {
+        let l = part.local_node(n).unwrap() as usize;
+        part.bc.velocity[l][d] = value;
     }
 }
 
@@ -114,11 +119,11 @@ fn heated_free_cube(comm: &SimpleCommunicator, h: f64) -> (f64, f64, u64) {
     // Lowest mode of the cube on three symmetry planes is a shear mode:
     // ω_1 ≈ π c_s / (2 L) with c_s = sqrt(μ/ρ).
     let w1 = std::f64::consts::PI * (mu / mat.density).sqrt() / 2.0;
-    let mut model = cube(1e-5, h, &format!("damping = {:e}", 2.0 * w1));
+    let model = cube(1e-5, h, &format!("damping = {:e}", 2.0 * w1));
+    let mut part = one_rank_layout(&model);
     for (d, side) in ["b0.xmin", "b0.ymin", "b0.zmin"].iter().enumerate() {
-        set_bc(&mut model, side, d, Some(0.0));
+        set_bc(&model, &mut part, side, d, Some(0.0));
     }
-    let part = one_rank_layout(&model);
     let mut dom = domain(comm, &model, &part);
     heat(comm, &model, &mut dom, 100.0);
     // 30/ω_1 of settling: the slowest (critically damped) modes decay as exp(−ω_1 t).
@@ -156,17 +161,12 @@ fn fixed_heated_cube_matches_eq_38() {
     on_one_rank(|comm| {
         let mat = concrete(1e-6);
         let (mu, lambda) = mat.lame();
-        let mut model = cube(1e-6, 1.0, "");
-        for d in 0..3 {
-            model
-                .mechanics
-                .as_mut()
-                .unwrap()
-                .bc
-                .iter_mut()
-                .for_each(|b| b[d] = Some(0.0));
-        }
-        let part = one_rank_layout(&model);
+        let model = cube(1e-6, 1.0, "");
+        let mut part = one_rank_layout(&model);
+        part.bc
+            .velocity
+            .iter_mut()
+            .for_each(|b| *b = [Some(0.0); 3]);
         let mut dom = domain(comm, &model, &part);
         heat(comm, &model, &mut dom, 100.0);
         dom.advance(comm, 5).unwrap();
@@ -195,16 +195,16 @@ fn time_step_above_the_limit_is_an_error() {
         let safety = model.mechanics.as_ref().unwrap().safety;
         let dom = domain(comm, &model, &part);
         let crit = dom.dt / safety;
-        let x: Vec<Vector3<f64>> = model.mesh.nodes.iter().map(|p| Vector3::from(*p)).collect();
-        let omega =
-            body_max_frequency(&x, &model.mesh.tets, &vec![mat; model.mesh.tets.len()]).unwrap();
+        let w = whole(&model);
+        let x: Vec<Vector3<f64>> = w.mesh.nodes.iter().map(|p| Vector3::from(*p)).collect();
+        let omega = body_max_frequency(&x, &w.mesh.tets, &vec![mat; w.mesh.tets.len()]).unwrap();
         // Round-off tolerance 1e-12 relative.
         assert!(
             (crit * omega / 2.0 - 1.0).abs() < 1e-12,
             "{crit} vs {}",
             2.0 / omega
         );
-        let element = critical_dt(&model.mesh, &[mat]).unwrap().dt;
+        let element = critical_dt(&w.mesh, &[mat]).unwrap().dt;
         let want = 0.5 / 6f64.sqrt() / mat.p_wave_speed();
         assert!((element / want - 1.0).abs() < 1e-12);
         assert!(
@@ -265,7 +265,8 @@ fn undamped_vibration_conserves_momentum_and_energy() {
         let mut dom = domain(comm, &model, &part);
         let c = Vector3::new(0.3, 0.5, 0.4);
         let omega = Vector3::new(0.0, 0.0, 0.001);
-        let velocities: Vec<[f64; 3]> = model
+        let w = whole(&model);
+        let velocities: Vec<[f64; 3]> = w
             .mesh
             .nodes
             .iter()
@@ -276,7 +277,7 @@ fn undamped_vibration_conserves_momentum_and_energy() {
             })
             .collect();
         let saved = SavedMotion {
-            positions: &model.mesh.nodes,
+            positions: &w.mesh.nodes,
             velocities: &velocities,
             velocities_prev: None,
             dissipated: 0.0,
@@ -322,12 +323,12 @@ fn undamped_vibration_conserves_momentum_and_energy() {
 #[test]
 fn velocity_boundary_conditions_are_imposed() {
     on_one_rank(|comm| {
-        let mut model = cube(0.0, 0.5, "gravity = [0.0, 0.0, -9.81]");
+        let model = cube(0.0, 0.5, "gravity = [0.0, 0.0, -9.81]");
+        let mut part = one_rank_layout(&model);
         for d in 0..3 {
-            set_bc(&mut model, "b0.zmin", d, Some(0.0));
+            set_bc(&model, &mut part, "b0.zmin", d, Some(0.0));
         }
-        set_bc(&mut model, "b0.zmax", 0, Some(0.1));
-        let part = one_rank_layout(&model);
+        set_bc(&model, &mut part, "b0.zmax", 0, Some(0.1));
         let mut dom = domain(comm, &model, &part);
         let n = 50;
         dom.advance(comm, n).unwrap();
@@ -337,10 +338,11 @@ fn velocity_boundary_conditions_are_imposed() {
             let i = part.owned_gids().iter().position(|&o| o == node).unwrap();
             Vector3::new(u[3 * i], u[3 * i + 1], u[3 * i + 2])
         };
-        for &i in &model.mesh.node_sets["b0.zmin"] {
+        let w = whole(&model);
+        for &i in &w.mesh.node_sets["b0.zmin"] {
             assert_eq!(row(i), Vector3::zeros());
         }
-        for &i in &model.mesh.node_sets["b0.zmax"] {
+        for &i in &w.mesh.node_sets["b0.zmax"] {
             // x displacement = 0.1 t (round-off of x += Δt u, 1e-9 relative).
             assert!((row(i).x - 0.1 * t).abs() < 1e-9 * (0.1 * t));
         }
@@ -384,7 +386,7 @@ fn force_sum_is_the_serial_sum_in_any_element_order() {
         let part = one_rank_layout(&model);
         let mut dom = domain(comm, &model, &part);
         // A deformed, moving state.
-        let positions: Vec<[f64; 3]> = model
+        let positions: Vec<[f64; 3]> = whole(&model)
             .mesh
             .nodes
             .iter()
@@ -409,7 +411,7 @@ fn force_sum_is_the_serial_sum_in_any_element_order() {
         dom.substep(comm).unwrap();
         let first = dom.f[..dom.n_owned].to_vec();
         // Serial: every element, in id order, added into one nodal array.
-        let elements = mesh_elements(&model.mesh, 1).unwrap();
+        let elements = mesh_elements(&whole(&model).mesh, 1).unwrap();
         let xs: Vec<Vector3<f64>> = positions.iter().map(|p| Vector3::from(*p)).collect();
         let vs: Vec<Vector3<f64>> = velocities.iter().map(|p| Vector3::from(*p)).collect();
         let mut serial = vec![Vector3::zeros(); xs.len()];
@@ -463,7 +465,7 @@ fn candidates_are_the_pairs_within_the_margin() {
             for c in &dom.candidates {
                 assert_eq!((c.body_a, c.body_b), (0, 1));
                 for (e, b) in [(c.a, 0), (c.b, 1)] {
-                    assert_eq!(model.mesh.body[e as usize], b);
+                    assert_eq!(whole(&model).mesh.body[e as usize], b);
                     assert!(dom.pair_info.iter().any(|t| t.gid == e && t.mask != 0));
                 }
             }

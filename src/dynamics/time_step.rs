@@ -15,50 +15,49 @@ use crate::mechanics::frequency::{
 };
 use crate::mechanics::ElasticMaterial;
 use crate::model::Model;
+use crate::parallel::Part;
 
-/// Collective. The explicit step of the free elements `elem_ids` of this
-/// rank (`pn` the contact penalty, if any): the scenario's, checked against
-/// the critical one, or safety × critical, cut to fill `coupling_dt`.
+/// Collective. The explicit step of the free elements `free` (local
+/// indices) of this rank's part (`pn` the contact penalty, if any): the
+/// scenario's, checked against the critical one, or safety × critical, cut
+/// to fill `coupling_dt`.
 /// Returns (Δt, substeps per thermal step, the smallest characteristic
 /// element length over the ranks).
 pub(super) fn time_step(
     comm: &SimpleCommunicator,
     model: &Model,
+    part: &Part,
     materials: &[ElasticMaterial],
-    elem_ids: &[u32],
+    free: &[usize],
     pn: Option<f64>,
     coupling_dt: f64,
 ) -> Result<(f64, u64, f64)> {
     let mm = model.mechanics.as_ref().expect("mechanics model");
-    let mesh = &model.mesh;
+    let mesh = &part.mesh;
     // Time step: the exact highest frequency of each small free body
     // (congruent copies share it), the element bound in larger ones; the
-    // contact penalty acts as a stiffer modulus.
+    // contact penalty acts as a stiffer modulus. A small body is never
+    // split over ranks, so its elements are all here.
     let mut dt_local = f64::INFINITY;
     let mut min_len = f64::INFINITY;
-    let mut body_elems: Vec<Vec<u32>> = vec![Vec::new(); model.bodies.len()];
-    for &e in elem_ids {
-        body_elems[mesh.body[e as usize] as usize].push(e);
-    }
-    let mut all_elems: Vec<Vec<u32>> = vec![Vec::new(); model.bodies.len()];
-    for (e, &b) in mesh.body.iter().enumerate() {
-        if !body_elems[b as usize].is_empty() {
-            all_elems[b as usize].push(e as u32);
-        }
+    let mut body_elems: std::collections::BTreeMap<u32, Vec<usize>> = Default::default();
+    for &e in free {
+        body_elems.entry(mesh.body[e]).or_default().push(e);
     }
     let mut shapes: Vec<(BodyShape, f64)> = Vec::new();
     let mut local_error = None;
-    for (b, owned) in body_elems.iter().enumerate() {
-        if owned.is_empty() {
-            continue;
-        }
+    for (&b, owned) in &body_elems {
         for &e in owned {
-            min_len = min_len.min(characteristic_length(&to_vectors(
-                &mesh.element_coords(e as usize),
-            )));
+            min_len = min_len.min(characteristic_length(&to_vectors(&mesh.element_coords(e))));
         }
-        let body_dt = body_frequency(model, materials, &all_elems[b], &mut shapes)
-            .map_err(|err| Error::Mechanics(format!("body `{}`: {err}", model.bodies[b].name)));
+        let body = &model.bodies[b as usize];
+        let whole = owned.len() as u32 == body.elem_range.1 - body.elem_range.0;
+        let body_dt = if whole {
+            body_frequency(part, materials, owned, &mut shapes)
+                .map_err(|err| Error::Mechanics(format!("body `{}`: {err}", body.name)))
+        } else {
+            Ok(None)
+        };
         match body_dt.unwrap_or_else(|err| {
             local_error.get_or_insert(err);
             None
@@ -72,9 +71,8 @@ pub(super) fn time_step(
             }
             None => {
                 for &e in owned {
-                    let e = e as usize;
                     let xe = to_vectors(&mesh.element_coords(e));
-                    let mat = &materials[model.elem_material[e] as usize];
+                    let mat = &materials[part.elem_material[e] as usize];
                     dt_local = dt_local.min(element_critical_dt(&xe, mat));
                     if let Some(pn) = pn {
                         // Not numbered in the seeds: a penalty p_n acts like a modulus, Δt ≤ L sqrt(ρ/p_n).
@@ -118,30 +116,29 @@ pub(super) fn time_step(
 /// smallest P-wave modulus M) of its elements; `None` for larger bodies.
 /// `shapes` caches ω_max of the shapes seen (copies of one template).
 fn body_frequency(
-    model: &Model,
+    part: &Part,
     materials: &[ElasticMaterial],
-    elems: &[u32],
+    elems: &[usize],
     shapes: &mut Vec<(BodyShape, f64)>,
 ) -> std::result::Result<Option<(f64, f64, f64)>, crate::mechanics::MechanicsError> {
-    let mesh = &model.mesh;
-    let mut nodes: Vec<u32> = elems.iter().flat_map(|&e| mesh.tets[e as usize]).collect();
-    nodes.sort_unstable();
+    let mesh = &part.mesh;
+    // The body's nodes in ascending global id (the same numbering on any rank).
+    let mut nodes: Vec<u32> = elems.iter().flat_map(|&e| mesh.tets[e]).collect();
+    nodes.sort_unstable_by_key(|&l| part.node_gid[l as usize]);
     nodes.dedup();
     if nodes.len() > BODY_EIGEN_MAX_NODES {
         return Ok(None);
     }
-    let local = |g: u32| nodes.binary_search(&g).expect("node of the body") as u32;
-    let tets: Vec<[u32; 4]> = elems
-        .iter()
-        .map(|&e| mesh.tets[e as usize].map(local))
-        .collect();
-    let mat_ids: Vec<u32> = elems
-        .iter()
-        .map(|&e| model.elem_material[e as usize])
-        .collect();
+    let local = |l: u32| {
+        nodes
+            .binary_search_by_key(&part.node_gid[l as usize], |&k| part.node_gid[k as usize])
+            .expect("node of the body") as u32
+    };
+    let tets: Vec<[u32; 4]> = elems.iter().map(|&e| mesh.tets[e].map(local)).collect();
+    let mat_ids: Vec<u32> = elems.iter().map(|&e| part.elem_material[e]).collect();
     let x: Vec<Vector3<f64>> = nodes
         .iter()
-        .map(|&g| Vector3::from(mesh.nodes[g as usize]))
+        .map(|&l| Vector3::from(mesh.nodes[l as usize]))
         .collect();
     let shape = BodyShape::new(&x, &tets, &mat_ids);
     let omega = match shapes.iter().find(|(s, _)| s.congruent(&shape)) {

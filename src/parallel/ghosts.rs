@@ -37,33 +37,57 @@ fn overlap(a: &Aabb, b: &Aabb, g: f64) -> bool {
     (0..3).all(|d| a.0[d] - g <= b.1[d] && b.0[d] <= a.1[d] + g)
 }
 
-/// One body's tets on this rank: the indices of its tets in `own`, and
-/// their box.
+/// One body's tets on this rank: the indices of its tets and of their
+/// nodes in the rank's [`ContactTets`], and their box.
 struct Piece {
     body: u32,
     tets: Vec<u32>,
+    nodes: Vec<u32>,
     bounds: Aabb,
 }
 
-fn pieces(own: &ContactTets) -> Vec<Piece> {
-    let mut by_body: HashMap<u32, Vec<u32>> = HashMap::new();
-    for (t, &b) in own.body.iter().enumerate() {
-        by_body.entry(b).or_default().push(t as u32);
-    }
-    let mut out: Vec<Piece> = by_body
-        .into_iter()
-        .map(|(body, tets)| {
-            let mut bounds = empty_box();
-            for &t in &tets {
-                for p in own.corners(t as usize) {
-                    grow(&mut bounds, p);
+/// The pieces of a rank's tets, one per body: grouped once, boxed at each
+/// exchange from the current positions.
+#[derive(Default)]
+pub struct Pieces {
+    pieces: Vec<Piece>,
+}
+
+impl Pieces {
+    /// Group the tets of `own` by body.
+    pub fn new(own: &ContactTets) -> Pieces {
+        let mut by_body: HashMap<u32, Vec<u32>> = HashMap::new();
+        for (t, &b) in own.body.iter().enumerate() {
+            by_body.entry(b).or_default().push(t as u32);
+        }
+        let mut pieces: Vec<Piece> = by_body
+            .into_iter()
+            .map(|(body, tets)| {
+                let mut nodes: Vec<u32> = tets.iter().flat_map(|&t| own.tets[t as usize]).collect();
+                nodes.sort_unstable();
+                nodes.dedup();
+                Piece {
+                    body,
+                    tets,
+                    nodes,
+                    bounds: empty_box(),
                 }
+            })
+            .collect();
+        pieces.sort_by_key(|p| p.body);
+        Pieces { pieces }
+    }
+
+    /// Box every piece at the positions of `own`.
+    fn update(&mut self, own: &ContactTets) {
+        for p in &mut self.pieces {
+            let mut b = empty_box();
+            for &n in &p.nodes {
+                grow(&mut b, own.x[n as usize]);
             }
-            Piece { body, tets, bounds }
-        })
-        .collect();
-    out.sort_by_key(|p| p.body);
-    out
+            p.bounds = b;
+        }
+    }
 }
 
 fn box_f64(b: &Aabb) -> [f64; 6] {
@@ -83,15 +107,17 @@ fn f64_box(v: &[f64]) -> Aabb {
 pub fn exchange_ghosts<C: Communicator>(
     comm: &C,
     own: &ContactTets,
+    pieces: &mut Pieces,
     margin: f64,
     interior: bool,
 ) -> ContactTets {
     let size = comm.size() as usize;
     let me = comm.rank() as usize;
-    let mine = pieces(own);
+    pieces.update(own);
+    let mine = &pieces.pieces;
     // 1. One box per rank.
     let mut rank_box = empty_box();
-    for p in &mine {
+    for p in mine {
         union(&mut rank_box, &p.bounds);
     }
     let boxes: Vec<f64> = all_gather(comm, &box_f64(&rank_box));
@@ -102,7 +128,7 @@ pub fn exchange_ghosts<C: Communicator>(
             continue;
         }
         let rb = f64_box(rb);
-        for p in &mine {
+        for p in mine {
             if overlap(&p.bounds, &rb, margin) {
                 send[r].push(f64::from(p.body));
                 send[r].extend_from_slice(&box_f64(&p.bounds));

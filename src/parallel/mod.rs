@@ -7,6 +7,7 @@
 //! touch it; rank r's owned nodes get the consecutive global numbers
 //! [start_r, end_r), sorted by global id.
 
+mod build;
 pub mod exchange;
 pub mod ghosts;
 mod halo;
@@ -14,6 +15,7 @@ mod part;
 mod partition;
 pub mod rcb;
 
+pub use build::IMBALANCE;
 pub use halo::Halo;
 pub use part::{GlobalBcs, LocalBcs, Part, WholeMaps};
 pub use partition::{

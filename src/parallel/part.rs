@@ -242,36 +242,26 @@ impl Part {
         crate::contact::BoundaryTets::from_masks(&self.face_mask, self.boundary_node.clone())
     }
 
-    /// Rank `rank`'s part (of `size`) of a model built on every rank, for
-    /// the element partition `elem_part`.
-    pub fn from_model(
-        model: &crate::model::Model,
+    /// Rank `rank`'s part (of `size`) of a model's bodies all made on this
+    /// process ([`crate::model::Model::whole_mesh`]), for the element
+    /// partition `elem_part` (tests).
+    pub fn from_whole(
+        w: &crate::model::WholeMesh,
         elem_part: &[u32],
         rank: usize,
         size: usize,
     ) -> Part {
         let bcs = GlobalBcs {
-            initial_t: model.thermal.initial.clone(),
-            dirichlet: model.thermal.dirichlet.clone(),
-            flux: model.thermal.flux.clone(),
-            convection: model.thermal.convection.clone(),
-            velocity: model
-                .mechanics
-                .as_ref()
-                .map_or(Vec::new(), |m| m.bc.clone()),
-            traction: model
-                .mechanics
-                .as_ref()
-                .map_or(Vec::new(), |m| m.traction.clone()),
+            initial_t: w.initial_t.clone(),
+            dirichlet: w.dirichlet.clone(),
+            flux: w.flux.clone(),
+            convection: w.convection.clone(),
+            velocity: w.velocity.clone(),
+            traction: w.traction.clone(),
         };
-        Part::from_global(
-            &model.mesh,
-            &model.elem_material,
-            elem_part,
-            rank,
-            size,
-            &bcs,
-        )
+        let mut p = Part::from_global(&w.mesh, &w.material, elem_part, rank, size, &bcs);
+        p.whole = None;
+        p
     }
 
     /// Build rank `rank`'s part (of `size`) from the whole mesh and an

@@ -114,6 +114,19 @@ pub fn rcb<C: Communicator + AsRaw<Raw = mpi_sys::MPI_Comm>>(
     if size == 1 {
         return Ok(vec![0; objects.len()]);
     }
+    // Fewer objects than ranks (Zoltan's RCB refuses them): object k in
+    // global order goes to rank k, and the other ranks stay empty.
+    let count = objects.len() as u64;
+    let mut total = 0u64;
+    comm.all_reduce_into(&count, &mut total, mpi::collective::SystemOperation::sum());
+    if total < size as u64 {
+        let mut before = 0u64;
+        comm.exclusive_scan_into(&count, &mut before, mpi::collective::SystemOperation::sum());
+        if comm.rank() == 0 {
+            before = 0;
+        }
+        return Ok((0..count).map(|i| (before + i) as u32).collect());
+    }
     INIT.call_once(|| {
         let mut ver = 0f32;
         // SAFETY: MPI is initialised (the communicator exists); Zoltan

@@ -86,7 +86,7 @@ pub fn run(
     // Output: only now that the input is known good are files created.
     let mut out = st.start_output(opts.output_dir.as_deref(), ck)?;
     let show = opts.progress && comm.rank() == 0;
-    let mut at = Position::new(&model, ck, &out, st.sys.is_some(), st.mech.is_some(), show);
+    let mut at = Position::new(&st, ck, &out, show);
     while let Some(target) = at.next_stop() {
         st.advance(at.step, target)?;
         at.reached(target);
@@ -111,16 +111,10 @@ struct Position {
 
 impl Position {
     /// At the start (the checkpoint's step on a restart).
-    fn new(
-        model: &Model,
-        ck: Option<&CheckpointHead>,
-        out: &Output,
-        heat: bool,
-        mechanics: bool,
-        show: bool,
-    ) -> Position {
+    fn new(st: &Stages, ck: Option<&CheckpointHead>, out: &Output, show: bool) -> Position {
+        let (model, heat, mechanics) = (st.model, st.sys.is_some(), st.mech.is_some());
         let start_step = ck.map_or(0, |c| c.step);
-        let settling = Settling::new(model, ck);
+        let settling = Settling::new(st.comm, model, &st.part, ck);
         let schedule = Schedule::new(
             model.steps,
             &model.output_steps,

@@ -16,6 +16,7 @@ use crate::io::checkpoint::CheckpointHead;
 use crate::io::particles::ParticleReport;
 use crate::io::{HistoryWriter, MeshPart, TimeSeriesWriter};
 use crate::model::Model;
+use crate::parallel::exchange::{block, to_blocks};
 use crate::parallel::{agree, Part};
 use crate::scenario::ParticleOutputSpec;
 use crate::thermal::ThermalSystem;
@@ -197,6 +198,15 @@ impl Output {
                 .collect();
             node_fields.push(("displacement", 3, u));
         }
+        // In global id order: each rank its block of rows.
+        let node_fields: Vec<(&str, usize, Vec<f64>)> = node_fields
+            .into_iter()
+            .map(|(n, c, v)| (n, c, node_block(comm, model, part, &v, c)))
+            .collect();
+        let cell_fields: Vec<(&str, usize, Vec<f64>)> = cell_fields
+            .into_iter()
+            .map(|(n, c, v)| (n, c, cell_block(comm, model, part, &v, c)))
+            .collect();
         let nf: Vec<(&str, usize, &[f64])> = node_fields
             .iter()
             .map(|(n, c, v)| (*n, *c, v.as_slice()))
@@ -381,22 +391,35 @@ impl BodyStats {
     }
 }
 
-/// This rank's part of the output mesh: owned node coordinates, and cells
-/// in the global (PETSc) node numbering.
-fn mesh_rows(part: &Part) -> (Vec<[f64; 3]>, Vec<[u32; 4]>) {
-    let coords = part.mesh.nodes[..part.n_owned].to_vec();
-    let cells = part
-        .mesh
-        .tets
-        .iter()
-        .map(|t| t.map(|l| part.petsc[l as usize]))
-        .collect();
-    (coords, cells)
+/// Collective. `values` (`width` per owned node of the part) moved to
+/// this rank's block of the global node ids: the series is written in
+/// global id order, the same file on any number of ranks.
+fn node_block(
+    comm: &SimpleCommunicator,
+    model: &Model,
+    part: &Part,
+    values: &[f64],
+    width: usize,
+) -> Vec<f64> {
+    to_blocks(comm, part.owned_gids(), values, width, model.totals().0).1
+}
+
+/// Collective. `values` (`width` per element of the part) moved to this
+/// rank's block of the global element ids.
+fn cell_block(
+    comm: &SimpleCommunicator,
+    model: &Model,
+    part: &Part,
+    values: &[f64],
+    width: usize,
+) -> Vec<f64> {
+    to_blocks(comm, &part.elem_gid, values, width, model.totals().1).1
 }
 
 /// Collective. The series writer of `dir`: a new series, or with
 /// `continue_after = Some(t)` the existing one reopened to continue after
-/// the checkpoint at `t` (same mesh and partition, checked).
+/// the checkpoint at `t` (the same mesh, checked). Rows are global ids:
+/// each rank writes its block of them.
 fn open_writer(
     comm: &SimpleCommunicator,
     model: &Model,
@@ -405,37 +428,53 @@ fn open_writer(
     stem: &str,
     continue_after: Option<f64>,
 ) -> Result<TimeSeriesWriter> {
-    let (coords, cells) = mesh_rows(part);
-    let ncells = cells.len() as u64;
-    let mut cell_offset = 0u64;
-    comm.exclusive_scan_into(&ncells, &mut cell_offset, SystemOperation::sum());
-    if comm.rank() == 0 {
-        cell_offset = 0;
-    }
-    let mut global_cells = 0u64;
-    comm.all_reduce_into(&ncells, &mut global_cells, SystemOperation::sum());
+    let (size, rank) = (comm.size() as usize, comm.rank() as usize);
+    let (nodes, cells) = model.totals();
+    let no = part.num_owned();
+    let x: Vec<f64> = part.mesh.nodes[..no].iter().flatten().copied().collect();
+    let coords: Vec<[f64; 3]> = node_block(comm, model, part, &x, 3)
+        .chunks_exact(3)
+        .map(|c| [c[0], c[1], c[2]])
+        .collect();
+    let t: Vec<f64> = part
+        .mesh
+        .tets
+        .iter()
+        .flat_map(|t| t.map(|l| f64::from(part.node_gid[l as usize])))
+        .collect();
+    let topology: Vec<[u32; 4]> = cell_block(comm, model, part, &t, 4)
+        .chunks_exact(4)
+        .map(|c| [c[0] as u32, c[1] as u32, c[2] as u32, c[3] as u32])
+        .collect();
+    let owner = vec![rank as f64; part.num_elements()];
+    let rank_cell: Vec<i32> = cell_block(comm, model, part, &owner, 1)
+        .iter()
+        .map(|&r| r as i32)
+        .collect();
+    let (n0, _) = block(nodes, size, rank);
+    let (c0, _) = block(cells, size, rank);
     let rows = MeshPart {
-        global_nodes: part.num_global() as u64,
-        node_offset: part.owned_range().0 as u64,
+        global_nodes: nodes,
+        node_offset: n0,
         coords: &coords,
-        global_cells,
-        cell_offset,
-        cells: &cells,
+        global_cells: cells,
+        cell_offset: c0,
+        cells: &topology,
     };
-    let node_id: Vec<i32> = part.owned_gids().iter().map(|&n| n as i32).collect();
+    let node_id: Vec<i32> = (n0..n0 + coords.len() as u64).map(|g| g as i32).collect();
     if let Some(keep_until) = continue_after {
         return Ok(TimeSeriesWriter::reopen(
             comm, dir, stem, &rows, &node_id, keep_until,
         )?);
     }
     let mut w = TimeSeriesWriter::create(comm, dir, stem, &rows)?;
-    let body_node: Vec<i32> = part
-        .owned_gids()
+    let body_node: Vec<i32> = node_id
         .iter()
-        .map(|&n| model.body_of_node(n) as i32)
+        .map(|&n| model.body_of_node(n as u32) as i32)
         .collect();
-    let body_cell: Vec<i32> = part.mesh.body.iter().map(|&b| b as i32).collect();
-    let rank_cell: Vec<i32> = vec![comm.rank(); cells.len()];
+    let body_cell: Vec<i32> = (c0..c0 + topology.len() as u64)
+        .map(|e| model.body_of_elem(e as u32) as i32)
+        .collect();
     w.write_static_node_field_i32("body", &body_node)?;
     w.write_static_node_field_i32("node_id", &node_id)?;
     w.write_static_cell_field_i32("body", &body_cell)?;

@@ -2,10 +2,13 @@
 //! bodies' kinetic energy falls below a threshold (absolute, relative to
 //! its peak, or an rms speed) after a given time.
 
+use mpi::collective::SystemOperation;
 use mpi::topology::SimpleCommunicator;
+use mpi::traits::*;
 
 use crate::io::checkpoint::CheckpointHead;
 use crate::model::Model;
+use crate::parallel::Part;
 use crate::scenario::SettleSpec;
 
 use super::{Mechanics, Settled};
@@ -22,11 +25,21 @@ pub(super) struct Settling {
 }
 
 impl Settling {
-    pub fn new(model: &Model, restart: Option<&CheckpointHead>) -> Settling {
-        let free_mass: f64 = (0..model.mesh.tets.len())
-            .filter(|&e| !model.bodies[model.mesh.body[e] as usize].is_held())
-            .map(|e| model.material_of(e).density * model.mesh.element_volume(e))
+    /// Collective. The criterion of `model` on its parts (the free mass
+    /// summed over the ranks), at a checkpoint's state on a restart.
+    pub fn new(
+        comm: &SimpleCommunicator,
+        model: &Model,
+        part: &Part,
+        restart: Option<&CheckpointHead>,
+    ) -> Settling {
+        let m = &part.mesh;
+        let mine: f64 = (0..part.num_elements())
+            .filter(|&e| !model.bodies[m.body[e] as usize].is_held())
+            .map(|e| model.materials[part.elem_material[e] as usize].density * m.element_volume(e))
             .sum();
+        let mut free_mass = 0.0;
+        comm.all_reduce_into(&mine, &mut free_mass, SystemOperation::sum());
         Settling {
             spec: model.mechanics.as_ref().and_then(|m| m.settle),
             free_mass,

@@ -18,7 +18,7 @@ use crate::dynamics::ExplicitDomain;
 use crate::error::{Error, Result};
 use crate::io::checkpoint::CheckpointHead;
 use crate::model::Model;
-use crate::parallel::ghosts::exchange_ghosts;
+use crate::parallel::ghosts::{exchange_ghosts, Pieces};
 use crate::parallel::{agree, Part};
 use crate::petsc::Petsc;
 use crate::thermal::ThermalSystem;
@@ -26,49 +26,16 @@ use crate::thermal::ThermalSystem;
 use super::checkpoint::{self, Restart};
 use super::{Mechanics, PhaseTimes, RunOptions};
 
-/// Collective. Partition the model over the ranks.
+/// Collective. Each rank's part of the model: whole bodies, and pieces of
+/// the large ones, cut by recursive coordinate bisection; each rank makes
+/// only what it holds.
 pub(super) fn partition(
     comm: &SimpleCommunicator,
     model: &Model,
     times: &mut PhaseTimes,
 ) -> Result<Part> {
     let clock = Instant::now();
-    // With mechanics, elements of held bodies (a container) cost only their
-    // thermal share: weight the partition by the explicit work.
-    let weights: Option<Vec<i32>> = model.mechanics.as_ref().map(|_| {
-        model
-            .mesh
-            .body
-            .iter()
-            .map(|&b| {
-                let body = &model.bodies[b as usize];
-                if body.is_held() {
-                    1
-                } else {
-                    8
-                }
-            })
-            .collect()
-    });
-    // Touching bodies are linked in the element graph (the contact
-    // search's pairs of boundary tets whose boxes touch).
-    let bodies = model.bodies.len();
-    let links = |mesh: &crate::mesh::TetMesh| {
-        if bodies > 1 {
-            crate::contact::search::touching_pairs(mesh, crate::contact::THERMAL_SEARCH.pad)
-        } else {
-            Vec::new()
-        }
-    };
-    let elem_part =
-        crate::parallel::partition_collective(comm, &model.mesh, weights.as_deref(), links)
-            .map_err(Error::Partition)?;
-    let part = Part::from_model(
-        model,
-        &elem_part,
-        comm.rank() as usize,
-        comm.size() as usize,
-    );
+    let part = Part::build(comm, model)?;
     times.partition = clock.elapsed().as_secs_f64();
     Ok(part)
 }
@@ -120,6 +87,7 @@ enum Source {
 /// positions, and the search (its trees of bodies that never move kept).
 struct ThermalSearch {
     own: ContactTets,
+    pieces: Pieces,
     search: ContactSearch,
     /// Whether bodies move (at their prescribed velocities).
     moving: bool,
@@ -177,6 +145,7 @@ impl Contacts {
             let mut max_ext = 0.0;
             comm.all_reduce_into(&ext, &mut max_ext, SystemOperation::max());
             Source::Search(Box::new(ThermalSearch {
+                pieces: Pieces::new(&own),
                 own,
                 search: ContactSearch::new(),
                 moving,
@@ -244,7 +213,8 @@ impl Contacts {
             (Source::Mechanics, None) => unreachable!("a coupled run has mechanics"),
             (Source::Search(ts), _) => {
                 let t = Instant::now();
-                let ghosts = exchange_ghosts(comm, &ts.own, ts.exchange_margin, true);
+                let ghosts =
+                    exchange_ghosts(comm, &ts.own, &mut ts.pieces, ts.exchange_margin, true);
                 let og = OwnAndGhosts {
                     own: &ts.own,
                     ghosts: &ghosts,

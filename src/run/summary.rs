@@ -331,8 +331,8 @@ impl Stages<'_, '_> {
         let sys = self.sys.as_ref();
         Ok(RunSummary {
             ranks: self.part.size,
-            nodes: self.model.mesh.nodes.len(),
-            elements: self.model.mesh.tets.len(),
+            nodes: self.model.totals().0 as usize,
+            elements: self.model.totals().1 as usize,
             steps: step - start_step,
             ksp_iterations: sys.map_or(0, |s| s.iterations),
             start_step,

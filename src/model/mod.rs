@@ -1,14 +1,21 @@
-//! The data model every stage shares: the combined Tet4 mesh of all
-//! bodies, materials, bodies, and the thermal problem resolved to nodes and
-//! faces. Built from a scenario; holds no MPI or PETSc state.
-//!
-//! Later stages extend it (contact pairs and conductance, mechanical
-//! materials and constraints, joints) without changing what is here.
+//! The data model every stage shares, of the size of the number of bodies:
+//! materials, bodies (each with where its mesh comes from), the meshes
+//! bodies are made from (a body's own mesh, or a template its copies
+//! share), and the boundary conditions resolved to a body and a named set.
+//! Built from a scenario; holds no MPI or PETSc state. No rank builds the
+//! mesh of every body: each makes the bodies it holds
+//! ([`crate::parallel::Part::build`]); [`Model::whole_mesh`] makes them
+//! all on one process for `fdem check` and tests.
+
+mod bcs;
+mod bodies;
+
+pub use bcs::{body_bcs, BodyBcs, MechanicsKind, SetTarget, ThermalKind};
+pub use bodies::{BodyMesh, BodySource, Motion, SourceMesh};
 
 use crate::contact::DeltaT;
 use crate::error::{Error, Result};
 use crate::geometry::transform::{rotate_points, rotation_xyz_degrees, translate_points};
-use crate::mechanics::explicit::VelocityBc;
 use crate::mechanics::ElasticMaterial;
 use crate::mesh::{self, TetMesh};
 use crate::scenario::{
@@ -44,7 +51,7 @@ pub struct Body {
     pub initial_temperature: f64,
     /// Prescribed rigid translation velocity (m/s).
     pub velocity: [f64; 3],
-    /// Its nodes: `node_range.0..node_range.1` in the combined mesh.
+    /// Its nodes: global ids `node_range.0..node_range.1` (bodies in order).
     pub node_range: (u32, u32),
     /// Its elements.
     pub elem_range: (u32, u32),
@@ -56,6 +63,8 @@ pub struct Body {
     pub reference_temperature: f64,
     /// Prescribed uniform heating (final temperature, duration).
     pub heating: Option<(f64, f64)>,
+    /// Where its mesh comes from.
+    pub source: BodySource,
 }
 
 impl Body {
@@ -66,7 +75,7 @@ impl Body {
     }
 }
 
-/// The explicit mechanics resolved to nodes and faces (original numbering).
+/// The explicit mechanics: its settings, and its conditions on named sets.
 #[derive(Debug, Clone)]
 pub struct MechanicsModel {
     /// Explicit step given by the scenario (else from the critical step).
@@ -81,17 +90,16 @@ pub struct MechanicsModel {
     pub damping: f64,
     /// Mass-proportional damping (1/s) of bodies touching nothing (None: `damping`).
     pub free_damping: Option<f64>,
-    /// Velocity conditions per node (fixed and kinematic bodies included).
-    pub bc: Vec<VelocityBc>,
-    /// Dead-load nodal forces from tractions (N), per node.
-    pub traction: Vec<[f64; 3]>,
+    /// Conditions on named sets, in scenario order (held bodies are held
+    /// whole besides).
+    pub bcs: Vec<(SetTarget, MechanicsKind)>,
     /// Penalty contact.
     pub contact: Option<PenaltySpec>,
     /// Stop once settled (deposition).
     pub settle: Option<crate::scenario::SettleSpec>,
 }
 
-/// The thermal problem resolved to nodes and faces (original numbering).
+/// The thermal problem: its settings, and its conditions on named sets.
 #[derive(Debug, Clone, Default)]
 pub struct ThermalProblem {
     /// θ of the theta method.
@@ -100,16 +108,11 @@ pub struct ThermalProblem {
     pub capacity: CapacityKind,
     /// Conduction operator form.
     pub conduction: crate::scenario::ConductionKind,
-    /// Prescribed temperatures (node, value); last one given wins.
-    pub dirichlet: Vec<(u32, f64)>,
-    /// Prescribed inward flux on faces (face nodes, W/m²).
-    pub flux: Vec<([u32; 3], f64)>,
-    /// Convection on faces (face nodes, h, T_env).
-    pub convection: Vec<([u32; 3], f64, f64)>,
+    /// Initial temperatures, prescribed temperatures (the last one given
+    /// wins), fluxes and convection on named sets, in scenario order.
+    pub bcs: Vec<(SetTarget, ThermalKind)>,
     /// Volumetric source per body (W/m³).
     pub source: Vec<f64>,
-    /// Initial nodal temperatures.
-    pub initial: Vec<f64>,
 }
 
 /// Contact heat transfer settings resolved to material indices.
@@ -142,15 +145,18 @@ pub struct OutputPlan {
     pub particles: Option<ParticleOutputSpec>,
 }
 
-/// Everything a run needs, independent of the rank count.
+/// Everything a run needs, independent of the rank count, of the size of
+/// the number of bodies (plus the meshes bodies are made from).
 #[derive(Debug, Clone)]
 pub struct Model {
-    /// All bodies' elements in one mesh; `mesh.body[e]` indexes `bodies`.
-    pub mesh: TetMesh,
     /// Materials.
     pub materials: Vec<Material>,
-    /// Bodies.
+    /// Bodies, each with its global node and element ranges.
     pub bodies: Vec<Body>,
+    /// The meshes bodies are made from.
+    pub meshes: Vec<SourceMesh>,
+    /// Checkpoint files bodies are taken from.
+    pub checkpoints: Vec<std::path::PathBuf>,
     /// Thermal problem.
     pub thermal: ThermalProblem,
     /// Contact heat transfer, when the scenario has a `[contact]` table.
@@ -159,8 +165,6 @@ pub struct Model {
     pub thermal_active: bool,
     /// Mechanics, when the scenario has a `[mechanics]` table.
     pub mechanics: Option<MechanicsModel>,
-    /// Material of every element (index into `materials`).
-    pub elem_material: Vec<u32>,
     /// Time step (s).
     pub dt: f64,
     /// Number of steps.
@@ -177,6 +181,27 @@ pub struct Model {
 /// write: every step repeats the mesh block in the XDMF index, which is
 /// rewritten after each step.
 pub const MAX_OUTPUT_STEPS: u64 = 100_000;
+
+/// Every body made on one process ([`Model::whole_mesh`]).
+#[derive(Debug, Clone, Default)]
+pub struct WholeMesh {
+    /// All bodies' elements in one mesh; `mesh.body[e]` indexes the bodies.
+    pub mesh: TetMesh,
+    /// Material of every element.
+    pub material: Vec<u32>,
+    /// Initial temperature per node.
+    pub initial_t: Vec<f64>,
+    /// Prescribed temperatures (node, value).
+    pub dirichlet: Vec<(u32, f64)>,
+    /// Inward fluxes on faces.
+    pub flux: Vec<([u32; 3], f64)>,
+    /// Convection on faces.
+    pub convection: Vec<([u32; 3], f64, f64)>,
+    /// Velocity conditions per node (mechanics).
+    pub velocity: Vec<crate::mechanics::explicit::VelocityBc>,
+    /// Traction loads per node (mechanics).
+    pub traction: Vec<[f64; 3]>,
+}
 
 impl Model {
     /// Build the model: load or generate every body's mesh, check it, and
@@ -215,55 +240,114 @@ impl Model {
                 .position(|mm| mm.name == n)
                 .expect("validated") as u32
         };
-        let mut combined = TetMesh::default();
-        let mut bodies = Vec::new();
-        let mut elem_material: Vec<u32> = Vec::new();
-        let mut checkpoints: std::collections::BTreeMap<
-            std::path::PathBuf,
-            crate::io::checkpoint::Checkpoint,
-        > = Default::default();
+        let mut bodies: Vec<Body> = Vec::new();
+        let mut meshes: Vec<SourceMesh> = Vec::new();
+        let mut checkpoints: Vec<std::path::PathBuf> = Vec::new();
+        let mut files: Vec<crate::io::checkpoint::CheckpointFile> = Vec::new();
+        let (mut n_nodes, mut n_elems) = (0u64, 0u64);
+        let limit = |b: &str, copies: u128, per: usize, so_far: u64| -> Result<()> {
+            let total = u128::from(so_far) + copies * per as u128;
+            if total > mesh::MAX_ELEMENTS as u128 {
+                return Err(model_err(format!(
+                    "body `{b}`: {copies} cop{} of its {per} Tet4 would make the model {total} Tet4, \
+                     more than fdem's limit of {}",
+                    if copies == 1 { "y" } else { "ies" },
+                    mesh::MAX_ELEMENTS
+                )));
+            }
+            Ok(())
+        };
+        let new_body = |b: &crate::scenario::BodySpec,
+                        name: String,
+                        source: BodySource,
+                        nn: usize,
+                        ne: usize,
+                        n_nodes: &mut u64,
+                        n_elems: &mut u64|
+         -> Body {
+            let body = Body {
+                name,
+                template: b.name.clone(),
+                material: material_index(&b.material) as usize,
+                initial_temperature: b.initial_temperature,
+                velocity: b.velocity.unwrap_or([0.0; 3]),
+                node_range: (*n_nodes as u32, (*n_nodes + nn as u64) as u32),
+                elem_range: (*n_elems as u32, (*n_elems + ne as u64) as u32),
+                fixed: b.fixed,
+                initial_velocity: b.initial_velocity.unwrap_or([0.0; 3]),
+                reference_temperature: b.reference_temperature.unwrap_or(b.initial_temperature),
+                heating: b.heating.map(|h| (h.to, h.over)),
+                source,
+            };
+            *n_nodes += nn as u64;
+            *n_elems += ne as u64;
+            body
+        };
         for b in &s.bodies {
             let context = format!("{path}: body `{}`", b.name);
             if let MeshSpec::Checkpoint { file, template } = &b.mesh {
                 let file = sc.resolve(file);
-                if !checkpoints.contains_key(&file) {
-                    // Every rank reads the same file and fails alike: a model
-                    // error, which rank 0 alone prints.
-                    let ck = crate::io::checkpoint::Checkpoint::read(&file)
-                        .map_err(|e| model_err(format!("body `{}`: {e}", b.name)))?;
-                    checkpoints.insert(file.clone(), ck);
+                let fi = match checkpoints.iter().position(|p| *p == file) {
+                    Some(i) => i,
+                    None => {
+                        // Every rank reads the same head and fails alike: a
+                        // model error, which rank 0 alone prints.
+                        let f = crate::io::checkpoint::CheckpointFile::open(&file)
+                            .map_err(|e| model_err(format!("body `{}`: {e}", b.name)))?;
+                        checkpoints.push(file.clone());
+                        files.push(f);
+                        files.len() - 1
+                    }
+                };
+                let h = &files[fi].head;
+                let ids = h.bodies_of(template);
+                if ids.is_empty() {
+                    let mut t: Vec<&str> = h.body_templates.iter().map(String::as_str).collect();
+                    t.sort_unstable();
+                    t.dedup();
+                    return Err(model_err(format!(
+                        "body `{}`: {}: the checkpoint has no bodies from the entry `{template}`; it has: {}",
+                        b.name,
+                        file.display(),
+                        t.join(", ")
+                    )));
                 }
-                let copies =
-                    crate::pack::from_checkpoint(&checkpoints[&file], template).map_err(|m| {
-                        model_err(format!("body `{}`: {}: {m}", b.name, file.display()))
-                    })?;
                 if !b.regions.is_empty() {
                     return Err(model_err(format!(
                         "body `{}`: regions cannot be given for bodies from a checkpoint",
                         b.name
                     )));
                 }
-                let material = material_index(&b.material) as usize;
-                let total =
-                    combined.tets.len() + copies.iter().map(|c| c.1.tets.len()).sum::<usize>();
-                if total > mesh::MAX_ELEMENTS {
+                let elems: u64 = ids
+                    .iter()
+                    .map(|&i| u64::from(h.body_elems[i][1] - h.body_elems[i][0]))
+                    .sum();
+                if n_elems + elems > mesh::MAX_ELEMENTS as u64 {
                     return Err(model_err(format!(
-                        "body `{}`: the model would have {total} Tet4, more than fdem's limit of {}",
+                        "body `{}`: the model would have {} Tet4, more than fdem's limit of {}",
                         b.name,
+                        n_elems + elems,
                         mesh::MAX_ELEMENTS
                     )));
                 }
-                for (name, mut c) in copies {
-                    if let Some(t) = b.translate {
-                        translate_points(&mut c.nodes, t);
-                    }
-                    c.validate().map_err(|source| Error::Mesh {
-                        context: format!("{context} ({name} from {})", file.display()),
+                for i in ids {
+                    let (bn, be) = (h.body_nodes[i], h.body_elems[i]);
+                    let source = BodySource::Saved {
+                        file: fi as u32,
+                        body: i as u32,
+                        offset: b.translate.unwrap_or([0.0; 3]),
+                    };
+                    let name = h.body_names[i].clone();
+                    let (nn, ne) = ((bn[1] - bn[0]) as usize, (be[1] - be[0]) as usize);
+                    bodies.push(new_body(
+                        b,
+                        name,
                         source,
-                    })?;
-                    let ne = c.tets.len();
-                    push_body(&mut combined, &mut bodies, b, name, c, material);
-                    elem_material.extend(std::iter::repeat_n(material as u32, ne));
+                        nn,
+                        ne,
+                        &mut n_nodes,
+                        &mut n_elems,
+                    ));
                 }
                 continue;
             }
@@ -385,25 +469,18 @@ impl Model {
                     mat_of_elem[e as usize] = material_index(mat);
                 }
             }
+            let material_vec = mat_of_elem;
             // The body itself, its copies on a lattice, or a pack of
-            // particles: refused before they are built if the model would
+            // particles: refused before they are placed if the model would
             // exceed the element limit.
             let copies = match (&b.pack, &b.lattice) {
                 (Some(p), _) => p.count as u128,
                 (None, Some(l)) => l.count.iter().map(|&c| u128::from(c)).product(),
                 (None, None) => 1,
             };
-            let total = combined.tets.len() as u128 + copies * m.tets.len() as u128;
-            if total > mesh::MAX_ELEMENTS as u128 {
-                return Err(model_err(format!(
-                    "body `{}`: {copies} cop{} of its {} Tet4 would make the model {total} Tet4, \
-                     more than fdem's limit of {} (the mesh is kept on every rank)",
-                    b.name,
-                    if copies == 1 { "y" } else { "ies" },
-                    m.tets.len(),
-                    mesh::MAX_ELEMENTS
-                )));
-            }
+            limit(&b.name, copies, m.tets.len(), n_elems)?;
+            let (nn, ne) = (m.nodes.len(), m.tets.len());
+            let mi = meshes.len() as u32;
             if let Some(p) = &b.pack {
                 let into = s
                     .bodies
@@ -413,40 +490,108 @@ impl Model {
                 let interior =
                     crate::pack::ContainerInterior::from_spec(&into.mesh, into.translate)
                         .expect("validated");
-                let copies = crate::pack::place(&b.name, &m, p, &interior, &|f| sc.resolve(f))
+                let placed = crate::pack::place(&b.name, &m, p, &interior, &|f| sc.resolve(f))
                     .map_err(|msg| model_err(format!("body `{}`: pack: {msg}", b.name)))?;
-                for (name, c) in copies {
-                    push_body(&mut combined, &mut bodies, b, name, c, material);
-                    elem_material.extend_from_slice(&mat_of_elem);
+                for (name, motion) in placed {
+                    let source = BodySource::Mesh { mesh: mi, motion };
+                    bodies.push(new_body(
+                        b,
+                        name,
+                        source,
+                        nn,
+                        ne,
+                        &mut n_nodes,
+                        &mut n_elems,
+                    ));
                 }
-                continue;
-            }
-            let copies: Vec<(String, [f64; 3])> = match &b.lattice {
-                None => vec![(b.name.clone(), [0.0; 3])],
-                Some(l) => {
-                    let mut v = Vec::new();
-                    for k in 0..l.count[2] {
-                        for j in 0..l.count[1] {
-                            for i in 0..l.count[0] {
-                                let off = [
-                                    i as f64 * l.spacing[0],
-                                    j as f64 * l.spacing[1],
-                                    k as f64 * l.spacing[2],
-                                ];
-                                v.push((format!("{}_{i}_{j}_{k}", b.name), off));
+            } else {
+                let copies: Vec<(String, [f64; 3])> = match &b.lattice {
+                    None => vec![(b.name.clone(), [0.0; 3])],
+                    Some(l) => {
+                        let mut v = Vec::new();
+                        for k in 0..l.count[2] {
+                            for j in 0..l.count[1] {
+                                for i in 0..l.count[0] {
+                                    let off = [
+                                        i as f64 * l.spacing[0],
+                                        j as f64 * l.spacing[1],
+                                        k as f64 * l.spacing[2],
+                                    ];
+                                    v.push((format!("{}_{i}_{j}_{k}", b.name), off));
+                                }
                             }
                         }
+                        v
                     }
-                    v
+                };
+                for (name, off) in copies {
+                    let source = BodySource::Mesh {
+                        mesh: mi,
+                        motion: Motion::Translate(off),
+                    };
+                    bodies.push(new_body(
+                        b,
+                        name,
+                        source,
+                        nn,
+                        ne,
+                        &mut n_nodes,
+                        &mut n_elems,
+                    ));
                 }
-            };
-            for (name, off) in copies {
-                let mut c = m.clone();
-                translate_points(&mut c.nodes, off);
-                push_body(&mut combined, &mut bodies, b, name, c, material);
-                elem_material.extend_from_slice(&mat_of_elem);
             }
+            meshes.push(SourceMesh::new(m, material_vec));
         }
+        drop(files);
+        let names: Vec<String> = bodies.iter().map(|b| b.name.clone()).collect();
+        // The set names of each body's source mesh (none for checkpoint bodies).
+        let source_of = |k: usize| match &bodies[k].source {
+            BodySource::Mesh { mesh, .. } => Some(&meshes[*mesh as usize].mesh),
+            BodySource::Saved { .. } => None,
+        };
+        let sets_of = |k: usize| -> Vec<String> {
+            source_of(k).map_or(Vec::new(), |m| {
+                let mut v: Vec<String> = m
+                    .node_sets
+                    .keys()
+                    .chain(m.face_sets.keys())
+                    .cloned()
+                    .collect();
+                v.sort();
+                v.dedup();
+                v
+            })
+        };
+        let node_set = |k: usize, set: &str| {
+            source_of(k)
+                .is_some_and(|m| m.node_sets.contains_key(set) || m.face_sets.contains_key(set))
+        };
+        let face_set =
+            |k: usize, set: &str| source_of(k).is_some_and(|m| m.face_sets.contains_key(set));
+        // A node set (or a face set's nodes), not empty.
+        let nodes_target = |name: &str| -> std::result::Result<SetTarget, String> {
+            let t = bcs::resolve(name, &names, sets_of, node_set)?;
+            let m = source_of(t.body as usize).expect("has sets");
+            if bcs::set_nodes(m, &t.set).is_empty() {
+                return Err(format!(
+                    "set `{}.{}` is empty",
+                    names[t.body as usize], t.set
+                ));
+            }
+            Ok(t)
+        };
+        let faces_target = |name: &str| -> std::result::Result<SetTarget, String> {
+            let t = bcs::resolve(name, &names, sets_of, face_set)
+                .map_err(|e| format!("{e} (flux and convection need a face set)"))?;
+            let m = source_of(t.body as usize).expect("has sets");
+            if m.face_sets.get(&t.set).is_none_or(Vec::is_empty) {
+                return Err(format!(
+                    "face set `{}.{}` is empty",
+                    names[t.body as usize], t.set
+                ));
+            }
+            Ok(t)
+        };
 
         let thermal_spec = s.thermal_spec();
         let mut thermal = ThermalProblem {
@@ -454,42 +599,28 @@ impl Model {
             capacity: thermal_spec.capacity,
             conduction: thermal_spec.conduction,
             source: vec![0.0; bodies.len()],
-            initial: vec![0.0; combined.nodes.len()],
             ..Default::default()
         };
-        for b in &bodies {
-            for n in b.node_range.0..b.node_range.1 {
-                thermal.initial[n as usize] = b.initial_temperature;
-            }
-        }
         for (i, init) in thermal_spec.initial.iter().enumerate() {
-            let nodes = resolve_nodes(&combined, &init.set)
+            let t = nodes_target(&init.set)
                 .map_err(|m| model_err(format!("thermal.initial[{i}]: {m}")))?;
-            for n in nodes {
-                thermal.initial[n as usize] = init.value;
-            }
+            thermal.bcs.push((t, ThermalKind::Initial(init.value)));
         }
         for (i, bc) in thermal_spec.bc.iter().enumerate() {
             let key = format!("thermal.bc[{i}]");
+            let err = |m: String| model_err(format!("{key}: {m}"));
             match bc {
                 ThermalBcSpec::Temperature { set, value } => {
-                    let nodes = resolve_nodes(&combined, set)
-                        .map_err(|m| model_err(format!("{key}: {m}")))?;
-                    thermal
-                        .dirichlet
-                        .extend(nodes.into_iter().map(|n| (n, *value)));
+                    let t = nodes_target(set).map_err(err)?;
+                    thermal.bcs.push((t, ThermalKind::Temperature(*value)));
                 }
                 ThermalBcSpec::Flux { set, value } => {
-                    let faces = resolve_faces(&combined, set)
-                        .map_err(|m| model_err(format!("{key}: {m}")))?;
-                    thermal.flux.extend(faces.into_iter().map(|f| (f, *value)));
+                    let t = faces_target(set).map_err(err)?;
+                    thermal.bcs.push((t, ThermalKind::Flux(*value)));
                 }
                 ThermalBcSpec::Convection { set, h, ambient } => {
-                    let faces = resolve_faces(&combined, set)
-                        .map_err(|m| model_err(format!("{key}: {m}")))?;
-                    thermal
-                        .convection
-                        .extend(faces.into_iter().map(|f| (f, *h, *ambient)));
+                    let t = faces_target(set).map_err(err)?;
+                    thermal.bcs.push((t, ThermalKind::Convection(*h, *ambient)));
                 }
                 ThermalBcSpec::Source { body, value } => {
                     let b = bodies
@@ -499,15 +630,6 @@ impl Model {
                     thermal.source[b] += value;
                 }
             }
-        }
-        // Last assignment wins for nodes named by several temperature BCs.
-        let mut last = std::collections::BTreeMap::new();
-        for (n, v) in thermal.dirichlet.drain(..) {
-            last.insert(n, v);
-        }
-        thermal.dirichlet = last.into_iter().collect();
-        for &(n, v) in &thermal.dirichlet {
-            thermal.initial[n as usize] = v;
         }
 
         let steps = s.num_steps();
@@ -572,78 +694,48 @@ impl Model {
         let mechanics = match &s.mechanics {
             None => None,
             Some(ms) => {
-                let nn = combined.nodes.len();
-                let mut bc: Vec<VelocityBc> = vec![[None; 3]; nn];
-                for b in &bodies {
-                    let held = if b.fixed {
-                        Some([0.0; 3])
-                    } else if b.velocity != [0.0; 3] {
-                        Some(b.velocity)
-                    } else {
-                        None
-                    };
-                    if let Some(v) = held {
-                        for n in b.node_range.0..b.node_range.1 {
-                            bc[n as usize] = v.map(Some);
-                        }
-                    }
-                }
-                let mut traction = vec![[0.0; 3]; nn];
+                let mut bcs = Vec::new();
                 for (i, spec) in ms.bc.iter().enumerate() {
                     let key = format!("mechanics.bc[{i}]");
+                    let err = |m: String| model_err(format!("{key}: {m}"));
                     match spec {
                         MechanicsBcSpec::Fixed { set, components } => {
-                            let nodes = resolve_nodes(&combined, set)
-                                .map_err(|m| model_err(format!("{key}: {m}")))?;
-                            let comps: Vec<usize> = match components {
-                                None => vec![0, 1, 2],
-                                Some(c) => c
-                                    .iter()
-                                    .map(|x| match x.as_str() {
-                                        "x" => 0,
-                                        "y" => 1,
-                                        _ => 2,
-                                    })
-                                    .collect(),
-                            };
-                            for n in nodes {
-                                for &d in &comps {
-                                    bc[n as usize][d] = Some(0.0);
-                                }
+                            let t = nodes_target(set).map_err(err)?;
+                            let mut comps = [components.is_none(); 3];
+                            for c in components.iter().flatten() {
+                                comps[match c.as_str() {
+                                    "x" => 0,
+                                    "y" => 1,
+                                    _ => 2,
+                                }] = true;
                             }
+                            bcs.push((t, MechanicsKind::Fixed(comps)));
                         }
                         MechanicsBcSpec::Velocity { set, value } => {
-                            let nodes = resolve_nodes(&combined, set)
-                                .map_err(|m| model_err(format!("{key}: {m}")))?;
-                            for n in nodes {
-                                for d in 0..3 {
-                                    if !value[d].is_nan() {
-                                        bc[n as usize][d] = Some(value[d]);
-                                    }
-                                }
-                            }
+                            let t = nodes_target(set).map_err(err)?;
+                            bcs.push((t, MechanicsKind::Velocity(*value)));
                         }
                         MechanicsBcSpec::Traction { set, value } => {
-                            let faces = resolve_faces(&combined, set)
-                                .map_err(|m| model_err(format!("{key}: {m}")))?;
-                            for f in faces {
-                                let p = f.map(|n| combined.nodes[n as usize]);
-                                let area = crate::geometry::polygon_area(&p);
-                                for &n in &f {
-                                    for d in 0..3 {
-                                        // Not numbered in the seeds: a constant traction t on a linear triangle gives t A/3 per node.
-                                        traction[n as usize][d] += value[d] * area / 3.0;
-                                    }
-                                }
-                            }
+                            let t = faces_target(set).map_err(err)?;
+                            bcs.push((t, MechanicsKind::Traction(*value)));
                         }
                     }
                 }
-                for (e, &m) in elem_material.iter().enumerate() {
-                    if materials[m as usize].elastic.is_none() {
+                // Every element's material needs elastic constants.
+                for b in &bodies {
+                    let mats: Vec<u32> = match &b.source {
+                        BodySource::Mesh { mesh, .. } => meshes[*mesh as usize].material.clone(),
+                        BodySource::Saved { .. } => vec![b.material as u32],
+                    };
+                    if let Some(k) = mats
+                        .iter()
+                        .position(|&m| materials[m as usize].elastic.is_none())
+                    {
+                        let m = mats[k] as usize;
                         return Err(model_err(format!(
-                            "element {e}: material `{}` has no elastic constants",
-                            materials[m as usize].name
+                            "element {}: material `{}` has no elastic constants",
+                            b.elem_range.0 as usize + k,
+                            materials[m].name
                         )));
                     }
                 }
@@ -654,8 +746,7 @@ impl Model {
                     gravity: ms.gravity,
                     damping: ms.damping,
                     free_damping: ms.free_damping,
-                    bc,
-                    traction,
+                    bcs,
                     contact: ms.contact.clone(),
                     settle: ms.settle,
                 })
@@ -663,9 +754,10 @@ impl Model {
         };
 
         Ok(Model {
-            mesh: combined,
             materials,
             bodies,
+            meshes,
+            checkpoints,
             thermal,
             contact,
             dt,
@@ -686,13 +778,7 @@ impl Model {
             solver: s.solver.clone(),
             thermal_active: s.has_thermal(),
             mechanics,
-            elem_material,
         })
-    }
-
-    /// Material of element `e`.
-    pub fn material_of(&self, e: usize) -> &Material {
-        &self.materials[self.elem_material[e] as usize]
     }
 
     /// Contact resistance between materials `a` and `b` (infinite without
@@ -733,31 +819,95 @@ impl Model {
         self.bodies.iter().any(|b| b.velocity != [0.0; 3])
     }
 
-    /// Node positions at time `t` (bodies translated by their velocities).
-    pub fn positions_at(&self, t: f64, out: &mut [[f64; 3]]) {
-        for b in &self.bodies {
-            for n in b.node_range.0..b.node_range.1 {
-                let p = self.mesh.nodes[n as usize];
-                out[n as usize] = [
-                    p[0] + b.velocity[0] * t,
-                    p[1] + b.velocity[1] * t,
-                    p[2] + b.velocity[2] * t,
-                ];
-            }
-        }
+    /// The conditions on body `b`, made on its mesh (`mesh` of it).
+    pub fn body_bcs(&self, b: usize, mesh: &BodyMesh) -> BodyBcs {
+        let body = &self.bodies[b];
+        let on = |t: &SetTarget| t.body as usize == b;
+        let thermal: Vec<(&SetTarget, ThermalKind)> = self
+            .thermal
+            .bcs
+            .iter()
+            .filter(|(t, _)| on(t))
+            .map(|(t, k)| (t, *k))
+            .collect();
+        let mechanics: Option<Vec<(&SetTarget, MechanicsKind)>> =
+            self.mechanics.as_ref().map(|m| {
+                m.bcs
+                    .iter()
+                    .filter(|(t, _)| on(t))
+                    .map(|(t, k)| (t, *k))
+                    .collect()
+            });
+        let held = if body.fixed {
+            Some([0.0; 3])
+        } else if body.velocity != [0.0; 3] {
+            Some(body.velocity)
+        } else {
+            None
+        };
+        body_bcs(
+            mesh.nodes.len(),
+            &mesh.nodes,
+            mesh.source,
+            body.initial_temperature,
+            held,
+            &thermal,
+            mechanics.as_deref(),
+        )
     }
 
-    /// Heat capacity ρcV/4 carried by each node (the row sums of M).
-    pub fn node_capacity(&self) -> Vec<f64> {
-        let mut w = vec![0.0; self.mesh.nodes.len()];
-        for e in 0..self.mesh.tets.len() {
-            let m = self.material_of(e);
-            let c = m.density * m.specific_heat * self.mesh.element_volume(e) / 4.0;
-            for &n in &self.mesh.tets[e] {
-                w[n as usize] += c;
+    /// Make every body on this process: the whole mesh (sets prefixed by
+    /// the body names, as `<body>.<set>`), every element's material, and
+    /// the conditions per node and face. For `fdem check` and tests: a run
+    /// makes only the bodies each rank holds.
+    pub fn whole_mesh(&self) -> Result<WholeMesh> {
+        let files = self.open_checkpoints()?;
+        let mut w = WholeMesh::default();
+        for b in 0..self.bodies.len() {
+            let m = self.body_mesh(b, &files).map_err(|message| Error::Model {
+                path: self.bodies[b].name.clone(),
+                message,
+            })?;
+            let bc = self.body_bcs(b, &m);
+            let n0 = w.mesh.nodes.len() as u32;
+            let name = &self.bodies[b].name;
+            let mut part = TetMesh {
+                nodes: m.nodes.clone(),
+                tets: m.tets.to_vec(),
+                body: vec![0; m.tets.len()],
+                ..Default::default()
+            };
+            if let Some(src) = m.source {
+                part.node_sets = prefix_sets(src.node_sets.clone(), name);
+                part.face_sets = prefix_sets(src.face_sets.clone(), name);
+                part.elem_sets = prefix_sets(src.elem_sets.clone(), name);
             }
+            w.mesh.append(part, b as u32);
+            w.material.extend_from_slice(&m.material);
+            w.initial_t.extend_from_slice(&bc.initial_t);
+            for (i, d) in bc.dirichlet.iter().enumerate() {
+                if let Some(v) = d {
+                    w.dirichlet.push((n0 + i as u32, *v));
+                }
+            }
+            w.flux
+                .extend(bc.flux.iter().map(|(f, q)| (f.map(|n| n + n0), *q)));
+            w.convection.extend(
+                bc.convection
+                    .iter()
+                    .map(|(f, h, t)| (f.map(|n| n + n0), *h, *t)),
+            );
+            w.velocity.extend_from_slice(&bc.velocity);
+            w.traction.extend_from_slice(&bc.traction);
         }
-        w
+        Ok(w)
+    }
+
+    /// Body of element `e` (bodies own consecutive, ascending element ranges).
+    pub fn body_of_elem(&self, e: u32) -> usize {
+        self.bodies
+            .partition_point(|b| b.elem_range.1 <= e)
+            .min(self.bodies.len().saturating_sub(1))
     }
 
     /// Body of node `n` (bodies own consecutive, ascending node ranges).
@@ -775,102 +925,6 @@ fn prefix_sets<V>(
     sets.into_iter()
         .map(|(k, v)| (format!("{name}.{k}"), v))
         .collect()
-}
-
-/// Append one body (its sets prefixed by its name) to the combined mesh.
-fn push_body(
-    combined: &mut TetMesh,
-    bodies: &mut Vec<Body>,
-    b: &crate::scenario::BodySpec,
-    name: String,
-    mut c: TetMesh,
-    material: usize,
-) {
-    c.node_sets = prefix_sets(std::mem::take(&mut c.node_sets), &name);
-    c.face_sets = prefix_sets(std::mem::take(&mut c.face_sets), &name);
-    c.elem_sets = prefix_sets(std::mem::take(&mut c.elem_sets), &name);
-    let n0 = combined.nodes.len() as u32;
-    let e0 = combined.tets.len() as u32;
-    combined.append(c, bodies.len() as u32);
-    bodies.push(Body {
-        name,
-        template: b.name.clone(),
-        material,
-        initial_temperature: b.initial_temperature,
-        velocity: b.velocity.unwrap_or([0.0; 3]),
-        node_range: (n0, combined.nodes.len() as u32),
-        elem_range: (e0, combined.tets.len() as u32),
-        fixed: b.fixed,
-        initial_velocity: b.initial_velocity.unwrap_or([0.0; 3]),
-        reference_temperature: b.reference_temperature.unwrap_or(b.initial_temperature),
-        heating: b.heating.map(|h| (h.to, h.over)),
-    });
-}
-
-/// Find the set a scenario names: `<body>.<set>` exactly, or `<set>` when
-/// exactly one body has a set of that name.
-fn resolve_name<'a, V>(
-    sets: &'a std::collections::BTreeMap<String, V>,
-    other: &'a std::collections::BTreeMap<String, Vec<[u32; 3]>>,
-    name: &str,
-) -> std::result::Result<String, String> {
-    if sets.contains_key(name) || other.contains_key(name) {
-        return Ok(name.to_string());
-    }
-    let suffix = format!(".{name}");
-    let mut hits: Vec<&String> = sets
-        .keys()
-        .chain(other.keys())
-        .filter(|k| k.ends_with(&suffix))
-        .collect();
-    hits.sort();
-    hits.dedup();
-    match hits.len() {
-        1 => Ok(hits[0].clone()),
-        0 => {
-            let mut all: Vec<&String> = sets.keys().chain(other.keys()).collect();
-            all.sort();
-            all.dedup();
-            Err(format!(
-                "no set named `{name}`; available: {}",
-                all.iter()
-                    .map(|s| s.as_str())
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ))
-        }
-        _ => Err(format!(
-            "set name `{name}` is ambiguous: {}; qualify it as <body>.<set>",
-            hits.iter()
-                .map(|s| s.as_str())
-                .collect::<Vec<_>>()
-                .join(", ")
-        )),
-    }
-}
-
-/// Nodes of a named node set or face set.
-pub fn resolve_nodes(mesh: &TetMesh, name: &str) -> std::result::Result<Vec<u32>, String> {
-    let full = resolve_name(&mesh.node_sets, &mesh.face_sets, name)?;
-    let nodes = mesh
-        .set_nodes(&full)
-        .ok_or_else(|| format!("set `{full}` has no nodes"))?;
-    if nodes.is_empty() {
-        return Err(format!("set `{full}` is empty"));
-    }
-    Ok(nodes)
-}
-
-/// Faces of a named face set.
-pub fn resolve_faces(mesh: &TetMesh, name: &str) -> std::result::Result<Vec<[u32; 3]>, String> {
-    let empty = std::collections::BTreeMap::<String, Vec<[u32; 3]>>::new();
-    let full = resolve_name(&mesh.face_sets, &empty, name)
-        .map_err(|e| format!("{e} (flux and convection need a face set)"))?;
-    let faces = mesh.face_sets.get(&full).cloned().unwrap_or_default();
-    if faces.is_empty() {
-        return Err(format!("face set `{full}` is empty"));
-    }
-    Ok(faces)
 }
 
 #[cfg(test)]
@@ -917,7 +971,8 @@ conductance = 50.0
     #[test]
     fn pair_resistance_overrides_the_default() {
         let m = model();
-        let mat = |b: usize| m.elem_material[m.bodies[b].elem_range.0 as usize];
+        let w = m.whole_mesh().unwrap();
+        let mat = |b: usize| w.material[m.bodies[b].elem_range.0 as usize];
         let (steel, glass, glass2) = (mat(0), mat(1), mat(2));
         assert_eq!(m.resistance(steel, glass), 1.0 / 50.0);
         assert_eq!(m.resistance(glass, steel), 1.0 / 50.0);
@@ -927,20 +982,21 @@ conductance = 50.0
     #[test]
     fn rotation_and_lattice_place_the_copies() {
         let m = model();
+        let w = m.whole_mesh().unwrap();
         assert_eq!(m.bodies.len(), 3);
         assert_eq!(m.bodies[1].name, "g_0_0_0");
         assert_eq!(m.bodies[2].name, "g_1_0_0");
         assert_eq!(m.bodies[2].template, "g");
         // 90° about z maps (0.1, 0, 0) to (0, 0.1, 0): body a spans x in [-0.1, 0].
         let (lo, hi) = m.bodies[0].node_range;
-        let xs: Vec<f64> = (lo..hi).map(|n| m.mesh.nodes[n as usize][0]).collect();
+        let xs: Vec<f64> = (lo..hi).map(|n| w.mesh.nodes[n as usize][0]).collect();
         assert!(xs.iter().all(|&x| (-0.1 - 1e-12..=1e-12).contains(&x)));
         // The second copy is shifted by the spacing.
         let (lo2, _) = m.bodies[2].node_range;
         let (lo1, _) = m.bodies[1].node_range;
         assert!(
-            (m.mesh.nodes[lo2 as usize][0] - m.mesh.nodes[lo1 as usize][0] - 0.2).abs() < 1e-15
+            (w.mesh.nodes[lo2 as usize][0] - w.mesh.nodes[lo1 as usize][0] - 0.2).abs() < 1e-15
         );
-        assert!(m.mesh.face_sets.contains_key("g_1_0_0.xmax"));
+        assert!(w.mesh.face_sets.contains_key("g_1_0_0.xmax"));
     }
 }

@@ -1,0 +1,230 @@
+//! Where each body's mesh comes from, and the body meshes themselves: a
+//! mesh of its own (generated or read), a copy of a particle or lattice
+//! template moved rigidly, or a body taken back from a checkpoint. Any
+//! rank can make any body from the model (O(bodies) data plus the
+//! templates), so each rank makes only the bodies it holds.
+
+use nalgebra::{Matrix3, Vector3};
+
+use crate::io::checkpoint::CheckpointFile;
+use crate::mesh::TetMesh;
+
+/// A mesh bodies are made from: a body's own, or a template shared by
+/// the copies of a lattice or a pack. Its sets are unprefixed.
+#[derive(Debug, Clone)]
+pub struct SourceMesh {
+    /// The mesh (body ids 0), at its place in the scenario.
+    pub mesh: TetMesh,
+    /// Material of every element (the body's, or a region's).
+    pub material: Vec<u32>,
+    /// Per element: its faces on the boundary (bit i: opposite node i).
+    pub face_mask: Vec<u8>,
+    /// Per node: on the boundary.
+    pub boundary_node: Vec<bool>,
+}
+
+impl SourceMesh {
+    /// A source mesh and its boundary.
+    pub fn new(mesh: TetMesh, material: Vec<u32>) -> SourceMesh {
+        let bt = crate::contact::BoundaryTets::new(&mesh);
+        SourceMesh {
+            face_mask: bt.mask,
+            boundary_node: bt.boundary_node,
+            material,
+            mesh,
+        }
+    }
+}
+
+/// How one body's nodes are made.
+#[derive(Debug, Clone, PartialEq)]
+pub enum BodySource {
+    /// Source mesh `mesh`, its nodes x moved to `site + R (x − center)`
+    /// (a pack's particle) or translated by `offset` (a lattice copy, or a
+    /// body's own mesh with a zero offset).
+    Mesh {
+        /// Index into [`crate::model::Model::meshes`].
+        mesh: u32,
+        /// The rigid motion.
+        motion: Motion,
+    },
+    /// Body `body` of checkpoint file `file`, translated by `offset`.
+    Saved {
+        /// Index into [`crate::model::Model::checkpoints`].
+        file: u32,
+        /// The body's index in that checkpoint.
+        body: u32,
+        /// Translation (m).
+        offset: [f64; 3],
+    },
+}
+
+/// A rigid motion of a source mesh's nodes.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Motion {
+    /// x + offset.
+    Translate([f64; 3]),
+    /// site + R (x − center).
+    Place {
+        /// Rotation.
+        rotation: Matrix3<f64>,
+        /// The point of the template that goes to `site`.
+        center: Vector3<f64>,
+        /// Where it goes.
+        site: Vector3<f64>,
+    },
+}
+
+impl Motion {
+    /// The moved point.
+    pub fn apply(&self, p: [f64; 3]) -> [f64; 3] {
+        match self {
+            Motion::Translate(t) => [p[0] + t[0], p[1] + t[1], p[2] + t[2]],
+            Motion::Place {
+                rotation,
+                center,
+                site,
+            } => {
+                let q = site + rotation * (Vector3::from(p) - center);
+                [q.x, q.y, q.z]
+            }
+        }
+    }
+}
+
+/// A body's mesh as a rank makes it: its nodes (body-local numbering),
+/// elements, materials, boundary, and the named sets of its source.
+#[derive(Debug, Clone)]
+pub struct BodyMesh<'a> {
+    /// Node positions (reference configuration).
+    pub nodes: Vec<[f64; 3]>,
+    /// Elements over the body's nodes.
+    pub tets: std::borrow::Cow<'a, [[u32; 4]]>,
+    /// Material of every element.
+    pub material: std::borrow::Cow<'a, [u32]>,
+    /// Per element: its faces on the boundary.
+    pub face_mask: std::borrow::Cow<'a, [u8]>,
+    /// Per node: on the boundary.
+    pub boundary_node: std::borrow::Cow<'a, [bool]>,
+    /// The source mesh, for its named sets (none for a checkpoint body).
+    pub source: Option<&'a TetMesh>,
+}
+
+impl super::Model {
+    /// The mesh of body `b`: its source moved into place, or its rows of a
+    /// checkpoint (`files` open, indexed as [`super::Model::checkpoints`]).
+    pub fn body_mesh<'a>(
+        &'a self,
+        b: usize,
+        files: &[CheckpointFile],
+    ) -> Result<BodyMesh<'a>, String> {
+        match &self.bodies[b].source {
+            BodySource::Mesh { mesh, motion } => {
+                let src = &self.meshes[*mesh as usize];
+                Ok(BodyMesh {
+                    nodes: src.mesh.nodes.iter().map(|&p| motion.apply(p)).collect(),
+                    tets: std::borrow::Cow::Borrowed(&src.mesh.tets),
+                    material: std::borrow::Cow::Borrowed(&src.material),
+                    face_mask: std::borrow::Cow::Borrowed(&src.face_mask),
+                    boundary_node: std::borrow::Cow::Borrowed(&src.boundary_node),
+                    source: Some(&src.mesh),
+                })
+            }
+            BodySource::Saved { file, body, offset } => {
+                let f = &files[*file as usize];
+                let h = &f.head;
+                let [n0, n1] = h.body_nodes[*body as usize];
+                let [e0, e1] = h.body_elems[*body as usize];
+                let ids: Vec<u32> = (n0..n1).collect();
+                let name = if h.has_positions {
+                    "state/positions"
+                } else {
+                    "mesh/reference"
+                };
+                let err = |e: crate::io::IoError| e.to_string();
+                let x = f.node_rows3(name, &ids).map_err(err)?;
+                let tets = f.elem_tets(&(e0..e1).collect::<Vec<u32>>()).map_err(err)?;
+                let mut m = TetMesh {
+                    nodes: x
+                        .iter()
+                        .map(|p| [p[0] + offset[0], p[1] + offset[1], p[2] + offset[2]])
+                        .collect(),
+                    tets: Vec::with_capacity(tets.len()),
+                    body: vec![0; tets.len()],
+                    ..Default::default()
+                };
+                for (e, t) in tets.iter().enumerate() {
+                    if t.iter().any(|&n| n < n0 || n >= n1) {
+                        return Err(format!(
+                            "{}: element {} of body `{}` names a node outside the body",
+                            f.path().display(),
+                            e0 as usize + e,
+                            h.body_names[*body as usize]
+                        ));
+                    }
+                    m.tets.push(t.map(|n| n - n0));
+                }
+                m.validate().map_err(|e| {
+                    format!(
+                        "{}: body `{}`: {e}",
+                        f.path().display(),
+                        h.body_names[*body as usize]
+                    )
+                })?;
+                let material = vec![self.bodies[b].material as u32; m.tets.len()];
+                let src = SourceMesh::new(m, material);
+                Ok(BodyMesh {
+                    nodes: src.mesh.nodes,
+                    tets: std::borrow::Cow::Owned(src.mesh.tets),
+                    material: std::borrow::Cow::Owned(src.material),
+                    face_mask: std::borrow::Cow::Owned(src.face_mask),
+                    boundary_node: std::borrow::Cow::Owned(src.boundary_node),
+                    source: None,
+                })
+            }
+        }
+    }
+
+    /// Open the checkpoint files the bodies come from (every rank reads
+    /// their heads; rows on demand).
+    pub fn open_checkpoints(&self) -> crate::error::Result<Vec<CheckpointFile>> {
+        self.checkpoints
+            .iter()
+            .map(|p| {
+                CheckpointFile::open(p).map_err(|e| crate::error::Error::Model {
+                    path: p.display().to_string(),
+                    message: e.to_string(),
+                })
+            })
+            .collect()
+    }
+
+    /// The mean of a body's node positions (its place for partitioning),
+    /// without making its mesh for a source-mesh body.
+    pub fn body_center(&self, b: usize, files: &[CheckpointFile]) -> Result<[f64; 3], String> {
+        match &self.bodies[b].source {
+            BodySource::Mesh { mesh, motion } => {
+                Ok(motion.apply(self.meshes[*mesh as usize].mean_node()))
+            }
+            BodySource::Saved { .. } => {
+                let m = self.body_mesh(b, files)?;
+                Ok(mean(&m.nodes))
+            }
+        }
+    }
+}
+
+impl SourceMesh {
+    /// The mean of the node positions.
+    pub fn mean_node(&self) -> [f64; 3] {
+        mean(&self.mesh.nodes)
+    }
+}
+
+fn mean(nodes: &[[f64; 3]]) -> [f64; 3] {
+    let n = nodes.len().max(1) as f64;
+    let s = nodes
+        .iter()
+        .fold([0.0; 3], |a, p| [a[0] + p[0], a[1] + p[1], a[2] + p[2]]);
+    [s[0] / n, s[1] / n, s[2] / n]
+}

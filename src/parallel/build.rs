@@ -1,0 +1,405 @@
+//! Building each rank's [`Part`] from the model without any rank making
+//! every body: the bodies (and the elements of large bodies of their own
+//! mesh, which are split) are cut into parts by recursive coordinate
+//! bisection ([`super::rcb`]) over their centres, each rank makes only the
+//! bodies and elements that fall to it, and the nodes shared by the
+//! pieces of a split body find their owner (the lowest rank holding them)
+//! and PETSc number through a rendezvous on their global ids.
+//!
+//! Collective over the communicator.
+
+use std::collections::HashMap;
+
+use mpi::topology::SimpleCommunicator;
+use mpi::traits::*;
+
+use super::exchange::{all_gather, all_to_all, block};
+use super::{agree, LocalBcs, Part};
+use crate::error::{Error, Result};
+use crate::mechanics::frequency::BODY_EIGEN_MAX_NODES;
+use crate::mesh::TetMesh;
+use crate::model::{BodySource, Model};
+
+/// The largest max/mean work per rank the bisection aims at.
+pub const IMBALANCE: f64 = 1.05;
+
+/// What one rank holds of a body: all of it, or some of its elements.
+#[derive(Debug, Clone, PartialEq, Eq)]
+enum Held {
+    Whole,
+    Elements(Vec<u32>),
+}
+
+impl Part {
+    /// Collective. This rank's part of `model`: whole bodies, and the
+    /// elements of split bodies, by recursive coordinate bisection of the
+    /// bodies' (and split bodies' elements') centres weighted by their
+    /// work; each rank makes only what it holds.
+    pub fn build(comm: &SimpleCommunicator, model: &Model) -> Result<Part> {
+        let size = comm.size() as usize;
+        let rank = comm.rank() as usize;
+        let files = model.open_checkpoints()?;
+        let nb = model.bodies.len();
+        let split = split_bodies(model, size);
+        let weight = |b: usize| {
+            let body = &model.bodies[b];
+            let w = if model.mechanics.is_some() && !body.is_held() {
+                8.0
+            } else {
+                1.0
+            };
+            w * f64::from(body.elem_range.1 - body.elem_range.0)
+        };
+        // Objects: the whole bodies of this rank's block of bodies, and the
+        // elements of its block of each split body's elements.
+        let (b0, b1) = block(nb as u64, size, rank);
+        let mut objects: Vec<super::rcb::Object> = Vec::new();
+        let mut ids: Vec<[u32; 2]> = Vec::new();
+        let mut local_error = None;
+        for (b, _) in split
+            .iter()
+            .enumerate()
+            .take(b1 as usize)
+            .skip(b0 as usize)
+            .filter(|(_, &s)| !s)
+        {
+            match model.body_center(b, &files) {
+                Ok(point) => {
+                    objects.push(super::rcb::Object {
+                        weight: weight(b),
+                        point,
+                    });
+                    ids.push([b as u32, u32::MAX]);
+                }
+                Err(message) => {
+                    local_error.get_or_insert(Error::Model {
+                        path: model.bodies[b].name.clone(),
+                        message,
+                    });
+                }
+            }
+        }
+        agree(comm, local_error.map_or(Ok(()), Err))?;
+        for (b, _) in split.iter().enumerate().filter(|(_, &s)| s) {
+            let BodySource::Mesh { mesh, motion } = &model.bodies[b].source else {
+                unreachable!("only bodies of their own mesh are split")
+            };
+            let src = &model.meshes[*mesh as usize];
+            let ne = src.mesh.tets.len() as u64;
+            let w = weight(b) / ne as f64;
+            let (e0, e1) = block(ne, size, rank);
+            for e in e0 as usize..e1 as usize {
+                let x = src.mesh.element_coords(e);
+                let c = std::array::from_fn(|d| (x[0][d] + x[1][d] + x[2][d] + x[3][d]) / 4.0);
+                objects.push(super::rcb::Object {
+                    weight: w,
+                    point: motion.apply(c),
+                });
+                ids.push([b as u32, e as u32]);
+            }
+        }
+        let dest = agree(
+            comm,
+            super::rcb::rcb(comm, &objects, IMBALANCE).map_err(Error::Partition),
+        )?;
+        // Tell every object's rank.
+        let mut send: Vec<Vec<u32>> = vec![Vec::new(); size];
+        for (id, &r) in ids.iter().zip(&dest) {
+            send[r as usize].extend_from_slice(id);
+        }
+        let mut held: std::collections::BTreeMap<u32, Held> = Default::default();
+        for rec in all_to_all(comm, &send)
+            .iter()
+            .flat_map(|v| v.chunks_exact(2))
+        {
+            let (b, e) = (rec[0], rec[1]);
+            if e == u32::MAX {
+                held.insert(b, Held::Whole);
+            } else if let Held::Elements(v) = held.entry(b).or_insert(Held::Elements(Vec::new())) {
+                v.push(e);
+            }
+        }
+        for h in held.values_mut() {
+            if let Held::Elements(v) = h {
+                v.sort_unstable();
+            }
+        }
+        let local = make_bodies(model, &files, &held);
+        let local = agree(comm, local)?;
+        Ok(number(comm, local))
+    }
+}
+
+/// Whether each body is split over the ranks: a body of its own mesh (not
+/// a copy of a template, nor from a checkpoint) when there are several
+/// ranks, in a mechanics run only if too large for the exact body
+/// frequency of the explicit step (a small body's elements stay together
+/// for it). Particles stay whole.
+fn split_bodies(model: &Model, size: usize) -> Vec<bool> {
+    let mut users = vec![0usize; model.meshes.len()];
+    for b in &model.bodies {
+        if let BodySource::Mesh { mesh, .. } = b.source {
+            users[mesh as usize] += 1;
+        }
+    }
+    model
+        .bodies
+        .iter()
+        .map(|b| match b.source {
+            BodySource::Mesh { mesh, .. } => {
+                size > 1
+                    && users[mesh as usize] == 1
+                    && (model.mechanics.is_none()
+                        || (b.node_range.1 - b.node_range.0) as usize > BODY_EIGEN_MAX_NODES)
+            }
+            BodySource::Saved { .. } => false,
+        })
+        .collect()
+}
+
+/// The elements and nodes a rank has made, before numbering.
+#[derive(Default)]
+struct Made {
+    /// Per element (ascending global id): id, body, material, face mask, node ids.
+    elem_gid: Vec<u32>,
+    elem_body: Vec<u32>,
+    elem_material: Vec<u32>,
+    face_mask: Vec<u8>,
+    tets: Vec<[u32; 4]>,
+    /// Per node (ascending global id, unique): id, position, boundary flag,
+    /// and its conditions.
+    node_gid: Vec<u32>,
+    x: Vec<[f64; 3]>,
+    boundary: Vec<bool>,
+    initial_t: Vec<f64>,
+    dirichlet: Vec<Option<f64>>,
+    velocity: Vec<crate::mechanics::explicit::VelocityBc>,
+    traction: Vec<[f64; 3]>,
+    /// Faces with conditions (node ids).
+    flux: Vec<([u32; 3], f64)>,
+    convection: Vec<([u32; 3], f64, f64)>,
+    /// Per node: whether it belongs to a split body.
+    shared: Vec<bool>,
+}
+
+/// Make the bodies and elements `held` by this rank.
+fn make_bodies(
+    model: &Model,
+    files: &[crate::io::checkpoint::CheckpointFile],
+    held: &std::collections::BTreeMap<u32, Held>,
+) -> Result<Made> {
+    let mech = model.mechanics.is_some();
+    let mut m = Made::default();
+    for (&b, h) in held {
+        let body = &model.bodies[b as usize];
+        let mesh = model
+            .body_mesh(b as usize, files)
+            .map_err(|message| Error::Model {
+                path: body.name.clone(),
+                message,
+            })?;
+        let bc = model.body_bcs(b as usize, &mesh);
+        let (n0, e0) = (body.node_range.0, body.elem_range.0);
+        let elems: Vec<u32> = match h {
+            Held::Whole => (0..mesh.tets.len() as u32).collect(),
+            Held::Elements(v) => v.clone(),
+        };
+        let mut used = vec![false; mesh.nodes.len()];
+        let mut face_of: HashMap<[u32; 3], ()> = HashMap::new();
+        let whole = matches!(h, Held::Whole);
+        for &e in &elems {
+            let t = mesh.tets[e as usize];
+            m.elem_gid.push(e0 + e);
+            m.elem_body.push(b);
+            m.elem_material.push(mesh.material[e as usize]);
+            m.face_mask.push(mesh.face_mask[e as usize]);
+            m.tets.push(t.map(|n| n0 + n));
+            for n in t {
+                used[n as usize] = true;
+            }
+            if !whole {
+                for k in 0..4 {
+                    let mut f = [0u32; 3];
+                    let mut j = 0;
+                    for (i, &n) in t.iter().enumerate() {
+                        if i != k {
+                            f[j] = n;
+                            j += 1;
+                        }
+                    }
+                    f.sort_unstable();
+                    face_of.insert(f, ());
+                }
+            }
+        }
+        for (n, &u) in used.iter().enumerate() {
+            if !u {
+                continue;
+            }
+            m.node_gid.push(n0 + n as u32);
+            m.x.push(mesh.nodes[n]);
+            m.boundary.push(mesh.boundary_node[n]);
+            m.initial_t.push(bc.initial_t[n]);
+            m.dirichlet.push(bc.dirichlet[n]);
+            if mech {
+                m.velocity.push(bc.velocity[n]);
+                m.traction.push(bc.traction[n]);
+            }
+            m.shared.push(!whole);
+        }
+        let here = |f: &[u32; 3]| {
+            whole || {
+                let mut s = *f;
+                s.sort_unstable();
+                face_of.contains_key(&s)
+            }
+        };
+        m.flux.extend(
+            bc.flux
+                .iter()
+                .filter(|(f, _)| here(f))
+                .map(|(f, q)| (f.map(|n| n0 + n), *q)),
+        );
+        m.convection.extend(
+            bc.convection
+                .iter()
+                .filter(|(f, _, _)| here(f))
+                .map(|(f, h, t)| (f.map(|n| n0 + n), *h, *t)),
+        );
+    }
+    Ok(m)
+}
+
+/// Collective. Owners and PETSc numbers of the made nodes, and the part.
+fn number(comm: &SimpleCommunicator, m: Made) -> Part {
+    let size = comm.size() as usize;
+    let rank = comm.rank() as usize;
+    // Owners of the split bodies' nodes: the lowest rank holding each,
+    // found at the rendezvous rank gid % size.
+    let mut ask: Vec<Vec<u32>> = vec![Vec::new(); size];
+    for (i, &g) in m.node_gid.iter().enumerate() {
+        if m.shared[i] {
+            ask[g as usize % size].push(g);
+        }
+    }
+    let asked = all_to_all(comm, &ask);
+    let mut holders: HashMap<u32, Vec<u32>> = HashMap::new();
+    for (r, list) in asked.iter().enumerate() {
+        for &g in list {
+            holders.entry(g).or_default().push(r as u32);
+        }
+    }
+    let mut reply: Vec<Vec<u32>> = vec![Vec::new(); size];
+    for (r, list) in asked.iter().enumerate() {
+        for &g in list {
+            let owner = *holders[&g].iter().min().expect("a holder");
+            reply[r].extend_from_slice(&[g, owner]);
+        }
+    }
+    let mut owner_of: HashMap<u32, u32> = HashMap::new();
+    for rec in all_to_all(comm, &reply)
+        .iter()
+        .flat_map(|v| v.chunks_exact(2))
+    {
+        owner_of.insert(rec[0], rec[1]);
+    }
+    let owner: Vec<u32> = m
+        .node_gid
+        .iter()
+        .zip(&m.shared)
+        .map(|(g, &s)| if s { owner_of[g] } else { rank as u32 })
+        .collect();
+    // PETSc numbers: each rank's owned nodes in ascending id from its start.
+    let n_owned = owner.iter().filter(|&&o| o as usize == rank).count();
+    let counts: Vec<u64> = all_gather(comm, &[n_owned as u64]);
+    let mut starts = vec![0usize; size + 1];
+    for r in 0..size {
+        starts[r + 1] = starts[r] + counts[r] as usize;
+    }
+    let mut petsc_of: HashMap<u32, u32> = HashMap::new();
+    let mut next = starts[rank] as u32;
+    for (i, &g) in m.node_gid.iter().enumerate() {
+        if owner[i] as usize == rank {
+            petsc_of.insert(g, next);
+            next += 1;
+        }
+    }
+    // Ghosts' numbers: owners tell the rendezvous rank, which tells the holders.
+    let mut tell: Vec<Vec<u32>> = vec![Vec::new(); size];
+    for (i, &g) in m.node_gid.iter().enumerate() {
+        if m.shared[i] && owner[i] as usize == rank {
+            tell[g as usize % size].extend_from_slice(&[g, petsc_of[&g]]);
+        }
+    }
+    let mut forward: Vec<Vec<u32>> = vec![Vec::new(); size];
+    for rec in all_to_all(comm, &tell)
+        .iter()
+        .flat_map(|v| v.chunks_exact(2))
+    {
+        for &h in &holders[&rec[0]] {
+            forward[h as usize].extend_from_slice(rec);
+        }
+    }
+    for rec in all_to_all(comm, &forward)
+        .iter()
+        .flat_map(|v| v.chunks_exact(2))
+    {
+        petsc_of.insert(rec[0], rec[1]);
+    }
+    // Local order: owned nodes ascending, then ghosts ascending.
+    let mut order: Vec<usize> = (0..m.node_gid.len()).collect();
+    order.sort_by_key(|&i| (owner[i] as usize != rank, m.node_gid[i]));
+    let node_gid: Vec<u32> = order.iter().map(|&i| m.node_gid[i]).collect();
+    let local: HashMap<u32, u32> = node_gid
+        .iter()
+        .enumerate()
+        .map(|(l, &g)| (g, l as u32))
+        .collect();
+    let l = |g: u32| local[&g];
+    let bc = LocalBcs {
+        initial_t: order.iter().map(|&i| m.initial_t[i]).collect(),
+        dirichlet: order
+            .iter()
+            .take(n_owned)
+            .enumerate()
+            .filter_map(|(li, &i)| m.dirichlet[i].map(|v| (li as u32, v)))
+            .collect(),
+        flux: m.flux.iter().map(|(f, q)| (f.map(l), *q)).collect(),
+        convection: m
+            .convection
+            .iter()
+            .map(|(f, h, t)| (f.map(l), *h, *t))
+            .collect(),
+        velocity: if m.velocity.is_empty() {
+            Vec::new()
+        } else {
+            order.iter().map(|&i| m.velocity[i]).collect()
+        },
+        traction: if m.traction.is_empty() {
+            Vec::new()
+        } else {
+            order.iter().take(n_owned).map(|&i| m.traction[i]).collect()
+        },
+    };
+    Part {
+        rank,
+        size,
+        mesh: TetMesh {
+            nodes: order.iter().map(|&i| m.x[i]).collect(),
+            tets: m.tets.iter().map(|t| t.map(l)).collect(),
+            body: m.elem_body,
+            ..Default::default()
+        },
+        elem_gid: m.elem_gid,
+        elem_material: m.elem_material,
+        face_mask: m.face_mask,
+        node_owner: order.iter().map(|&i| owner[i]).collect(),
+        petsc: node_gid.iter().map(|g| petsc_of[g]).collect(),
+        boundary_node: order.iter().map(|&i| m.boundary[i]).collect(),
+        node_gid,
+        n_owned,
+        starts,
+        bc,
+        whole: None,
+    }
+}

@@ -261,13 +261,19 @@ fn restart_in_place_continues_the_series() {
 }
 
 #[test]
-fn heatup_agrees_on_one_and_two_ranks_and_balances_heat() {
+fn heatup_agrees_on_one_to_four_ranks_and_balances_heat() {
     let (d1, _) = heatup(1, "packing/heatup-1", &[]);
     let (d2, s2) = heatup(2, "packing/heatup-2", &[]);
     let stem = "nut-packing-heatup";
     let r1 = read_results(&d1, stem);
     let r2 = read_results(&d2, stem);
     assert_same_temperatures(&r1, &r2, 1e-8, "heat-up 1 vs 2 ranks");
+    // Issue 18: 3 and 4 ranks (oversubscribed), checkpoint of 2 read in pieces.
+    for ranks in [3, 4] {
+        let (d, _) = heatup(ranks, &format!("packing/heatup-{ranks}"), &[]);
+        let r = read_results(&d, stem);
+        assert_same_temperatures(&r1, &r, 1e-8, &format!("heat-up 1 vs {ranks} ranks"));
+    }
     // Issue 15: nuts at 0 °C heated from a 300 °C container stay within
     // [0, 300] at every node and output, on 1 and 2 ranks, with the scheme
     // the scenario ships with (lumped capacity, bounded conduction).

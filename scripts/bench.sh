@@ -141,6 +141,9 @@ old_heatup_wall=$last_wall
 old_heatup_bounds=$(bounds_of "$OUT/run/nut-packing-heatup_history.csv")
 echo "heat-up bounds, old operator: $old_heatup_bounds" >&2
 
+# Issue 18: memory per rank on 1, 2, 4 and 8 ranks (docs/scaling-measured.md).
+FDEM="$BIN" bash scripts/bench-scaling.sh "$OUT/dep2000/nut-packing-deposit_checkpoint.h5"
+
 # Mechanics kernel throughput (issue 4, the first part built).
 cargo build --release --example mech_kernel_bench
 kernel_line=$(target/release/examples/mech_kernel_bench)

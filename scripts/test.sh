@@ -13,7 +13,7 @@ echo "== cargo fmt --check"
 cargo fmt --all -- --check
 echo "== cargo clippy -D warnings"
 cargo clippy --release --all-targets -- -D warnings
-echo "== cargo test (unit, validation, 1- and 2-rank)"
+echo "== cargo test (unit, validation, 1 to 4 ranks and 8, oversubscribed)"
 cargo test --release --workspace
 echo "== mpirun -n 2: two-rank run of the Gmsh block with PETSc options"
 out="$(mktemp -d)"

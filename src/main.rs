@@ -156,7 +156,14 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(Error::OtherRank) => ExitCode::FAILURE,
         Err(e) => {
-            if rank == 0 || !deterministic(e) {
+            if deterministic(e) {
+                if rank == 0 {
+                    eprintln!("error: {e}");
+                }
+            } else if world.size() > 1 {
+                // Only this rank met it: say which (the others stop with it).
+                eprintln!("error: {e} (on rank {rank} of {})", world.size());
+            } else {
                 eprintln!("error: {e}");
             }
             ExitCode::FAILURE

@@ -1242,6 +1242,10 @@ fn base_reductions(name: &str, binary: bool) -> Vec<(&'static str, Value)> {
             "bodies.1.pack.count",
             Value::Integer(if binary { 20 } else { 50 }),
         )],
+        "nut-lattice-heatup-20k" => vec![(
+            "bodies.1.lattice.count",
+            Value::Array(vec![Value::Integer(3); 3]),
+        )],
         _ => Vec::new(),
     };
     if binary {

@@ -60,6 +60,11 @@ pub struct MechanicsCounters {
     pub detections: u64,
     /// Seconds in contact detection and halo rebuilds.
     pub detect_time: f64,
+    /// Substeps advanced by this process (not restored on restart) and the
+    /// bytes it sent to other ranks meanwhile (halo, ghost refresh, pair
+    /// balancing).
+    pub substeps_run: u64,
+    pub bytes_sent: u64,
 }
 
 impl ExplicitDomain {

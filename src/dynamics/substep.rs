@@ -31,6 +31,7 @@ impl ExplicitDomain {
         {
             self.redetect = true;
         }
+        let sent_before = crate::parallel::bytes_sent();
         for i in 0..n {
             if i + 1 == n {
                 self.v_prev.clear();
@@ -63,7 +64,9 @@ impl ExplicitDomain {
             let half = 0.5 * self.margin;
             self.redetect = any[1] >= half * half;
             self.counters.substeps += 1;
+            self.counters.substeps_run += 1;
         }
+        self.counters.bytes_sent += crate::parallel::bytes_sent() - sent_before;
         Ok(())
     }
 

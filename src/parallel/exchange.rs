@@ -27,6 +27,14 @@ where
     let size = comm.size() as usize;
     assert_eq!(send.len(), size, "one send list per rank");
     let send_counts: Vec<i32> = send.iter().map(|v| v.len() as i32).collect();
+    let me = comm.rank() as usize;
+    super::count_sent(
+        send.iter()
+            .enumerate()
+            .filter(|&(r, _)| r != me)
+            .map(|(_, v)| std::mem::size_of_val(&v[..]))
+            .sum(),
+    );
     let mut recv_counts = vec![0i32; size];
     comm.all_to_all_into(&send_counts[..], &mut recv_counts[..]);
     let flat: Vec<T> = send.iter().flatten().copied().collect();
@@ -58,6 +66,7 @@ where
 {
     let size = comm.size() as usize;
     let n = local.len() as i32;
+    super::count_sent(std::mem::size_of_val(local) * (size - 1));
     let mut counts = vec![0i32; size];
     comm.all_gather_into(&n, &mut counts[..]);
     let total: usize = counts.iter().map(|&c| c as usize).sum();

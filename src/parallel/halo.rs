@@ -209,6 +209,7 @@ impl Halo {
             let mut sends = Vec::with_capacity(self.neighbours.len());
             for (r, buf) in self.neighbours.iter().zip(send) {
                 if !buf.is_empty() {
+                    super::count_sent(std::mem::size_of_val(&buf[..]));
                     sends.push(comm.process_at_rank(*r).immediate_send(scope, &buf[..]));
                 }
             }

@@ -25,6 +25,7 @@ pub use partition::{
 
 use mpi::collective::SystemOperation;
 use mpi::traits::*;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 /// Collective. Agree on success: if any rank failed, every rank returns an
 /// error (the failing rank its own, the others [`crate::error::Error::OtherRank`]).
@@ -63,4 +64,19 @@ pub fn all_gather_f64<C: Communicator>(comm: &C, local: &[f64]) -> Vec<f64> {
         comm.all_gather_varcount_into(local, &mut part);
     }
     out
+}
+
+/// Bytes this process has sent to other ranks through the point-to-point
+/// and all-to-all exchanges of this module (halo, ghosts, blocks); scalar
+/// reductions are not counted.
+static BYTES_SENT: AtomicU64 = AtomicU64::new(0);
+
+/// Count `bytes` sent to another rank.
+pub(crate) fn count_sent(bytes: usize) {
+    BYTES_SENT.fetch_add(bytes as u64, Ordering::Relaxed);
+}
+
+/// Bytes sent to other ranks so far by this process.
+pub fn bytes_sent() -> u64 {
+    BYTES_SENT.load(Ordering::Relaxed)
 }

@@ -70,6 +70,9 @@ pub struct MechanicsSummary {
     pub exact_overlaps: u64,
     /// Smallest (at-rest) contact search margin (m).
     pub margin: f64,
+    /// Bytes sent to other ranks per substep: the largest over the ranks,
+    /// and the mean.
+    pub bytes_per_substep: (f64, f64),
 }
 
 /// What a run did.
@@ -183,6 +186,11 @@ impl std::fmt::Display for RunSummary {
                 m.pair_updates,
                 m.exact_overlaps
             )?;
+            writeln!(
+                f,
+                "  traffic     {:.0} B sent per substep per rank (max over ranks), {:.0} B mean (halo, ghost refresh, pair balancing)",
+                m.bytes_per_substep.0, m.bytes_per_substep.1
+            )?;
         }
         if self.heat {
             writeln!(
@@ -276,6 +284,10 @@ impl MechanicsSummary {
         ];
         let mut counts = [0.0; 3];
         comm.all_reduce_into(&mine[..], &mut counts[..], SystemOperation::sum());
+        let sent = m.counters.bytes_sent as f64 / m.counters.substeps_run.max(1) as f64;
+        let (mut most, mut total) = (0.0, 0.0);
+        comm.all_reduce_into(&sent, &mut most, SystemOperation::max());
+        comm.all_reduce_into(&sent, &mut total, SystemOperation::sum());
         MechanicsSummary {
             dt: m.dt,
             substeps_per_step: mech.substeps_per_step,
@@ -285,6 +297,7 @@ impl MechanicsSummary {
             pair_updates: counts[1] as u64,
             exact_overlaps: counts[2] as u64,
             margin: m.min_margin(),
+            bytes_per_substep: (most, total / comm.size() as f64),
         }
     }
 }

@@ -142,25 +142,7 @@ impl Checkpoint {
             return Err(IoError::invalid(path, "checkpoint file not found"));
         }
         let file = File::open(path).map_err(|e| IoError::hdf5(path, "opening", e))?;
-        let format = file
-            .attr("format")
-            .and_then(|a| a.read_raw::<u8>())
-            .map_err(|_| {
-                IoError::invalid(path, "not an fdem checkpoint (no `format` attribute)")
-            })?;
-        if format != FORMAT.as_bytes() {
-            return Err(IoError::invalid(path, "not an fdem checkpoint"));
-        }
-        let version = file
-            .attr("version")
-            .and_then(|a| a.read_raw::<u8>())
-            .map_err(|e| IoError::hdf5(path, "reading the version", e))?;
-        if version != VERSION.to_le_bytes() {
-            return Err(IoError::invalid(
-                path,
-                format!("checkpoint version {version:?}, this fdem reads version {VERSION}"),
-            ));
-        }
+        check_format(&file, path)?;
         let text = |name: &str| -> Result<Vec<String>, IoError> {
             let b = get::<u8>(&file, path, name, 1)?;
             let s = String::from_utf8(b)

@@ -24,6 +24,14 @@ use super::TetMesh;
 /// oriented element.
 pub const LOCAL_FACES: [[usize; 3]; 4] = [[1, 2, 3], [0, 3, 2], [0, 1, 3], [0, 2, 1]];
 
+/// The nodes of tet `t`'s face opposite its local node `k`, sorted (a key
+/// that is the same from both elements sharing the face).
+pub fn sorted_face(t: &[u32; 4], k: usize) -> [u32; 3] {
+    let mut f = LOCAL_FACES[k].map(|i| t[i]);
+    f.sort_unstable();
+    f
+}
+
 /// A triangle on the mesh boundary.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct BoundaryFace {

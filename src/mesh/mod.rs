@@ -38,7 +38,7 @@ mod sets;
 #[cfg(test)]
 pub(crate) mod testutil;
 
-pub use boundary::{BoundaryFace, LOCAL_FACES};
+pub use boundary::{sorted_face, BoundaryFace, LOCAL_FACES};
 pub use closed::CLOSED_VOLUME_REL_TOL;
 pub use container::container_mesh;
 pub use error::MeshError;

@@ -219,16 +219,7 @@ fn make_bodies(
             }
             if !whole {
                 for k in 0..4 {
-                    let mut f = [0u32; 3];
-                    let mut j = 0;
-                    for (i, &n) in t.iter().enumerate() {
-                        if i != k {
-                            f[j] = n;
-                            j += 1;
-                        }
-                    }
-                    f.sort_unstable();
-                    face_of.insert(f, ());
+                    face_of.insert(crate::mesh::sorted_face(&t, k), ());
                 }
             }
         }

@@ -14,7 +14,8 @@
 use crate::mechanics::explicit::VelocityBc;
 use crate::mesh::TetMesh;
 
-/// Boundary conditions on the part's nodes and faces.
+/// Boundary conditions on the part's nodes and faces (local indices; as
+/// [`GlobalBcs`], a whole model's with global ids).
 #[derive(Debug, Clone, Default)]
 pub struct LocalBcs {
     /// Initial temperature of every local node.
@@ -343,19 +344,8 @@ impl Part {
             .iter()
             .flat_map(|&e| {
                 let t = mesh.tets[e as usize];
-                (0..4).map(move |k| {
-                    let mut f = [0u32; 3];
-                    let mut j = 0;
-                    for (i, &n) in t.iter().enumerate() {
-                        if i != k {
-                            f[j] = n;
-                            j += 1;
-                        }
-                    }
-                    f
-                })
+                (0..4).map(move |k| crate::mesh::sorted_face(&t, k))
             })
-            .map(sorted)
             .collect();
         let here = |f: &[u32; 3]| owned_faces.contains(&sorted(*f));
         let flux: Vec<([u32; 3], f64)> = bcs
@@ -431,22 +421,9 @@ impl Part {
 }
 
 /// Boundary conditions per global node and face, as a model built on every
-/// rank holds them ([`Part::from_global`]).
-#[derive(Debug, Clone, Default)]
-pub struct GlobalBcs {
-    /// Initial temperature per node.
-    pub initial_t: Vec<f64>,
-    /// (node, value).
-    pub dirichlet: Vec<(u32, f64)>,
-    /// (face nodes, W/m²).
-    pub flux: Vec<([u32; 3], f64)>,
-    /// (face nodes, h, T_env).
-    pub convection: Vec<([u32; 3], f64, f64)>,
-    /// Per node (empty without mechanics).
-    pub velocity: Vec<VelocityBc>,
-    /// Per node (empty without mechanics).
-    pub traction: Vec<[f64; 3]>,
-}
+/// rank holds them ([`Part::from_global`]): the fields of [`LocalBcs`] with
+/// global node ids, every node and face.
+pub type GlobalBcs = LocalBcs;
 
 #[cfg(test)]
 mod tests {

@@ -138,17 +138,8 @@ fn rows<T: Copy + Default, const C: usize>(v: Vec<T>) -> Vec<[T; C]> {
 impl Checkpoint {
     /// Read a checkpoint (serial).
     pub fn read(path: &Path) -> Result<Checkpoint, IoError> {
-        if !path.is_file() {
-            return Err(IoError::invalid(path, "checkpoint file not found"));
-        }
-        let file = File::open(path).map_err(|e| IoError::hdf5(path, "opening", e))?;
-        check_format(&file, path)?;
-        let text = |name: &str| -> Result<Vec<String>, IoError> {
-            let b = get::<u8>(&file, path, name, 1)?;
-            let s = String::from_utf8(b)
-                .map_err(|_| IoError::invalid(path, format!("{name} is not UTF-8")))?;
-            Ok(s.split('\n').map(str::to_string).collect())
-        };
+        let file = open_checked(path)?;
+        let text = |name: &str| text_lines(&file, path, name);
         let opt3 = |name: &str| -> Result<Option<Vec<[f64; 3]>>, IoError> {
             if file.link_exists(name) {
                 Ok(Some(rows::<f64, 3>(get(&file, path, name, 3)?)))
@@ -636,17 +627,8 @@ impl CheckpointFile {
     /// Open and read the head, checking the format, the version and the
     /// sizes of the body table and of every node dataset.
     pub fn open(path: &Path) -> Result<CheckpointFile, IoError> {
-        if !path.is_file() {
-            return Err(IoError::invalid(path, "checkpoint file not found"));
-        }
-        let file = File::open(path).map_err(|e| IoError::hdf5(path, "opening", e))?;
-        check_format(&file, path)?;
-        let text = |name: &str| -> Result<Vec<String>, IoError> {
-            let b = get::<u8>(&file, path, name, 1)?;
-            let s = String::from_utf8(b)
-                .map_err(|_| IoError::invalid(path, format!("{name} is not UTF-8")))?;
-            Ok(s.split('\n').map(str::to_string).collect())
-        };
+        let file = open_checked(path)?;
+        let text = |name: &str| text_lines(&file, path, name);
         let sc = get::<f64>(&file, path, "state/scalars", 1)?;
         if sc.len() != SCALARS {
             return Err(IoError::invalid(path, "state/scalars has the wrong length"));
@@ -831,6 +813,24 @@ fn runs(ids: &[u32]) -> Vec<(u64, Vec<usize>)> {
         }
     }
     out
+}
+
+/// Open an existing checkpoint and check its format and version.
+fn open_checked(path: &Path) -> Result<File, IoError> {
+    if !path.is_file() {
+        return Err(IoError::invalid(path, "checkpoint file not found"));
+    }
+    let file = File::open(path).map_err(|e| IoError::hdf5(path, "opening", e))?;
+    check_format(&file, path)?;
+    Ok(file)
+}
+
+/// A newline-separated text dataset (UTF-8 bytes), as lines.
+fn text_lines(file: &File, path: &Path, name: &str) -> Result<Vec<String>, IoError> {
+    let b = get::<u8>(file, path, name, 1)?;
+    let s =
+        String::from_utf8(b).map_err(|_| IoError::invalid(path, format!("{name} is not UTF-8")))?;
+    Ok(s.split('\n').map(str::to_string).collect())
 }
 
 fn check_format(file: &File, path: &Path) -> Result<(), IoError> {

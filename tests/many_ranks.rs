@@ -31,12 +31,14 @@ fn owning_ranks(dir: &Path, stem: &str) -> Vec<i32> {
 }
 
 /// Runs `scenario` on 1..4 ranks and asserts bitwise equal displacements at
-/// every output, and that every rank owned elements.
-fn bitwise_on_one_to_four(tag: &str, scenario: &str, stem: &str, extra: &[&str]) {
+/// every output, and that every rank owned elements; returns each run's
+/// summary.
+fn bitwise_on_one_to_four(tag: &str, scenario: &str, stem: &str, extra: &[&str]) -> Vec<String> {
     let mut first: Option<(Vec<f64>, Vec<Vec<f64>>)> = None;
+    let mut summaries = Vec::new();
     for ranks in RANKS {
         let out = out_dir(&format!("many/{tag}-{ranks}"));
-        run_ok(ranks, &root().join(scenario), &out, extra);
+        summaries.push(run_ok(ranks, &root().join(scenario), &out, extra));
         assert_eq!(
             owning_ranks(&out, stem),
             (0..ranks as i32).collect::<Vec<_>>(),
@@ -71,11 +73,12 @@ fn bitwise_on_one_to_four(tag: &str, scenario: &str, stem: &str, extra: &[&str])
         .iter()
         .fold(0.0f64, |m, x| m.max(x.abs()));
     assert!(moved > 1e-3, "{tag}: largest displacement {moved}");
+    summaries
 }
 
 #[test]
 fn n50_deposition_to_0_1_s_bitwise_on_one_to_four_ranks() {
-    bitwise_on_one_to_four(
+    let _ = bitwise_on_one_to_four(
         "deposit",
         "scenarios/nut-packing-deposit.toml",
         "nut-packing-deposit",
@@ -94,7 +97,69 @@ fn n50_deposition_to_0_1_s_bitwise_on_one_to_four_ranks() {
 
 #[test]
 fn eight_body_drop_bitwise_on_one_to_four_ranks() {
-    bitwise_on_one_to_four("drop8", "scenarios/drop8.toml", "drop8", &[]);
+    let _ = bitwise_on_one_to_four("drop8", "scenarios/drop8.toml", "drop8", &[]);
+}
+
+/// The numbers before "repartition(s)" and "bodies moved" in a summary.
+fn repartitions(summary: &str) -> (u64, u64) {
+    let line = summary
+        .lines()
+        .find(|l| l.trim_start().starts_with("balance"))
+        .unwrap_or_else(|| panic!("no balance line in\n{summary}"));
+    let words: Vec<&str> = line.split_whitespace().collect();
+    let before = |w: &str| -> u64 {
+        let i = words.iter().position(|x| x.starts_with(w)).unwrap();
+        words[i - 1].parse().unwrap()
+    };
+    (before("repartition"), before("bodies"))
+}
+
+/// Bodies change owner during the run (repartitions every 2 steps, at
+/// any imbalance) and the trajectories stay bitwise those of 1 rank.
+#[test]
+fn n50_deposition_with_repartitions_bitwise_and_owners_change() {
+    let stem = "nut-packing-deposit";
+    let summaries = bitwise_on_one_to_four(
+        "migrate",
+        "scenarios/nut-packing-deposit.toml",
+        stem,
+        &[
+            "--set",
+            "bodies.1.pack.count=50",
+            "--set",
+            "time.end_time=0.2",
+            "--set",
+            "output.checkpoint=false",
+            "--set",
+            "output.every=1",
+            "--set",
+            "mechanics.rebalance.every=2",
+            "--set",
+            "mechanics.rebalance.threshold=1.0",
+        ],
+    );
+    assert!(
+        !summaries[0].contains("balance"),
+        "one rank never repartitions:\n{}",
+        summaries[0]
+    );
+    for (s, ranks) in summaries.iter().zip(RANKS).skip(1) {
+        let (done, moved) = repartitions(s);
+        assert!(
+            done >= 2 && moved > 0,
+            "{ranks} ranks: {done} repartitions, {moved} bodies moved"
+        );
+        // The owner field shows elements that changed rank.
+        let h5 = root()
+            .join("target/test-output/many")
+            .join(format!("migrate-{ranks}/{stem}.h5"));
+        let n = fdem::io::read_times(&h5).unwrap().len();
+        let first = fdem::io::read_cell_field_step(&h5, "owner_rank", 0).unwrap();
+        let last = fdem::io::read_cell_field_step(&h5, "owner_rank", n - 1).unwrap();
+        let changed = first.iter().zip(&last).filter(|(a, b)| a != b).count();
+        assert!(changed > 0, "{ranks} ranks: no element changed owner");
+        assert!(last.iter().all(|&r| r >= 0.0 && r < ranks as f64));
+    }
 }
 
 /// Temperatures of `scenario` on 1..4 ranks agree to 1e-8 relative.

@@ -187,6 +187,7 @@ impl ExplicitDomain {
                 ghosts: &ghosts,
             };
             let (kept, weights, thermal) = self.find_pairs(&og);
+            self.count_pair_work(&og, &kept, &weights);
             let (here, received) = self.balance_pairs(comm, &og, &kept, &weights);
             self.install(&og, &here, &received, &thermal);
             self.part_tets = own;
@@ -324,6 +325,22 @@ impl ExplicitDomain {
             }
         }
         (kept, weights, thermal)
+    }
+
+    /// Note the work of the `kept` pairs (`weights`) by the body of their
+    /// own tet (the first when both are own), for the repartition.
+    fn count_pair_work(&mut self, og: &OwnAndGhosts, kept: &[(u32, u32)], weights: &[u64]) {
+        self.body_pair_work.clear();
+        let n = og.own.len() as u32;
+        for (&(a, b), &w) in kept.iter().zip(weights) {
+            let own = if a < n { a } else { b };
+            if own < n {
+                *self
+                    .body_pair_work
+                    .entry(og.own.body[own as usize])
+                    .or_insert(0.0) += w as f64;
+            }
+        }
     }
 
     /// The penalty pair of tets `a` (of a free body) and `b`, handles of

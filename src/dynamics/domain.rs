@@ -95,6 +95,9 @@ pub struct ExplicitDomain {
     pub(super) margin: f64,
     pub(super) margin_min: f64,
     pub(super) candidates: Vec<Candidate>,
+    /// Work (partition units) of the penalty pairs this rank's tets found
+    /// at the last detection, per body of the own tet, before balancing.
+    pub(super) body_pair_work: HashMap<u32, f64>,
     /// Local nodes of the tets of the candidate pairs, each tet once, and
     /// what the thermal contact needs of them.
     pub(super) pair_tets: Vec<[u32; 4]>,
@@ -290,6 +293,7 @@ impl ExplicitDomain {
             margin,
             margin_min: margin,
             candidates: Vec::new(),
+            body_pair_work: HashMap::new(),
             pair_tets: Vec::new(),
             pair_info: Vec::new(),
             pair_geometry: Vec::new(),

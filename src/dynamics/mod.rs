@@ -42,6 +42,7 @@
 //!   trajectories bitwise the same on any number of ranks;
 //! - `state`: energies, output fields, checkpoint save and restore.
 
+mod balance;
 mod candidates;
 mod domain;
 mod force_sum;
@@ -52,6 +53,7 @@ mod time_step;
 #[cfg(test)]
 mod tests;
 
+pub use balance::BodyLoad;
 pub use domain::ExplicitDomain;
 pub use state::{MechanicsCounters, MechanicsState, SavedMotion};
 

@@ -97,6 +97,8 @@ pub struct MechanicsModel {
     pub contact: Option<PenaltySpec>,
     /// Stop once settled (deposition).
     pub settle: Option<crate::scenario::SettleSpec>,
+    /// Repartition as the bodies move (several ranks).
+    pub rebalance: crate::scenario::RebalanceSpec,
 }
 
 /// The thermal problem: its settings, and its conditions on named sets.
@@ -749,6 +751,7 @@ impl Model {
                     bcs,
                     contact: ms.contact.clone(),
                     settle: ms.settle,
+                    rebalance: ms.rebalance,
                 })
             }
         };

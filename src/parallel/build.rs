@@ -23,6 +23,19 @@ use crate::model::{BodySource, Model};
 /// The largest max/mean work per rank the bisection aims at.
 pub const IMBALANCE: f64 = 1.05;
 
+/// The estimated work of one element of body `b` per step, in the units
+/// of the partition weights: 8 for a body whose elements compute forces
+/// each substep (a free body of a mechanics run), 1 otherwise. A contact
+/// pair's work is counted in the same units (a pair whose boxes are apart
+/// 1, one likely to overlap 32: `dynamics::candidates`).
+pub fn element_work(model: &Model, b: usize) -> f64 {
+    if model.mechanics.is_some() && !model.bodies[b].is_held() {
+        8.0
+    } else {
+        1.0
+    }
+}
+
 /// What one rank holds of a body: all of it, or some of its elements.
 #[derive(Debug, Clone, PartialEq, Eq)]
 enum Held {
@@ -36,6 +49,20 @@ impl Part {
     /// bodies' (and split bodies' elements') centres weighted by their
     /// work; each rank makes only what it holds.
     pub fn build(comm: &SimpleCommunicator, model: &Model) -> Result<Part> {
+        Self::build_placed(comm, model, None)
+    }
+
+    /// Collective. As [`Part::build`], with the centres and work of the
+    /// whole bodies of this rank's block of body ids given by `placed`
+    /// (body id → current centre, work) instead of their model centres
+    /// and element counts: the repartition of a running deposition, whose
+    /// bodies have moved and whose contacts add work. Split bodies' elements
+    /// keep their model positions.
+    pub fn build_placed(
+        comm: &SimpleCommunicator,
+        model: &Model,
+        placed: Option<&HashMap<u32, ([f64; 3], f64)>>,
+    ) -> Result<Part> {
         let size = comm.size() as usize;
         let rank = comm.rank() as usize;
         let files = model.open_checkpoints()?;
@@ -43,12 +70,7 @@ impl Part {
         let split = split_bodies(model, size);
         let weight = |b: usize| {
             let body = &model.bodies[b];
-            let w = if model.mechanics.is_some() && !body.is_held() {
-                8.0
-            } else {
-                1.0
-            };
-            w * f64::from(body.elem_range.1 - body.elem_range.0)
+            element_work(model, b) * f64::from(body.elem_range.1 - body.elem_range.0)
         };
         // Objects: the whole bodies of this rank's block of bodies, and the
         // elements of its block of each split body's elements.
@@ -63,10 +85,15 @@ impl Part {
             .skip(b0 as usize)
             .filter(|(_, &s)| !s)
         {
-            match model.body_center(b, &files) {
+            let here = placed.and_then(|p| p.get(&(b as u32)));
+            let centre = match here {
+                Some(&(c, _)) => Ok(c),
+                None => model.body_center(b, &files),
+            };
+            match centre {
                 Ok(point) => {
                     objects.push(super::rcb::Object {
-                        weight: weight(b),
+                        weight: here.map_or_else(|| weight(b), |&(_, w)| w),
                         point,
                     });
                     ids.push([b as u32, u32::MAX]);
@@ -124,9 +151,16 @@ impl Part {
                 v.sort_unstable();
             }
         }
+        let whole: Vec<u32> = held
+            .iter()
+            .filter(|(_, h)| matches!(h, Held::Whole))
+            .map(|(&b, _)| b)
+            .collect();
         let local = make_bodies(model, &files, &held);
         let local = agree(comm, local)?;
-        Ok(number(comm, local))
+        let mut part = number(comm, local);
+        part.whole_bodies = whole;
+        Ok(part)
     }
 }
 
@@ -392,5 +426,6 @@ fn number(comm: &SimpleCommunicator, m: Made) -> Part {
         starts,
         bc,
         whole: None,
+        whole_bodies: Vec::new(),
     }
 }

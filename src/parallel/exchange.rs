@@ -127,6 +127,47 @@ pub fn to_blocks<C: Communicator>(
     (lo, out)
 }
 
+/// Collective. The rows `ids` (global ids) read from the blocks that
+/// [`to_blocks`] made: `(lo, rows)` is this rank's block of `width`
+/// values per row, `total` the number of rows. Each rank asks the block
+/// owners for its ids and gets the rows back in the order asked.
+pub fn from_blocks<C: Communicator>(
+    comm: &C,
+    (lo, rows): (u64, &[f64]),
+    width: usize,
+    total: u64,
+    ids: &[u32],
+) -> Vec<f64> {
+    let size = comm.size() as usize;
+    let mut ask: Vec<Vec<u32>> = vec![Vec::new(); size];
+    for &g in ids {
+        ask[block_owner(u64::from(g), total, size)].push(g);
+    }
+    let asked = all_to_all(comm, &ask);
+    let reply: Vec<Vec<f64>> = asked
+        .iter()
+        .map(|list| {
+            list.iter()
+                .flat_map(|&g| {
+                    let row = (u64::from(g) - lo) as usize;
+                    rows[width * row..width * (row + 1)].iter().copied()
+                })
+                .collect()
+        })
+        .collect();
+    let got = all_to_all(comm, &reply);
+    // Replies come per block owner in the order asked.
+    let mut next = vec![0usize; size];
+    let mut out = Vec::with_capacity(ids.len() * width);
+    for &g in ids {
+        let r = block_owner(u64::from(g), total, size);
+        let at = next[r];
+        out.extend_from_slice(&got[r][width * at..width * (at + 1)]);
+        next[r] += 1;
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::displacements;

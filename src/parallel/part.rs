@@ -66,6 +66,9 @@ pub struct Part {
     /// Maps over the whole mesh, present while the model is built on every
     /// rank (the contact stages still look up other ranks' nodes in them).
     pub whole: Option<WholeMaps>,
+    /// The bodies this rank holds whole (global ids, ascending): all their
+    /// elements and nodes are here and owned here.
+    pub whole_bodies: Vec<u32>,
 }
 
 /// Per element and node of the whole mesh: its rank and PETSc number.
@@ -409,6 +412,7 @@ impl Part {
                 node_owner: owner,
                 petsc_of,
             }),
+            whole_bodies: Vec::new(),
         }
     }
 

@@ -117,33 +117,143 @@ fn unreadable(restart: &Path, e: crate::io::IoError) -> Error {
     }
 }
 
-/// Collective. Put the mechanical state of the checkpoint into the domain.
+/// A run's state held in memory by global node id while the ranks
+/// repartition: each field in blocks of node ids over the ranks (the
+/// rows a checkpoint would hold), read back by the new owners.
+pub(super) struct Snapshot {
+    /// The head a checkpoint of this state would have.
+    pub head: CheckpointHead,
+    /// Number of nodes.
+    total: u64,
+    /// Per field (a checkpoint dataset's name): width, this rank's first
+    /// row and its block of rows.
+    fields: Vec<(&'static str, usize, u64, Vec<f64>)>,
+}
+
+impl Snapshot {
+    /// Collective. The state of `captured` (this rank's owned rows of
+    /// `part`) moved into blocks of global node ids.
+    pub fn take(comm: &SimpleCommunicator, model: &Model, part: &Part, c: Captured) -> Snapshot {
+        let total = model.totals().0;
+        let ids = part.owned_gids();
+        let flat3 = |v: Option<Vec<[f64; 3]>>| v.map(|v| (3, v.concat()));
+        let present = [
+            ("state/positions", flat3(c.positions)),
+            ("state/velocities", flat3(c.velocities)),
+            ("state/velocities_prev", flat3(c.velocities_prev)),
+            ("state/temperature", c.temperature.map(|v| (1, v))),
+            ("state/account_t0", c.account_t0.map(|v| (1, v))),
+            ("state/account_t_sum", c.account_t_sum.map(|v| (1, v))),
+        ];
+        let fields = present
+            .into_iter()
+            .filter_map(|(name, f)| {
+                let (width, values) = f?;
+                let (lo, rows) =
+                    crate::parallel::exchange::to_blocks(comm, ids, &values, width, total);
+                Some((name, width, lo, rows))
+            })
+            .collect();
+        Snapshot {
+            head: c.head,
+            total,
+            fields,
+        }
+    }
+
+    /// Collective. The rows of field `name` for nodes `ids`.
+    fn rows(&self, comm: &SimpleCommunicator, name: &str, ids: &[u32]) -> Vec<f64> {
+        let (_, width, lo, rows) = self
+            .fields
+            .iter()
+            .find(|f| f.0 == name)
+            .expect("the snapshot holds what its head says");
+        crate::parallel::exchange::from_blocks(comm, (*lo, rows), *width, self.total, ids)
+    }
+}
+
+/// Where a restored state comes from: a checkpoint file (a restart), or
+/// the ranks' memory (a repartition).
+#[derive(Clone, Copy)]
+pub(super) enum Saved<'a> {
+    File(&'a Restart),
+    Memory(&'a Snapshot),
+}
+
+impl Saved<'_> {
+    /// The head of the state.
+    pub fn head(&self) -> &CheckpointHead {
+        match self {
+            Saved::File(r) => &r.file.head,
+            Saved::Memory(s) => &s.head,
+        }
+    }
+
+    /// What errors name: the checkpoint's path.
+    fn origin(&self) -> &Path {
+        match self {
+            Saved::File(r) => &r.path,
+            Saved::Memory(_) => Path::new("(repartition)"),
+        }
+    }
+
+    /// Collective for a snapshot. Rows of 3 of field `name` for nodes `ids`.
+    fn rows3(
+        &self,
+        comm: &SimpleCommunicator,
+        name: &str,
+        ids: &[u32],
+    ) -> std::result::Result<Vec<[f64; 3]>, crate::io::IoError> {
+        match self {
+            Saved::File(r) => r.file.node_rows3(name, ids),
+            Saved::Memory(s) => Ok(s
+                .rows(comm, name, ids)
+                .chunks_exact(3)
+                .map(|c| [c[0], c[1], c[2]])
+                .collect()),
+        }
+    }
+
+    /// Collective for a snapshot. Rows of 1 of field `name` for nodes `ids`.
+    fn rows1(
+        &self,
+        comm: &SimpleCommunicator,
+        name: &str,
+        ids: &[u32],
+    ) -> std::result::Result<Vec<f64>, crate::io::IoError> {
+        match self {
+            Saved::File(r) => r.file.node_rows1(name, ids),
+            Saved::Memory(s) => Ok(s.rows(comm, name, ids)),
+        }
+    }
+}
+
+/// Collective. Put the saved mechanical state into the domain.
 pub(super) fn restore_mechanics(
     comm: &SimpleCommunicator,
     part: &Part,
-    restart: &Restart,
+    saved: Saved,
     mech: &mut Mechanics,
 ) -> Result<()> {
-    let ck = &restart.file.head;
+    let ck = saved.head();
     let m = &mut mech.domain;
     if !(ck.has_positions && ck.has_velocities) {
         return Err(missing(
-            &restart.path,
+            saved.origin(),
             "the checkpoint has no mechanical state, the scenario has mechanics",
         ));
     }
-    let f = &restart.file;
     let read = || -> std::result::Result<_, crate::io::IoError> {
-        let x = f.node_rows3("state/positions", &part.node_gid)?;
-        let v = f.node_rows3("state/velocities", &part.node_gid)?;
+        let x = saved.rows3(comm, "state/positions", &part.node_gid)?;
+        let v = saved.rows3(comm, "state/velocities", &part.node_gid)?;
         let vp = if ck.has_velocities_prev {
-            Some(f.node_rows3("state/velocities_prev", part.owned_gids())?)
+            Some(saved.rows3(comm, "state/velocities_prev", part.owned_gids())?)
         } else {
             None
         };
         Ok((x, v, vp))
     };
-    let (x, v, vp) = agree(comm, read().map_err(|e| unreadable(&restart.path, e)))?;
+    let (x, v, vp) = agree(comm, read().map_err(|e| unreadable(saved.origin(), e)))?;
     let saved = crate::dynamics::SavedMotion {
         positions: &x,
         velocities: &v,
@@ -156,35 +266,34 @@ pub(super) fn restore_mechanics(
     Ok(())
 }
 
-/// Collective. Put the temperatures and the heat account of the
-/// checkpoint into the thermal system.
+/// Collective. Put the saved temperatures and heat account into the
+/// thermal system.
 pub(super) fn restore_thermal(
     comm: &SimpleCommunicator,
     part: &Part,
-    restart: &Restart,
+    saved: Saved,
     s: &mut ThermalSystem,
 ) -> Result<()> {
-    let ck = &restart.file.head;
+    let ck = saved.head();
     if !ck.has_temperature {
         return Err(missing(
-            &restart.path,
+            saved.origin(),
             "the checkpoint has no temperatures, the scenario has a thermal problem",
         ));
     }
-    let f = &restart.file;
     let owned = part.owned_gids();
     let read = || -> std::result::Result<_, crate::io::IoError> {
-        let t = f.node_rows1("state/temperature", owned)?;
+        let t = saved.rows1(comm, "state/temperature", owned)?;
         let account = match ck.account {
             Some(_) => Some((
-                f.node_rows1("state/account_t0", owned)?,
-                f.node_rows1("state/account_t_sum", owned)?,
+                saved.rows1(comm, "state/account_t0", owned)?,
+                saved.rows1(comm, "state/account_t_sum", owned)?,
             )),
             None => None,
         };
         Ok((t, account))
     };
-    let (t, account) = agree(comm, read().map_err(|e| unreadable(&restart.path, e)))?;
+    let (t, account) = agree(comm, read().map_err(|e| unreadable(saved.origin(), e)))?;
     let h = ck.heat;
     let heat = EnergyAccount {
         stored: h[0],
@@ -215,6 +324,18 @@ pub(super) fn restore_thermal(
     Ok(())
 }
 
+/// A rank's state as a checkpoint holds it: the head, and the rows of
+/// the owned nodes (present when the run has them).
+pub(super) struct Captured {
+    pub head: CheckpointHead,
+    positions: Option<Vec<[f64; 3]>>,
+    velocities: Option<Vec<[f64; 3]>>,
+    velocities_prev: Option<Vec<[f64; 3]>>,
+    temperature: Option<Vec<f64>>,
+    account_t0: Option<Vec<f64>>,
+    account_t_sum: Option<Vec<f64>>,
+}
+
 /// Collective. Write the checkpoint: every rank its part's rows.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn save_checkpoint(
@@ -229,9 +350,44 @@ pub(super) fn save_checkpoint(
     settled: Option<f64>,
     path: &Path,
 ) -> Result<()> {
+    let mut c = capture(comm, model, part, sys, mech, step, contacts)?;
+    c.head.peak_kinetic = peak_kinetic;
+    c.head.settled = settled;
+    let no = part.num_owned();
+    let tets: Vec<[u32; 4]> = part
+        .mesh
+        .tets
+        .iter()
+        .map(|t| t.map(|l| part.node_gid[l as usize]))
+        .collect();
+    let rows = CheckpointRows {
+        node_gid: part.owned_gids(),
+        reference: &part.mesh.nodes[..no],
+        elem_gid: &part.elem_gid,
+        tets: &tets,
+        elem_body: &part.mesh.body,
+        positions: c.positions.as_deref(),
+        velocities: c.velocities.as_deref(),
+        velocities_prev: c.velocities_prev.as_deref(),
+        temperature: c.temperature.as_deref(),
+        account_t0: c.account_t0.as_deref(),
+        account_t_sum: c.account_t_sum.as_deref(),
+    };
+    crate::io::checkpoint::write_parallel(comm, path, &c.head, &rows).map_err(Error::from)
+}
+
+/// Collective. The state of `step` on this rank, as a checkpoint holds it.
+pub(super) fn capture(
+    comm: &SimpleCommunicator,
+    model: &Model,
+    part: &Part,
+    sys: &mut Option<ThermalSystem>,
+    mech: Option<&mut Mechanics>,
+    step: u64,
+    contacts: &ContactSet,
+) -> Result<Captured> {
     let (nodes, elems) = model.totals();
     let mut head = CheckpointHead {
-        settled,
         step,
         time: step as f64 * model.dt,
         nodes,
@@ -248,17 +404,10 @@ pub(super) fn save_checkpoint(
             .iter()
             .map(|b| [b.elem_range.0, b.elem_range.1])
             .collect(),
-        peak_kinetic,
         thermal_contacts: contacts.total_pairs,
         ..Default::default()
     };
     let no = part.num_owned();
-    let tets: Vec<[u32; 4]> = part
-        .mesh
-        .tets
-        .iter()
-        .map(|t| t.map(|l| part.node_gid[l as usize]))
-        .collect();
     let (mut positions, mut velocities, mut velocities_prev) = (None, None, None);
     if let Some(Mechanics { domain: m, .. }) = mech {
         positions = Some(m.owned_positions());
@@ -304,18 +453,17 @@ pub(super) fn save_checkpoint(
             e.convection_in,
         ];
     }
-    let rows = CheckpointRows {
-        node_gid: part.owned_gids(),
-        reference: &part.mesh.nodes[..no],
-        elem_gid: &part.elem_gid,
-        tets: &tets,
-        elem_body: &part.mesh.body,
-        positions: positions.as_deref(),
-        velocities: velocities.as_deref(),
-        velocities_prev: velocities_prev.as_deref(),
-        temperature: temperature.as_deref(),
-        account_t0: t0.as_deref(),
-        account_t_sum: t_sum.as_deref(),
-    };
-    crate::io::checkpoint::write_parallel(comm, path, &head, &rows).map_err(Error::from)
+    head.has_positions = positions.is_some();
+    head.has_velocities = velocities.is_some();
+    head.has_velocities_prev = velocities_prev.is_some();
+    head.has_temperature = temperature.is_some();
+    Ok(Captured {
+        head,
+        positions,
+        velocities,
+        velocities_prev,
+        temperature,
+        account_t0: t0,
+        account_t_sum: t_sum,
+    })
 }

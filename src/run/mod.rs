@@ -12,6 +12,7 @@
 
 mod checkpoint;
 mod output;
+mod rebalance;
 mod schedule;
 mod settle;
 mod setup;
@@ -35,10 +36,11 @@ use crate::thermal::ThermalSystem;
 
 use checkpoint::Restart;
 use output::Output;
+use rebalance::Balance;
 use schedule::Schedule;
 use settle::Settling;
 use setup::Contacts;
-pub use summary::{peak_rss, MechanicsSummary, PhaseTimes, RunSummary, Settled};
+pub use summary::{peak_rss, BalanceSummary, MechanicsSummary, PhaseTimes, RunSummary, Settled};
 
 /// How to run.
 #[derive(Debug, Clone, Default)]
@@ -162,6 +164,8 @@ struct Stages<'a, 'p> {
     mech: Option<Mechanics>,
     contacts: Contacts,
     times: PhaseTimes,
+    /// Repartitions as the bodies move.
+    balance: Balance,
 }
 
 impl<'a, 'p> Stages<'a, 'p> {
@@ -202,6 +206,7 @@ impl<'a, 'p> Stages<'a, 'p> {
             mech,
             contacts,
             times,
+            balance: Balance::new(model, comm.size() as usize),
         })
     }
 }
@@ -248,6 +253,9 @@ impl Stages<'_, '_> {
             at.checkpoint = Some(at.checkpoint_path.clone());
         }
         self.times.output += clock.elapsed().as_secs_f64();
+        if !settled && step < self.model.steps {
+            self.rebalance(step, out)?;
+        }
         Ok(())
     }
 

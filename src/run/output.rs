@@ -40,6 +40,9 @@ pub(super) struct Output {
     /// Particle statistics (rank 0 keeps them; every rank takes part in the reductions).
     report: Option<ParticleReport>,
     radial_steps: Vec<u64>,
+    /// Whether element owners change during the run (repartitions): then
+    /// each output has an `owner_rank` cell field beside the static `rank`.
+    owners_move: bool,
 }
 
 impl Output {
@@ -151,7 +154,24 @@ impl Output {
             stats,
             report,
             radial_steps,
+            owners_move: mechanics
+                && comm.size() > 1
+                && model
+                    .mechanics
+                    .as_ref()
+                    .is_some_and(|m| m.rebalance.every > 0),
         })
+    }
+
+    /// Collective. After a repartition: the per-body tables of the new part.
+    pub fn repartitioned(
+        &mut self,
+        comm: &SimpleCommunicator,
+        model: &Model,
+        part: &Part,
+    ) -> Result<()> {
+        self.stats = BodyStats::new(comm, model, part)?;
+        Ok(())
     }
 
     /// Whether the particle statistics need every step.
@@ -185,6 +205,10 @@ impl Output {
             node_fields.push(("displacement", 3, m.displacement()));
             node_fields.push(("velocity", 3, m.velocity()));
             cell_fields.push(("stress", 6, m.stress_tensor6(&part.elem_gid)));
+            if self.owners_move {
+                let rank = f64::from(comm.rank());
+                cell_fields.push(("owner_rank", 1, vec![rank; part.num_elements()]));
+            }
         } else if model.has_motion() {
             // Rigid displacement of each owned node (ParaView: Warp By Vector).
             let u: Vec<f64> = part

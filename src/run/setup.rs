@@ -65,7 +65,7 @@ pub(super) fn mechanics(
         r.check_part(comm, part)?;
     }
     if let (Some(r), Some(m)) = (restart, mech.as_mut()) {
-        checkpoint::restore_mechanics(comm, part, r, m)?;
+        checkpoint::restore_mechanics(comm, part, checkpoint::Saved::File(r), m)?;
     }
     times.mechanics = clock.elapsed().as_secs_f64();
     times.mechanics_setup = times.mechanics;
@@ -165,6 +165,15 @@ impl Contacts {
             contacts.detections = 1;
         }
         Ok(contacts)
+    }
+
+    /// Count the detections and searches of `earlier` (the contacts of
+    /// the parts before a repartition) as this one's.
+    pub fn add_counts(&mut self, earlier: &Contacts) {
+        self.detections += earlier.detections;
+        self.searches += earlier.searches;
+        self.search_time += earlier.search_time;
+        self.surface_time += earlier.surface_time;
     }
 
     /// Collective. Detect again at the positions of `step`: the new set
@@ -279,18 +288,7 @@ pub(super) fn thermal<'p>(
     times: &mut PhaseTimes,
 ) -> Result<Option<ThermalSystem<'p>>> {
     let clock = Instant::now();
-    let mut sys = if model.thermal_active {
-        Some(ThermalSystem::new(
-            petsc,
-            comm,
-            model,
-            part,
-            &model.solver,
-            contacts,
-        )?)
-    } else {
-        None
-    };
+    let mut sys = thermal_system(petsc, comm, model, part, contacts)?;
     times.assembly = clock.elapsed().as_secs_f64();
     // Every PETSc object exists now: an option none of them read is a typo
     // (the options database is the same on every rank).
@@ -301,9 +299,25 @@ pub(super) fn thermal<'p>(
         }
     }
     if let (Some(r), Some(s)) = (restart, sys.as_mut()) {
-        checkpoint::restore_thermal(comm, part, r, s)?;
+        checkpoint::restore_thermal(comm, part, checkpoint::Saved::File(r), s)?;
     }
     Ok(sys)
+}
+
+/// Collective. The thermal system on `part` with `contacts` (None
+/// without a thermal problem).
+pub(super) fn thermal_system<'p>(
+    petsc: &'p Petsc,
+    comm: &SimpleCommunicator,
+    model: &Model,
+    part: &Part,
+    contacts: &ContactSet,
+) -> Result<Option<ThermalSystem<'p>>> {
+    if !model.thermal_active {
+        return Ok(None);
+    }
+    let s = ThermalSystem::new(petsc, comm, model, part, &model.solver, contacts)?;
+    Ok(Some(s))
 }
 
 /// Collective. Give the mechanics its first temperatures: the thermal

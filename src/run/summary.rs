@@ -75,6 +75,25 @@ pub struct MechanicsSummary {
     pub bytes_per_substep: (f64, f64),
 }
 
+/// The repartitions of a run on several ranks with moving bodies.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct BalanceSummary {
+    /// Checks of the work balance.
+    pub checks: u64,
+    /// Repartitions done.
+    pub repartitions: u64,
+    /// Bodies that changed rank, over all repartitions.
+    pub bodies_moved: u64,
+    /// Largest max/mean work per rank at a check: with the pairs as their
+    /// bodies' tets found them, and as evaluated (shared out evenly).
+    pub worst_found: f64,
+    pub worst_evaluated: f64,
+    /// Max/mean work (pairs as found) after the last check.
+    pub last: f64,
+    /// Time of the checks and repartitions (s, max over ranks).
+    pub time: f64,
+}
+
 /// What a run did.
 #[derive(Debug, Clone)]
 pub struct RunSummary {
@@ -114,6 +133,8 @@ pub struct RunSummary {
     pub assemblies: u64,
     /// Mechanics, when it ran.
     pub mechanics: Option<MechanicsSummary>,
+    /// Repartitions, when the run checked its balance.
+    pub balance: Option<BalanceSummary>,
     /// Step the run started from (0, or a checkpoint's).
     pub start_step: u64,
     /// Where the bodies settled (the run stopped there).
@@ -190,6 +211,19 @@ impl std::fmt::Display for RunSummary {
                 f,
                 "  traffic     {:.0} B sent per substep per rank (max over ranks), {:.0} B mean (halo, ghost refresh, pair balancing)",
                 m.bytes_per_substep.0, m.bytes_per_substep.1
+            )?;
+        }
+        if let Some(b) = &self.balance {
+            writeln!(
+                f,
+                "  balance     {} repartition(s), {} bodies moved, {:.3} s; work max/mean over {} checks: <= {:.3} as found, <= {:.3} as evaluated, {:.3} at the last",
+                b.repartitions,
+                b.bodies_moved,
+                b.time,
+                b.checks,
+                b.worst_found,
+                b.worst_evaluated,
+                b.last
             )?;
         }
         if self.heat {
@@ -342,6 +376,20 @@ impl Stages<'_, '_> {
             .as_ref()
             .map(|m| MechanicsSummary::gather(comm, m));
         let sys = self.sys.as_ref();
+        let b = &self.balance;
+        let balance = (b.checks > 0).then(|| {
+            let mut time = 0.0;
+            comm.all_reduce_into(&b.time, &mut time, SystemOperation::max());
+            BalanceSummary {
+                checks: b.checks,
+                repartitions: b.repartitions,
+                bodies_moved: b.bodies_moved,
+                worst_found: b.worst_found,
+                worst_evaluated: b.worst_evaluated,
+                last: b.last,
+                time,
+            }
+        });
         Ok(RunSummary {
             ranks: self.part.size,
             nodes: self.model.totals().0 as usize,
@@ -371,6 +419,7 @@ impl Stages<'_, '_> {
             searches,
             assemblies: sys.map_or(0, |s| s.assemblies),
             mechanics,
+            balance,
         })
     }
 }

@@ -632,6 +632,44 @@ pub struct MechanicsSpec {
     /// Stop the run once the bodies have settled (deposition).
     #[serde(default)]
     pub settle: Option<SettleSpec>,
+    /// Repartition the bodies over the ranks as they move (runs on
+    /// several ranks).
+    #[serde(default)]
+    pub rebalance: RebalanceSpec,
+}
+
+/// When a run on several ranks repartitions its bodies: every `every`
+/// steps (`time.dt`; 0: never) the work per rank (elements and the
+/// contact pairs its bodies found, in the partition's units) is compared
+/// with the mean, and when the largest exceeds `threshold` × the mean the
+/// bodies are cut again by recursive coordinate bisection over their
+/// current centres, weighted by their work; their state moves with them.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RebalanceSpec {
+    /// Largest max/mean work per rank tolerated (> 1).
+    #[serde(default = "default_rebalance_threshold")]
+    pub threshold: f64,
+    /// Steps between checks (0: never repartition).
+    #[serde(default = "default_rebalance_every")]
+    pub every: u64,
+}
+
+impl Default for RebalanceSpec {
+    fn default() -> Self {
+        RebalanceSpec {
+            threshold: default_rebalance_threshold(),
+            every: default_rebalance_every(),
+        }
+    }
+}
+
+fn default_rebalance_threshold() -> f64 {
+    1.1
+}
+
+fn default_rebalance_every() -> u64 {
+    10
 }
 
 /// When a deposition has settled: the kinetic energy, checked after every
@@ -943,6 +981,14 @@ impl Scenario {
             }
             if p.radial_bins == 0 {
                 return bad("output.particles.radial_bins", "must be at least 1".into());
+            }
+        }
+        if let Some(r) = self.mechanics.as_ref().map(|m| m.rebalance) {
+            if !(r.threshold.is_finite() && r.threshold >= 1.0) {
+                return bad(
+                    "mechanics.rebalance.threshold",
+                    format!("must be a number >= 1 (max/mean work), got {}", r.threshold),
+                );
             }
         }
         if let Some(st) = self.mechanics.as_ref().and_then(|m| m.settle) {

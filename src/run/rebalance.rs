@@ -1,0 +1,269 @@
+//! Bodies follow their ranks: the repartition of a running mechanics run
+//! on several ranks. Every `mechanics.rebalance.every` steps, at a stop,
+//! the ranks compare their work (elements and the contact pairs their
+//! bodies found at the last detection, [`crate::dynamics::BodyLoad`]); when
+//! the largest exceeds `threshold` × the mean, the whole bodies are cut
+//! again by recursive coordinate bisection over their current centres,
+//! weighted by their work ([`Part::build_placed`]), and the run continues
+//! on the new parts as a restart would: the state moves by global node id
+//! through a [`Snapshot`] in blocks over the ranks, and the mechanics
+//! domain, the contacts and the thermal system (its PETSc layout on the
+//! new ownership) are rebuilt and restored from it. Trajectories do not
+//! depend on the partition (pair ownership and the global-order force
+//! sum), so they continue bitwise; sums over ranks (energies, heat) may
+//! change in their last bits.
+//!
+//! Collective: every rank calls these at the same stops.
+
+use std::collections::HashMap;
+use std::time::Instant;
+
+use mpi::collective::SystemOperation;
+use mpi::topology::SimpleCommunicator;
+use mpi::traits::*;
+
+use crate::dynamics::ExplicitDomain;
+use crate::error::{Error, Result};
+use crate::model::Model;
+use crate::parallel::exchange::{all_to_all, block_owner};
+use crate::parallel::Part;
+use crate::scenario::RebalanceSpec;
+
+use super::checkpoint::{self, Saved, Snapshot};
+use super::output::Output;
+use super::setup::{self, Contacts};
+use super::{Mechanics, Stages};
+
+/// The repartitions of a run, and the balance of the work seen at the checks.
+#[derive(Debug, Clone, Default)]
+pub(super) struct Balance {
+    /// When to check (None: one rank, no mechanics, or `every = 0`).
+    spec: Option<RebalanceSpec>,
+    /// Repartitions done.
+    pub repartitions: u64,
+    /// Bodies that changed rank, summed over the repartitions.
+    pub bodies_moved: u64,
+    /// Checks made.
+    pub checks: u64,
+    /// Largest max/mean work per rank seen at a check, before a
+    /// repartition there (pairs as found) and as evaluated (the pairs
+    /// shared out evenly by the detection).
+    pub worst_found: f64,
+    pub worst_evaluated: f64,
+    /// Max/mean work per rank at the last check, after its repartition.
+    pub last: f64,
+    /// Time spent in checks and repartitions (s).
+    pub time: f64,
+}
+
+/// Work per rank at a check: max/mean as found, and as evaluated.
+struct Imbalance {
+    found: f64,
+    evaluated: f64,
+}
+
+impl Balance {
+    /// The repartition schedule of `model` on `size` ranks.
+    pub fn new(model: &Model, size: usize) -> Balance {
+        let spec = model
+            .mechanics
+            .as_ref()
+            .map(|m| m.rebalance)
+            .filter(|r| r.every > 0 && size > 1);
+        Balance {
+            spec,
+            ..Balance::default()
+        }
+    }
+
+    /// Whether `step` is a check.
+    fn due(&self, step: u64) -> bool {
+        self.spec.is_some_and(|s| step.is_multiple_of(s.every))
+    }
+}
+
+/// Collective. Max/mean of the ranks' work: elements and the pairs their
+/// tets found (before the detection shares them out), and elements and
+/// an even share of all pairs (what each rank evaluates).
+fn imbalance(
+    comm: &SimpleCommunicator,
+    model: &Model,
+    part: &Part,
+    m: &ExplicitDomain,
+) -> Imbalance {
+    let found = m.found_work(model, part);
+    let elements: f64 = part
+        .mesh
+        .body
+        .iter()
+        .map(|&b| crate::parallel::element_work(model, b as usize))
+        .sum();
+    let mine = [found, elements, found - elements];
+    let mut sum = [0.0; 3];
+    comm.all_reduce_into(&mine[..], &mut sum[..], SystemOperation::sum());
+    let size = comm.size() as f64;
+    let evaluated = elements + sum[2] / size;
+    let local = [found, evaluated];
+    let mut most = [0.0; 2];
+    comm.all_reduce_into(&local[..], &mut most[..], SystemOperation::max());
+    let mean_found = sum[0] / size;
+    let ratio = |m: f64| {
+        if mean_found > 0.0 {
+            m / mean_found
+        } else {
+            1.0
+        }
+    };
+    Imbalance {
+        found: ratio(most[0]),
+        evaluated: ratio(most[1]),
+    }
+}
+
+/// Collective. The current centre and work of every whole body on this
+/// rank, sent to the rank whose block of body ids holds it (where
+/// [`Part::build_placed`] reads it).
+fn placements(
+    comm: &SimpleCommunicator,
+    model: &Model,
+    part: &Part,
+    m: &ExplicitDomain,
+) -> HashMap<u32, ([f64; 3], f64)> {
+    let size = comm.size() as usize;
+    let nb = model.bodies.len() as u64;
+    let mut send: Vec<Vec<f64>> = vec![Vec::new(); size];
+    for l in m.body_loads(model, part) {
+        let c = l.centre;
+        send[block_owner(u64::from(l.body), nb, size)].extend_from_slice(&[
+            f64::from(l.body),
+            c[0],
+            c[1],
+            c[2],
+            l.work,
+        ]);
+    }
+    all_to_all(comm, &send)
+        .iter()
+        .flat_map(|v| v.chunks_exact(5))
+        .map(|r| (r[0] as u32, ([r[1], r[2], r[3]], r[4])))
+        .collect()
+}
+
+impl Stages<'_, '_> {
+    /// Collective. At a check (after the stop's output and checkpoint):
+    /// measure the balance and repartition when it is past the threshold.
+    pub(super) fn rebalance(&mut self, step: u64, out: &mut Output) -> Result<()> {
+        if !self.balance.due(step) {
+            return Ok(());
+        }
+        let Some(mech) = self.mech.as_ref() else {
+            return Ok(());
+        };
+        let clock = Instant::now();
+        let (comm, model) = (self.comm, self.model);
+        let before = imbalance(comm, model, &self.part, &mech.domain);
+        let b = &mut self.balance;
+        b.checks += 1;
+        b.worst_found = b.worst_found.max(before.found);
+        b.worst_evaluated = b.worst_evaluated.max(before.evaluated);
+        b.last = before.found;
+        let threshold = b.spec.map_or(f64::INFINITY, |s| s.threshold);
+        if before.found > threshold {
+            self.repartition(step, out)?;
+            let m = &self.mech.as_ref().expect("mechanics").domain;
+            self.balance.last = imbalance(comm, model, &self.part, m).found;
+        }
+        self.balance.time += clock.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    /// Collective. Cut the bodies again at their current centres and
+    /// continue on the new parts: the state of `step` through a snapshot,
+    /// the mechanics domain, contacts and thermal system rebuilt on the
+    /// new parts and restored, the output's per-node tables renewed.
+    fn repartition(&mut self, step: u64, out: &mut Output) -> Result<()> {
+        let (comm, model) = (self.comm, self.model);
+        let Some(mech) = self.mech.as_mut() else {
+            return Ok(());
+        };
+        let placed = placements(comm, model, &self.part, &mech.domain);
+        let captured = checkpoint::capture(
+            comm,
+            model,
+            &self.part,
+            &mut self.sys,
+            Some(mech),
+            step,
+            &self.contacts.set,
+        )?;
+        let snapshot = Snapshot::take(comm, model, &self.part, captured);
+        // What the old stages counted goes on with the new ones.
+        let old = self.mech.take().expect("mechanics");
+        let (counters, substeps_per_step) = (old.domain.counters, old.substeps_per_step);
+        drop(old);
+        let old_sys = self.sys.take();
+        let (iterations, assemblies) = old_sys
+            .as_ref()
+            .map_or((0, 0), |s| (s.iterations, s.assemblies));
+        drop(old_sys);
+
+        let clock = Instant::now();
+        let part = Part::build_placed(comm, model, Some(&placed))?;
+        self.times.partition += clock.elapsed().as_secs_f64();
+        let moved = part
+            .whole_bodies
+            .iter()
+            .filter(|b| self.part.whole_bodies.binary_search(b).is_err())
+            .count() as u64;
+        let mut all_moved = 0u64;
+        comm.all_reduce_into(&moved, &mut all_moved, SystemOperation::sum());
+        self.part = part;
+        let part = &self.part;
+
+        let clock = Instant::now();
+        let (domain, n) = ExplicitDomain::new(comm, model, part, model.dt)?;
+        if n != substeps_per_step {
+            return Err(Error::Mechanics(format!(
+                "the repartition at step {step} changed the substeps per step from \
+                 {substeps_per_step} to {n}"
+            )));
+        }
+        let mut mech = Mechanics {
+            domain,
+            substeps_per_step: n,
+        };
+        checkpoint::restore_mechanics(comm, part, Saved::Memory(&snapshot), &mut mech)?;
+        // The counts go on; the detections of the rebuild are added.
+        let fresh = mech.domain.counters;
+        mech.domain.counters = counters;
+        mech.domain.counters.detections += fresh.detections;
+        mech.domain.counters.detect_time += fresh.detect_time;
+        self.times.mechanics += clock.elapsed().as_secs_f64();
+
+        let mut contacts = Contacts::new(comm, model, part, None, Some(&mut mech))?;
+        contacts.add_counts(&self.contacts);
+        let clock = Instant::now();
+        let mut sys = setup::thermal_system(self.petsc, comm, model, part, &contacts.set)?;
+        if let Some(s) = sys.as_mut() {
+            checkpoint::restore_thermal(comm, part, Saved::Memory(&snapshot), s)?;
+            s.iterations = iterations;
+            s.assemblies += assemblies;
+        }
+        self.times.assembly += clock.elapsed().as_secs_f64();
+        setup::couple_temperatures(
+            comm,
+            model,
+            part,
+            sys.as_ref(),
+            Some(&mut mech),
+            Some(&snapshot.head),
+        )?;
+        self.mech = Some(mech);
+        self.sys = sys;
+        self.contacts = contacts;
+        out.repartitioned(comm, model, part)?;
+        self.balance.repartitions += 1;
+        self.balance.bodies_moved += all_moved;
+        Ok(())
+    }
+}

@@ -255,3 +255,62 @@ value = 100.0
         }
     }
 }
+
+/// A coupled run repartitions too: eight hot blocks dropped onto a cold
+/// floor with thermal contact and expansion. After each repartition the
+/// thermal system is rebuilt on the new owners and restored; temperatures
+/// and displacements on 2 and 3 ranks agree with 1 rank to 1e-8.
+#[test]
+fn coupled_drop_with_repartitions_on_one_to_three_ranks() {
+    let dir = out_dir("many/hot-drop8-scenario");
+    let base = std::fs::read_to_string(root().join("scenarios/drop8.toml")).unwrap();
+    let scenario = base
+        .replace(
+            "density = 1500.0",
+            "density = 1500.0\nconductivity = 1.0\nspecific_heat = 800.0\nexpansion = 1e-5",
+        )
+        .replace(
+            "rotate = [3.0, 5.0, 7.0]",
+            "rotate = [3.0, 5.0, 7.0]\ninitial_temperature = 100.0\nreference_temperature = 100.0",
+        )
+        .replace("fixed = true", "fixed = true\ninitial_temperature = 0.0")
+        + "\n[thermal]\ntheta = 1.0\n\n[contact]\nresistance = 0.01\nevery = 1\n";
+    let path = dir.join("hot-drop8.toml");
+    std::fs::write(&path, scenario).unwrap();
+    let extra = [
+        "--set",
+        "mechanics.rebalance.every=2",
+        "--set",
+        "mechanics.rebalance.threshold=1.0",
+    ];
+    let mut first: Option<(Results, Vec<Vec<f64>>)> = None;
+    for ranks in [1, 2, 3] {
+        let out = out_dir(&format!("many/hot-drop8-{ranks}"));
+        let summary = run_ok(ranks, &path, &out, &extra);
+        let r = read_results(&out, "hot-drop8");
+        let (_, disp) = displacements(&out, "hot-drop8");
+        let hot = r.temperature.last().unwrap();
+        assert!(
+            hot.iter().all(|&t| (-1e-6..=100.0 + 1e-6).contains(&t)),
+            "{ranks} ranks: temperatures leave [0, 100] C"
+        );
+        match &first {
+            None => first = Some((r, disp)),
+            Some((r1, d1)) => {
+                let (done, moved) = repartitions(&summary);
+                assert!(
+                    done >= 1 && moved > 0,
+                    "{ranks} ranks: {done} repartitions, {moved} moved"
+                );
+                assert_same_temperatures(r1, &r, 1e-8, &format!("hot drop: 1 vs {ranks} ranks"));
+                for (k, (a, b)) in d1.iter().zip(&disp).enumerate() {
+                    let d = rel_diff(a, b);
+                    assert!(
+                        d < 1e-8,
+                        "hot drop: displacement at output {k}, {ranks} ranks: {d:e}"
+                    );
+                }
+            }
+        }
+    }
+}

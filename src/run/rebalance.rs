@@ -60,6 +60,9 @@ pub(super) struct Balance {
 struct Imbalance {
     found: f64,
     evaluated: f64,
+    /// The heaviest whole body's work over the mean work per rank: no
+    /// partition into whole bodies does better.
+    heaviest: f64,
 }
 
 impl Balance {
@@ -103,8 +106,13 @@ fn imbalance(
     comm.all_reduce_into(&mine[..], &mut sum[..], SystemOperation::sum());
     let size = comm.size() as f64;
     let evaluated = elements + sum[2] / size;
-    let local = [found, evaluated];
-    let mut most = [0.0; 2];
+    let heaviest = m
+        .body_loads(model, part)
+        .iter()
+        .map(|l| l.work)
+        .fold(0.0, f64::max);
+    let local = [found, evaluated, heaviest];
+    let mut most = [0.0; 3];
     comm.all_reduce_into(&local[..], &mut most[..], SystemOperation::max());
     let mean_found = sum[0] / size;
     let ratio = |m: f64| {
@@ -117,6 +125,7 @@ fn imbalance(
     Imbalance {
         found: ratio(most[0]),
         evaluated: ratio(most[1]),
+        heaviest: ratio(most[2]),
     }
 }
 
@@ -168,7 +177,8 @@ impl Stages<'_, '_> {
         b.worst_evaluated = b.worst_evaluated.max(before.evaluated);
         b.last = before.found;
         let threshold = b.spec.map_or(f64::INFINITY, |s| s.threshold);
-        if before.found > threshold {
+        // Past the threshold, and not only because one body outweighs a rank's share.
+        if before.found > threshold && before.found > 1.05 * before.heaviest {
             self.repartition(step, out)?;
             let m = &self.mech.as_ref().expect("mechanics").domain;
             self.balance.last = imbalance(comm, model, &self.part, m).found;
@@ -187,6 +197,16 @@ impl Stages<'_, '_> {
             return Ok(());
         };
         let placed = placements(comm, model, &self.part, &mech.domain);
+        let clock = Instant::now();
+        let part = Part::build_placed(comm, model, Some(&placed))?;
+        self.times.partition += clock.elapsed().as_secs_f64();
+        // The same elements on every rank: nothing to move.
+        let same = i32::from(part.elem_gid == self.part.elem_gid);
+        let mut all_same = 0i32;
+        comm.all_reduce_into(&same, &mut all_same, SystemOperation::min());
+        if all_same == 1 {
+            return Ok(());
+        }
         let captured = checkpoint::capture(
             comm,
             model,
@@ -207,9 +227,6 @@ impl Stages<'_, '_> {
             .map_or((0, 0), |s| (s.iterations, s.assemblies));
         drop(old_sys);
 
-        let clock = Instant::now();
-        let part = Part::build_placed(comm, model, Some(&placed))?;
-        self.times.partition += clock.elapsed().as_secs_f64();
         let moved = part
             .whole_bodies
             .iter()

@@ -21,16 +21,29 @@ pub struct BodyLoad {
 }
 
 impl ExplicitDomain {
+    /// Collective. Detect the contact candidates at the current positions
+    /// (as a restore does), so the work each rank finds is that of this
+    /// moment on any run that reaches it, a restarted one too. Forces do
+    /// not depend on when candidates were found.
+    pub fn detect_now(
+        &mut self,
+        comm: &mpi::topology::SimpleCommunicator,
+    ) -> crate::error::Result<()> {
+        self.detect(comm)?;
+        self.redetect = false;
+        Ok(())
+    }
+
     /// The work of this rank: its elements' and the pairs its tets found
     /// at the last detection (before the pairs are shared out).
-    pub fn found_work(&self, model: &Model, part: &Part) -> f64 {
-        let elements: f64 = part
-            .mesh
-            .body
-            .iter()
-            .map(|&b| element_work(model, b as usize))
-            .sum();
-        elements + self.body_pair_work.values().sum::<f64>()
+    pub fn found_work(&self) -> f64 {
+        self.element_work + self.body_pair_work.values().sum::<f64>()
+    }
+
+    /// The work this rank evaluates: its elements' and the pairs it took
+    /// at the last detection (its share of all pairs found).
+    pub fn evaluated_work(&self) -> f64 {
+        self.element_work + self.pair_share
     }
 
     /// The whole bodies of `part` with their current centres and work.

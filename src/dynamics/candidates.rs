@@ -379,19 +379,22 @@ impl ExplicitDomain {
         (ra.0, rb.0, pair_stiffness(penalty, va, vb), reduced_mass)
     }
 
-    /// Collective. Share the pair work evenly over the ranks. Each rank
-    /// finds the pairs of the tets it owns, so the ranks holding the
-    /// bottom of a settling column (or its contacts) would do all the
-    /// contact work while the others wait. With `weights` the estimated
-    /// cost of each found pair, the pairs of all ranks, in rank order,
-    /// are cut into equal-weight runs and rank r takes run r: an excess
-    /// moves to the next ranks as one contiguous, spatially coherent run
-    /// (the pair's nodes become ghosts there). The forces do not depend
-    /// on which rank evaluates a pair (they are summed by pair key).
-    /// Returns the pairs this rank evaluates.
+    /// Collective. Share the work evenly over the ranks. Each rank finds
+    /// the pairs of the tets it owns, so the ranks holding the bottom of
+    /// a settling column (or its contacts) would do all the contact work
+    /// while the others wait. With `weights` the estimated cost of each
+    /// found pair, each rank's share of the pair work is what brings its
+    /// elements' work up to the mean work (elements and pairs) of the
+    /// ranks; the pairs of all ranks, in rank order, are cut into runs of
+    /// those shares and rank r takes run r: an excess moves to the next
+    /// ranks as one contiguous, spatially coherent run (the pair's nodes
+    /// become ghosts there). After a repartition by work the shares are
+    /// about what each rank found, and few pairs move. The forces do not
+    /// depend on which rank evaluates a pair (they are summed by pair
+    /// key). Returns the pairs this rank evaluates.
     #[allow(clippy::type_complexity)]
     fn balance_pairs(
-        &self,
+        &mut self,
         comm: &SimpleCommunicator,
         og: &OwnAndGhosts,
         kept: &[(u32, u32)],
@@ -399,29 +402,45 @@ impl ExplicitDomain {
     ) -> (Vec<(u32, u32)>, Vec<PairRecord>) {
         let size = comm.size() as usize;
         let rank = comm.rank() as usize;
+        let mine: u64 = weights.iter().sum();
+        self.pair_share = mine as f64;
         if size == 1 {
             return (kept.to_vec(), Vec::new());
         }
-        let mine: u64 = weights.iter().sum();
-        let mut all = vec![0u64; size];
-        comm.all_gather_into(&mine, &mut all[..]);
-        let total: u64 = all.iter().sum();
-        if total == 0 {
+        let local = [mine as f64, self.element_work];
+        let mut all = vec![0.0f64; 2 * size];
+        comm.all_gather_into(&local[..], &mut all[..]);
+        let found: Vec<f64> = all.iter().step_by(2).copied().collect();
+        let total: f64 = found.iter().sum();
+        if total == 0.0 {
             return (kept.to_vec(), Vec::new());
         }
-        let mut at: u64 = all[..rank].iter().sum();
+        let shares = pair_shares(
+            &found,
+            &all.iter().skip(1).step_by(2).copied().collect::<Vec<_>>(),
+        );
+        // Run r of the pair sequence: [ends[r], ends[r + 1]).
+        let mut ends = vec![0.0f64; size + 1];
+        for r in 0..size {
+            ends[r + 1] = ends[r] + shares[r];
+        }
+        self.pair_share = shares[rank];
+        let mut at: f64 = found[..rank].iter().sum();
         let mut out: Vec<Vec<f64>> = vec![Vec::new(); size];
         let mut here = Vec::with_capacity(kept.len());
+        let mut dest = 0usize;
         for (&(a, b), &w) in kept.iter().zip(weights) {
-            // The rank whose equal share holds the pair's mid-point.
-            let mid = 2 * u128::from(at) + u128::from(w);
-            let dest = ((mid * size as u128) / (2 * u128::from(total))).min(size as u128 - 1);
-            at += w;
-            if dest as usize == rank {
+            // The rank whose run holds the pair's mid-point.
+            let mid = at + 0.5 * w as f64;
+            at += w as f64;
+            while dest + 1 < size && ends[dest + 1] <= mid {
+                dest += 1;
+            }
+            if dest == rank {
                 here.push((a, b));
             } else {
                 let r = self.pair_record(og, a, b);
-                let o = &mut out[dest as usize];
+                let o = &mut out[dest];
                 o.extend_from_slice(&[r.stiffness, r.reduced_mass]);
                 r.a.push(o);
                 r.b.push(o);
@@ -661,5 +680,56 @@ impl ExplicitDomain {
         // Not in the seeds: Verlet-list skin, re-detect after the margin/2 a node may move in DETECT_EVERY substeps.
         (2.0 * DETECT_EVERY * v_max * self.dt)
             .clamp(self.margin_min, MARGIN_GROWTH * self.margin_min)
+    }
+}
+
+/// Each rank's share of the pair work (`found` per rank, summing to the
+/// total): what brings its `elements` work up to the mean of elements
+/// and pairs, a rank whose elements alone exceed a share taking none, the
+/// shares scaled to the total found.
+fn pair_shares(found: &[f64], elements: &[f64]) -> Vec<f64> {
+    let pairs: f64 = found.iter().sum();
+    // The level L with sum over r of max(0, L - elements_r) = pairs: filled
+    // over the ranks sorted by element work.
+    let mut e: Vec<f64> = elements.to_vec();
+    e.sort_by(f64::total_cmp);
+    let (mut sum, mut level) = (0.0, 0.0);
+    for k in 0..e.len() {
+        sum += e[k];
+        level = (sum + pairs) / (k + 1) as f64;
+        if k + 1 == e.len() || level <= e[k + 1] {
+            break;
+        }
+    }
+    let raw: Vec<f64> = elements.iter().map(|&x| (level - x).max(0.0)).collect();
+    let sum: f64 = raw.iter().sum();
+    if sum > 0.0 {
+        raw.iter().map(|&x| x * pairs / sum).collect()
+    } else {
+        found.to_vec()
+    }
+}
+
+#[cfg(test)]
+mod shares {
+    use super::pair_shares;
+
+    #[test]
+    fn shares_fill_the_ranks_up_to_the_mean_work() {
+        let close = |a: &[f64], b: &[f64]| a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-12);
+        // Equal elements: the pairs evenly.
+        assert!(close(&pair_shares(&[10.0, 0.0], &[4.0, 4.0]), &[5.0, 5.0]));
+        // A rank with more elements takes fewer pairs: 8 + 1 = 0 + 9.
+        assert!(close(&pair_shares(&[10.0, 0.0], &[8.0, 0.0]), &[1.0, 9.0]));
+        // Elements alone above the level: no pairs there.
+        assert!(close(
+            &pair_shares(&[3.0, 3.0, 0.0], &[20.0, 0.0, 0.0]),
+            &[0.0, 3.0, 3.0]
+        ));
+        // Shares always sum to the pairs found.
+        let s = pair_shares(&[7.0, 1.0, 0.5], &[3.0, 2.0, 9.0]);
+        assert!((s.iter().sum::<f64>() - 8.5).abs() < 1e-12);
+        // No pairs: no shares.
+        assert!(close(&pair_shares(&[0.0, 0.0], &[1.0, 2.0]), &[0.0, 0.0]));
     }
 }

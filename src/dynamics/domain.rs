@@ -98,6 +98,10 @@ pub struct ExplicitDomain {
     /// Work (partition units) of the penalty pairs this rank's tets found
     /// at the last detection, per body of the own tet, before balancing.
     pub(super) body_pair_work: HashMap<u32, f64>,
+    /// Work of this rank's elements per substep (partition units).
+    pub(super) element_work: f64,
+    /// Work of the pairs this rank evaluates since the last detection.
+    pub(super) pair_share: f64,
     /// Local nodes of the tets of the candidate pairs, each tet once, and
     /// what the thermal contact needs of them.
     pub(super) pair_tets: Vec<[u32; 4]>,
@@ -294,6 +298,13 @@ impl ExplicitDomain {
             margin_min: margin,
             candidates: Vec::new(),
             body_pair_work: HashMap::new(),
+            element_work: part
+                .mesh
+                .body
+                .iter()
+                .map(|&b| crate::parallel::element_work(model, b as usize))
+                .sum(),
+            pair_share: 0.0,
             pair_tets: Vec::new(),
             pair_info: Vec::new(),
             pair_geometry: Vec::new(),

@@ -321,6 +321,10 @@ pub struct CheckpointHead {
     pub has_velocities_prev: bool,
     /// Temperatures.
     pub has_temperature: bool,
+    /// The number of ranks of the run that wrote the file, when it saved
+    /// each element's rank (`partition/rank`): a restart on as many ranks
+    /// continues on the same parts.
+    pub partition_ranks: Option<u64>,
 }
 
 impl CheckpointHead {
@@ -346,6 +350,8 @@ pub struct CheckpointRows<'a> {
     pub tets: &'a [[u32; 4]],
     /// Their bodies.
     pub elem_body: &'a [u32],
+    /// The rank of every element (with `head.partition_ranks`), when saved.
+    pub elem_rank: Option<&'a [u32]>,
     /// Node fields, when saved (the same on every rank).
     pub positions: Option<&'a [[f64; 3]]>,
     /// Velocities.
@@ -546,6 +552,10 @@ fn write_parallel_to(
         nodes("state/velocities_prev", &flat(v), 3)?;
     }
     small_u("state/counters", &[head.ksp_iterations])?;
+    if let (Some(r), Some(n)) = (rows.elem_rank, head.partition_ranks) {
+        elems_u32("partition/rank", r, 1)?;
+        small_u("partition/ranks", &[n])?;
+    }
     if let Some(d) = &head.dissipated_per_rank {
         small("state/dissipated_per_rank", d, 1)?;
     }
@@ -695,6 +705,11 @@ impl CheckpointFile {
             has_velocities: file.link_exists("state/velocities"),
             has_velocities_prev: file.link_exists("state/velocities_prev"),
             has_temperature: file.link_exists("state/temperature"),
+            partition_ranks: if file.link_exists("partition/rank") {
+                first("partition/ranks")?
+            } else {
+                None
+            },
         };
         let bad = |m: String| Err(IoError::invalid(path, m));
         let nb = head.body_names.len();
@@ -796,6 +811,15 @@ impl CheckpointFile {
     /// The nodes (global ids) of elements `ids`.
     pub fn elem_tets(&self, ids: &[u32]) -> Result<Vec<[u32; 4]>, IoError> {
         self.rows_of::<u32, 4>("mesh/tets", ids, self.head.elems)
+    }
+
+    /// The saved rank of elements `ids` (when `head.partition_ranks`).
+    pub fn elem_ranks(&self, ids: &[u32]) -> Result<Vec<u32>, IoError> {
+        Ok(self
+            .rows_of::<u32, 1>("partition/rank", ids, self.head.elems)?
+            .into_iter()
+            .map(|[r]| r)
+            .collect())
     }
 }
 
@@ -920,6 +944,7 @@ mod tests {
             elem_gid: &elem_gid,
             tets: &c.tets,
             elem_body: &c.elem_body,
+            elem_rank: None,
             positions: c.positions.as_deref(),
             velocities: c.velocities.as_deref(),
             velocities_prev: c.velocities_prev.as_deref(),

@@ -23,6 +23,23 @@ use crate::model::{BodySource, Model};
 /// The largest max/mean work per rank the bisection aims at.
 pub const IMBALANCE: f64 = 1.05;
 
+/// Where the bodies are when the model is cut into parts.
+#[derive(Clone, Copy)]
+pub enum Placement<'a> {
+    /// At their model centres (the start), weighted by their elements.
+    Model,
+    /// The whole bodies of this rank's block of body ids at the given
+    /// current centres and work (body id → centre, work), the others at
+    /// their model centres: the repartition of a running deposition, whose
+    /// bodies have moved and whose contacts add work. Split bodies'
+    /// elements keep their model positions.
+    Moved(&'a HashMap<u32, ([f64; 3], f64)>),
+    /// On the parts a checkpoint saved, when it was written on as many
+    /// ranks (a restart continues on the parts it stopped on); else as
+    /// `Model`.
+    Saved(&'a crate::io::checkpoint::CheckpointFile),
+}
+
 /// The estimated work of one element of body `b` per step, in the units
 /// of the partition weights: 8 for a body whose elements compute forces
 /// each substep (a free body of a mechanics run), 1 otherwise. A contact
@@ -49,20 +66,19 @@ impl Part {
     /// bodies' (and split bodies' elements') centres weighted by their
     /// work; each rank makes only what it holds.
     pub fn build(comm: &SimpleCommunicator, model: &Model) -> Result<Part> {
-        Self::build_placed(comm, model, None)
+        Self::build_placed(comm, model, Placement::Model)
     }
 
-    /// Collective. As [`Part::build`], with the centres and work of the
-    /// whole bodies of this rank's block of body ids given by `placed`
-    /// (body id → current centre, work) instead of their model centres
-    /// and element counts: the repartition of a running deposition, whose
-    /// bodies have moved and whose contacts add work. Split bodies' elements
-    /// keep their model positions.
+    /// Collective. As [`Part::build`], the bodies placed as `placement` says.
     pub fn build_placed(
         comm: &SimpleCommunicator,
         model: &Model,
-        placed: Option<&HashMap<u32, ([f64; 3], f64)>>,
+        placement: Placement,
     ) -> Result<Part> {
+        let placed = match placement {
+            Placement::Moved(p) => Some(p),
+            _ => None,
+        };
         let size = comm.size() as usize;
         let rank = comm.rank() as usize;
         let files = model.open_checkpoints()?;
@@ -125,10 +141,26 @@ impl Part {
                 ids.push([b as u32, e as u32]);
             }
         }
-        let dest = agree(
-            comm,
-            super::rcb::rcb(comm, &objects, IMBALANCE).map_err(Error::Partition),
-        )?;
+        let dest = match placement {
+            Placement::Saved(f) if f.head.partition_ranks == Some(size as u64) => {
+                let elems: Vec<u32> = ids
+                    .iter()
+                    .map(|&[b, e]| {
+                        // A whole body: its first element's rank.
+                        model.bodies[b as usize].elem_range.0 + if e == u32::MAX { 0 } else { e }
+                    })
+                    .collect();
+                let ranks = f.elem_ranks(&elems).map_err(|e| Error::Model {
+                    path: f.path().display().to_string(),
+                    message: e.to_string(),
+                });
+                agree(comm, ranks)?
+            }
+            _ => agree(
+                comm,
+                super::rcb::rcb(comm, &objects, IMBALANCE).map_err(Error::Partition),
+            )?,
+        };
         // Tell every object's rank.
         let mut send: Vec<Vec<u32>> = vec![Vec::new(); size];
         for (id, &r) in ids.iter().zip(&dest) {

@@ -15,7 +15,7 @@ mod part;
 mod partition;
 pub mod rcb;
 
-pub use build::{element_work, IMBALANCE};
+pub use build::{element_work, Placement, IMBALANCE};
 pub use halo::Halo;
 pub use part::{GlobalBcs, LocalBcs, Part, WholeMaps};
 pub use partition::{

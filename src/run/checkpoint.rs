@@ -5,6 +5,7 @@
 use std::path::{Path, PathBuf};
 
 use mpi::topology::SimpleCommunicator;
+use mpi::traits::*;
 
 use crate::contact::ContactSet;
 use crate::error::{Error, Result};
@@ -360,12 +361,16 @@ pub(super) fn save_checkpoint(
         .iter()
         .map(|t| t.map(|l| part.node_gid[l as usize]))
         .collect();
+    // The parts go with the state: a restart on as many ranks continues on them.
+    let rank = vec![comm.rank() as u32; part.num_elements()];
+    c.head.partition_ranks = Some(comm.size() as u64);
     let rows = CheckpointRows {
         node_gid: part.owned_gids(),
         reference: &part.mesh.nodes[..no],
         elem_gid: &part.elem_gid,
         tets: &tets,
         elem_body: &part.mesh.body,
+        elem_rank: Some(&rank),
         positions: c.positions.as_deref(),
         velocities: c.velocities.as_deref(),
         velocities_prev: c.velocities_prev.as_deref(),

@@ -182,7 +182,7 @@ impl<'a, 'p> Stages<'a, 'p> {
         opts: &RunOptions,
         mut times: PhaseTimes,
     ) -> Result<Self> {
-        let part = setup::partition(comm, model, &mut times)?;
+        let part = setup::partition(comm, model, restart, &mut times)?;
         let ck = restart.map(|r| &r.file.head);
         let mut mech = setup::mechanics(comm, model, &part, restart, &mut times)?;
         let contacts = Contacts::new(comm, model, &part, restart, mech.as_mut())?;
@@ -229,7 +229,8 @@ impl Stages<'_, '_> {
 
     /// Collective. At a stop: re-detect contacts and check the
     /// temperatures when due, check whether the bodies settled, record the
-    /// particle statistics, write the fields and the checkpoint when due.
+    /// particle statistics, write the fields when due, repartition when
+    /// due and needed, and write the checkpoint when due.
     fn stop(&mut self, at: &mut Position, out: &mut Output) -> Result<()> {
         let step = at.step;
         if self.sys.is_some() && at.schedule.is_detection(step) {
@@ -248,13 +249,15 @@ impl Stages<'_, '_> {
             at.schedule.output_written();
             self.write(out, step)?;
         }
-        if at.schedule.is_checkpoint(step) && !settled {
-            self.save(step, at.settling.peak_kinetic, None, &at.checkpoint_path)?;
-            at.checkpoint = Some(at.checkpoint_path.clone());
-        }
         self.times.output += clock.elapsed().as_secs_f64();
         if !settled && step < self.model.steps {
             self.rebalance(step, out)?;
+        }
+        if at.schedule.is_checkpoint(step) && !settled {
+            let clock = Instant::now();
+            self.save(step, at.settling.peak_kinetic, None, &at.checkpoint_path)?;
+            at.checkpoint = Some(at.checkpoint_path.clone());
+            self.times.output += clock.elapsed().as_secs_f64();
         }
         Ok(())
     }

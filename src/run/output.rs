@@ -204,11 +204,12 @@ impl Output {
         if let Some(Mechanics { domain: m, .. }) = mech {
             node_fields.push(("displacement", 3, m.displacement()));
             node_fields.push(("velocity", 3, m.velocity()));
-            cell_fields.push(("stress", 6, m.stress_tensor6(&part.elem_gid)));
+            // Cell fields in name order (the order a continued series lists them).
             if self.owners_move {
                 let rank = f64::from(comm.rank());
                 cell_fields.push(("owner_rank", 1, vec![rank; part.num_elements()]));
             }
+            cell_fields.push(("stress", 6, m.stress_tensor6(&part.elem_gid)));
         } else if model.has_motion() {
             // Rigid displacement of each owned node (ParaView: Warp By Vector).
             let u: Vec<f64> = part

@@ -26,7 +26,7 @@ use crate::dynamics::ExplicitDomain;
 use crate::error::{Error, Result};
 use crate::model::Model;
 use crate::parallel::exchange::{all_to_all, block_owner};
-use crate::parallel::Part;
+use crate::parallel::{Part, Placement};
 use crate::scenario::RebalanceSpec;
 
 use super::checkpoint::{self, Saved, Snapshot};
@@ -87,25 +87,18 @@ impl Balance {
 
 /// Collective. Max/mean of the ranks' work: elements and the pairs their
 /// tets found (before the detection shares them out), and elements and
-/// an even share of all pairs (what each rank evaluates).
+/// the pairs each evaluates (its share).
 fn imbalance(
     comm: &SimpleCommunicator,
     model: &Model,
     part: &Part,
     m: &ExplicitDomain,
 ) -> Imbalance {
-    let found = m.found_work(model, part);
-    let elements: f64 = part
-        .mesh
-        .body
-        .iter()
-        .map(|&b| crate::parallel::element_work(model, b as usize))
-        .sum();
-    let mine = [found, elements, found - elements];
-    let mut sum = [0.0; 3];
-    comm.all_reduce_into(&mine[..], &mut sum[..], SystemOperation::sum());
+    let found = m.found_work();
+    let evaluated = m.evaluated_work();
+    let mut total = 0.0;
+    comm.all_reduce_into(&found, &mut total, SystemOperation::sum());
     let size = comm.size() as f64;
-    let evaluated = elements + sum[2] / size;
     let heaviest = m
         .body_loads(model, part)
         .iter()
@@ -114,7 +107,7 @@ fn imbalance(
     let local = [found, evaluated, heaviest];
     let mut most = [0.0; 3];
     comm.all_reduce_into(&local[..], &mut most[..], SystemOperation::max());
-    let mean_found = sum[0] / size;
+    let mean_found = total / size;
     let ratio = |m: f64| {
         if mean_found > 0.0 {
             m / mean_found
@@ -159,17 +152,20 @@ fn placements(
 }
 
 impl Stages<'_, '_> {
-    /// Collective. At a check (after the stop's output and checkpoint):
-    /// measure the balance and repartition when it is past the threshold.
+    /// Collective. At a check (after the stop's output, before its
+    /// checkpoint, so a restart continues on the new parts): detect at the
+    /// current positions, measure the balance, and repartition when it is
+    /// past the threshold.
     pub(super) fn rebalance(&mut self, step: u64, out: &mut Output) -> Result<()> {
         if !self.balance.due(step) {
             return Ok(());
         }
-        let Some(mech) = self.mech.as_ref() else {
+        let Some(mech) = self.mech.as_mut() else {
             return Ok(());
         };
         let clock = Instant::now();
         let (comm, model) = (self.comm, self.model);
+        mech.domain.detect_now(comm)?;
         let before = imbalance(comm, model, &self.part, &mech.domain);
         let b = &mut self.balance;
         b.checks += 1;
@@ -198,7 +194,7 @@ impl Stages<'_, '_> {
         };
         let placed = placements(comm, model, &self.part, &mech.domain);
         let clock = Instant::now();
-        let part = Part::build_placed(comm, model, Some(&placed))?;
+        let part = Part::build_placed(comm, model, Placement::Moved(&placed))?;
         self.times.partition += clock.elapsed().as_secs_f64();
         // The same elements on every rank: nothing to move.
         let same = i32::from(part.elem_gid == self.part.elem_gid);

@@ -32,10 +32,15 @@ use super::{Mechanics, PhaseTimes, RunOptions};
 pub(super) fn partition(
     comm: &SimpleCommunicator,
     model: &Model,
+    restart: Option<&Restart>,
     times: &mut PhaseTimes,
 ) -> Result<Part> {
     let clock = Instant::now();
-    let part = Part::build(comm, model)?;
+    let placement = match restart {
+        Some(r) => crate::parallel::Placement::Saved(&r.file),
+        None => crate::parallel::Placement::Model,
+    };
+    let part = Part::build_placed(comm, model, placement)?;
     times.partition = clock.elapsed().as_secs_f64();
     Ok(part)
 }

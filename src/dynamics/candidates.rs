@@ -60,9 +60,10 @@ struct TetRecord {
     nodes: [[u32; 3]; 4],
 }
 
-/// Values per tet record and per pair record in an `f64` message.
+/// Values per tet record and per pair (two tet slots, stiffness and
+/// reduced mass) in an `f64` message.
 const TET_F64S: usize = 5 + 12;
-const PAIR_F64S: usize = 2 + 2 * TET_F64S;
+const PAIR_F64S: usize = 4;
 
 impl TetRecord {
     fn of(og: &OwnAndGhosts, h: u32) -> TetRecord {
@@ -343,18 +344,6 @@ impl ExplicitDomain {
         }
     }
 
-    /// The penalty pair of tets `a` (of a free body) and `b`, handles of
-    /// `og`, as it travels.
-    fn pair_record(&self, og: &OwnAndGhosts, a: u32, b: u32) -> PairRecord {
-        let (_, _, stiffness, reduced_mass) = self.pair_record_values(og, a, b);
-        PairRecord {
-            a: TetRecord::of(og, a),
-            b: TetRecord::of(og, b),
-            stiffness,
-            reduced_mass,
-        }
-    }
-
     /// The bodies, stiffness and reduced mass of the penalty pair of tets
     /// `a` (of a free body) and `b`, handles of `og`.
     fn pair_record_values(&self, og: &OwnAndGhosts, a: u32, b: u32) -> (u32, u32, f64, f64) {
@@ -426,7 +415,11 @@ impl ExplicitDomain {
         }
         self.pair_share = shares[rank];
         let mut at: f64 = found[..rank].iter().sum();
-        let mut out: Vec<Vec<f64>> = vec![Vec::new(); size];
+        // Per destination: its tets (each once) and its pairs (tet slots,
+        // stiffness, reduced mass).
+        let mut tets: Vec<Vec<f64>> = vec![Vec::new(); size];
+        let mut pairs: Vec<Vec<f64>> = vec![Vec::new(); size];
+        let mut slot: Vec<HashMap<u32, u32>> = vec![HashMap::new(); size];
         let mut here = Vec::with_capacity(kept.len());
         let mut dest = 0usize;
         for (&(a, b), &w) in kept.iter().zip(weights) {
@@ -439,23 +432,42 @@ impl ExplicitDomain {
             if dest == rank {
                 here.push((a, b));
             } else {
-                let r = self.pair_record(og, a, b);
-                let o = &mut out[dest];
-                o.extend_from_slice(&[r.stiffness, r.reduced_mass]);
-                r.a.push(o);
-                r.b.push(o);
+                let (_, _, stiffness, reduced_mass) = self.pair_record_values(og, a, b);
+                let mut slot_of = |h: u32| -> f64 {
+                    let next = slot[dest].len() as u32;
+                    let s = *slot[dest].entry(h).or_insert_with(|| {
+                        TetRecord::of(og, h).push(&mut tets[dest]);
+                        next
+                    });
+                    f64::from(s)
+                };
+                let (sa, sb) = (slot_of(a), slot_of(b));
+                pairs[dest].extend_from_slice(&[sa, sb, stiffness, reduced_mass]);
             }
         }
-        let received = all_to_all(comm, &out)
-            .iter()
-            .flat_map(|v| v.chunks_exact(PAIR_F64S))
-            .map(|rec| PairRecord {
-                stiffness: rec[0],
-                reduced_mass: rec[1],
-                a: TetRecord::read(&rec[2..2 + TET_F64S]),
-                b: TetRecord::read(&rec[2 + TET_F64S..]),
+        let out: Vec<Vec<f64>> = tets
+            .into_iter()
+            .zip(pairs)
+            .map(|(mut t, p)| {
+                let mut m = Vec::with_capacity(1 + t.len() + p.len());
+                m.push((t.len() / TET_F64S) as f64);
+                m.append(&mut t);
+                m.extend_from_slice(&p);
+                m
             })
             .collect();
+        let mut received = Vec::new();
+        for m in all_to_all(comm, &out).iter().filter(|m| !m.is_empty()) {
+            let nt = m[0] as usize;
+            let (t, p) = m[1..].split_at(nt * TET_F64S);
+            let t: Vec<TetRecord> = t.chunks_exact(TET_F64S).map(TetRecord::read).collect();
+            received.extend(p.chunks_exact(PAIR_F64S).map(|r| PairRecord {
+                a: t[r[0] as usize],
+                b: t[r[1] as usize],
+                stiffness: r[2],
+                reduced_mass: r[3],
+            }));
+        }
         (here, received)
     }
 

@@ -6,6 +6,7 @@
 
 mod overrides;
 mod schema;
+mod validate;
 
 use std::path::{Path, PathBuf};
 

@@ -1,0 +1,505 @@
+//! Scenario methods: derived settings and the validation of values and
+//! cross-references, with errors naming the dotted key.
+
+use super::schema::*;
+
+impl Scenario {
+    /// Whether the thermal problem is solved.
+    pub fn has_thermal(&self) -> bool {
+        self.thermal.is_some() || self.mechanics.is_none()
+    }
+
+    /// The thermal settings (defaults when absent).
+    pub fn thermal_spec(&self) -> ThermalSpec {
+        self.thermal.clone().unwrap_or_default()
+    }
+
+    /// Number of steps implied by `time`.
+    pub fn num_steps(&self) -> u64 {
+        match (self.time.steps, self.time.end_time) {
+            (Some(n), _) => n,
+            (None, Some(t)) => (t / self.time.dt).round() as u64,
+            (None, None) => 0,
+        }
+    }
+
+    /// Check values and cross-references; returns (key path, message).
+    pub fn validate(&self) -> Result<(), (String, String)> {
+        let bad = |k: &str, m: String| Err((k.to_string(), m));
+        let t = &self.time;
+        if !(t.dt.is_finite() && t.dt > 0.0) {
+            return bad(
+                "time.dt",
+                format!("must be a positive number, got {}", t.dt),
+            );
+        }
+        match (t.steps, t.end_time) {
+            (Some(_), Some(_)) => {
+                return bad("time", "give either `steps` or `end_time`, not both".into())
+            }
+            (None, None) => return bad("time", "give `steps` or `end_time`".into()),
+            (None, Some(e)) if !(e.is_finite() && e > 0.0) => {
+                return bad("time.end_time", format!("must be positive, got {e}"))
+            }
+            _ => {}
+        }
+        let thermal = self.thermal_spec();
+        let th = thermal.theta;
+        if !(0.0..=1.0).contains(&th) {
+            return bad("thermal.theta", format!("must be in [0, 1], got {th}"));
+        }
+        if thermal.conduction == ConductionKind::Bounded
+            && thermal.capacity == CapacityKind::Consistent
+        {
+            return bad(
+                "thermal.conduction",
+                "\"bounded\" needs thermal.capacity = \"lumped\" (a consistent capacity \
+                 couples neighbouring nodes positively and cannot keep the bounds)"
+                    .into(),
+            );
+        }
+        if self.materials.is_empty() {
+            return bad("materials", "at least one material is needed".into());
+        }
+        for (i, m) in self.materials.iter().enumerate() {
+            let mut fields = vec![("density", Some(m.density))];
+            if self.has_thermal() {
+                fields.push(("conductivity", m.conductivity));
+                fields.push(("specific_heat", m.specific_heat));
+            }
+            for (field, v) in fields {
+                let Some(v) = v else {
+                    return bad(
+                        &format!("materials[{i}].{field}"),
+                        format!(
+                            "missing (material `{}`): the thermal problem needs it",
+                            m.name
+                        ),
+                    );
+                };
+                if !(v.is_finite() && v > 0.0) {
+                    return bad(
+                        &format!("materials[{i}].{field}"),
+                        format!("must be a positive number, got {v} (material `{}`)", m.name),
+                    );
+                }
+            }
+            if self.materials[..i].iter().any(|o| o.name == m.name) {
+                return bad(
+                    &format!("materials[{i}].name"),
+                    format!("duplicate material `{}`", m.name),
+                );
+            }
+        }
+        if self.bodies.is_empty() {
+            return bad("bodies", "at least one body is needed".into());
+        }
+        for (i, b) in self.bodies.iter().enumerate() {
+            let key = |f: &str| format!("bodies[{i}].{f}");
+            if b.name.is_empty() || b.name.contains('.') {
+                return bad(
+                    &key("name"),
+                    format!("`{}`: must be non-empty without dots", b.name),
+                );
+            }
+            if self.bodies[..i].iter().any(|o| o.name == b.name) {
+                return bad(&key("name"), format!("duplicate body `{}`", b.name));
+            }
+            if !self.materials.iter().any(|m| m.name == b.material) {
+                return bad(
+                    &key("material"),
+                    format!("no material named `{}`", b.material),
+                );
+            }
+            if !b.initial_temperature.is_finite() {
+                return bad(&key("initial_temperature"), "must be finite".into());
+            }
+            for (set, mat) in &b.regions {
+                if !self.materials.iter().any(|m| &m.name == mat) {
+                    return bad(
+                        &key(&format!("regions.{set}")),
+                        format!("no material named `{mat}`"),
+                    );
+                }
+            }
+            if let Some(h) = &b.heating {
+                if self.has_thermal() {
+                    return bad(
+                        &key("heating"),
+                        "a prescribed heating needs a run without a thermal problem \
+                         (no [thermal] table, with [mechanics])"
+                            .into(),
+                    );
+                }
+                if !(h.to.is_finite() && h.over.is_finite() && h.over >= 0.0) {
+                    return bad(&key("heating"), "`to` must be finite, `over` >= 0".into());
+                }
+            }
+            if b.fixed && (b.velocity.is_some() || b.initial_velocity.is_some()) {
+                return bad(
+                    &key("fixed"),
+                    "a fixed body cannot also have a velocity".into(),
+                );
+            }
+            for (f, v) in [
+                ("initial_velocity", b.initial_velocity),
+                (
+                    "reference_temperature",
+                    b.reference_temperature.map(|t| [t; 3]),
+                ),
+            ] {
+                if v.is_some_and(|v| v.iter().any(|x| !x.is_finite())) {
+                    return bad(&key(f), "must be finite".into());
+                }
+            }
+            if let Some(p) = &b.pack {
+                if b.lattice.is_some() {
+                    return bad(&key("pack"), "give `pack` or `lattice`, not both".into());
+                }
+                if p.count == 0 {
+                    return bad(&key("pack.count"), "must be at least 1".into());
+                }
+                if p.gap.is_some_and(|g| !(g.is_finite() && g >= 0.0)) {
+                    return bad(&key("pack.gap"), "must be finite and >= 0".into());
+                }
+                if !(p.max_fraction > 0.0 && p.max_fraction <= 1.0) {
+                    return bad(
+                        &key("pack.max_fraction"),
+                        format!("must be in (0, 1], got {}", p.max_fraction),
+                    );
+                }
+                match self.bodies.iter().find(|o| o.name == p.into) {
+                    Some(o) if matches!(o.mesh, MeshSpec::Container { .. }) => {
+                        if o.rotate.is_some() || o.lattice.is_some() || o.pack.is_some() {
+                            return bad(
+                                &key("pack.into"),
+                                format!("container `{}` must not be rotated or replicated", o.name),
+                            );
+                        }
+                    }
+                    Some(_) => {
+                        return bad(
+                            &key("pack.into"),
+                            format!("body `{}` is not a mesh of kind `container`", p.into),
+                        )
+                    }
+                    None => return bad(&key("pack.into"), format!("no body named `{}`", p.into)),
+                }
+            }
+            if matches!(b.mesh, MeshSpec::Checkpoint { .. })
+                && (b.pack.is_some() || b.lattice.is_some() || b.rotate.is_some())
+            {
+                return bad(
+                    &key("mesh"),
+                    "bodies from a checkpoint cannot be rotated, packed or replicated".into(),
+                );
+            }
+            if let MeshSpec::Box {
+                size,
+                element_size,
+                origin,
+            } = &b.mesh
+            {
+                if size.iter().any(|s| !(s.is_finite() && *s > 0.0)) {
+                    return bad(&key("mesh.size"), format!("must be positive, got {size:?}"));
+                }
+                if !(element_size.is_finite() && *element_size > 0.0) {
+                    return bad(
+                        &key("mesh.element_size"),
+                        format!("must be positive, got {element_size}"),
+                    );
+                }
+                if origin.iter().any(|o| !o.is_finite()) {
+                    return bad(&key("mesh.origin"), "must be finite".into());
+                }
+            }
+        }
+        if let Some(p) = &self.output.particles {
+            if !self.bodies.iter().any(|b| b.name == p.template) {
+                return bad(
+                    "output.particles.template",
+                    format!("no body entry named `{}`", p.template),
+                );
+            }
+            if p.radial_bins == 0 {
+                return bad("output.particles.radial_bins", "must be at least 1".into());
+            }
+        }
+        if let Some(r) = self.mechanics.as_ref().map(|m| m.rebalance) {
+            if !(r.threshold.is_finite() && r.threshold >= 1.0) {
+                return bad(
+                    "mechanics.rebalance.threshold",
+                    format!("must be a number >= 1 (max/mean work), got {}", r.threshold),
+                );
+            }
+        }
+        if let Some(st) = self.mechanics.as_ref().and_then(|m| m.settle) {
+            let ok = |v: Option<f64>| v.is_none_or(|x| x.is_finite() && x > 0.0);
+            if st.kinetic_energy.is_none() && st.relative.is_none() && st.rms_speed.is_none() {
+                return bad(
+                    "mechanics.settle",
+                    "give `kinetic_energy` (J), `relative` (of the peak) or `rms_speed` (m/s)"
+                        .into(),
+                );
+            }
+            if !ok(st.kinetic_energy)
+                || !ok(st.relative)
+                || !ok(st.rms_speed)
+                || st.after.is_nan()
+                || st.after < 0.0
+            {
+                return bad(
+                    "mechanics.settle",
+                    "thresholds must be positive and `after` >= 0".into(),
+                );
+            }
+        }
+        if let Some(c) = &self.contact {
+            contact_resistance(c.resistance, c.conductance)
+                .map_err(|m| ("contact".to_string(), m))?;
+            for (i, p) in c.pair.iter().enumerate() {
+                let key = format!("contact.pair[{i}]");
+                match contact_resistance(p.resistance, p.conductance) {
+                    Err(m) => return bad(&key, m),
+                    Ok(None) => return bad(&key, "give `resistance` or `conductance`".into()),
+                    Ok(Some(_)) => {}
+                }
+                for m in &p.materials {
+                    if !self.materials.iter().any(|x| &x.name == m) {
+                        return bad(
+                            &format!("{key}.materials"),
+                            format!("no material named `{m}`"),
+                        );
+                    }
+                }
+            }
+        }
+        for (i, b) in self.bodies.iter().enumerate() {
+            if let MeshSpec::Cylinder {
+                radius,
+                width,
+                element_size,
+                center,
+                ..
+            } = &b.mesh
+            {
+                for (f, v) in [
+                    ("radius", radius),
+                    ("width", width),
+                    ("element_size", element_size),
+                ] {
+                    if !(v.is_finite() && *v > 0.0) {
+                        return bad(
+                            &format!("bodies[{i}].mesh.{f}"),
+                            format!("must be positive, got {v}"),
+                        );
+                    }
+                }
+                if center.iter().any(|c| !c.is_finite()) {
+                    return bad(&format!("bodies[{i}].mesh.center"), "must be finite".into());
+                }
+            }
+            if let Some(l) = &b.lattice {
+                if l.count.contains(&0) || l.spacing.iter().any(|x| !x.is_finite()) {
+                    return bad(
+                        &format!("bodies[{i}].lattice"),
+                        "counts must be positive and spacings finite".into(),
+                    );
+                }
+            }
+            if let Some(v) = b.velocity {
+                if v.iter().any(|x| !x.is_finite()) {
+                    return bad(&format!("bodies[{i}].velocity"), "must be finite".into());
+                }
+                let every = self.contact.as_ref().map_or(0, |c| c.every);
+                if v != [0.0; 3] && self.contact.is_some() && every == 0 {
+                    return bad(
+                        &format!("bodies[{i}].velocity"),
+                        "a moving body needs `contact.every` > 0 to re-detect its contacts".into(),
+                    );
+                }
+            }
+            if let Some(r) = b.rotate {
+                if r.iter().any(|x| !x.is_finite()) {
+                    return bad(&format!("bodies[{i}].rotate"), "must be finite".into());
+                }
+            }
+        }
+        for (i, bc) in thermal.bc.iter().enumerate() {
+            let key = |f: &str| format!("thermal.bc[{i}].{f}");
+            match bc {
+                ThermalBcSpec::Temperature { value, .. } | ThermalBcSpec::Flux { value, .. } => {
+                    if !value.is_finite() {
+                        return bad(&key("value"), "must be finite".into());
+                    }
+                }
+                ThermalBcSpec::Convection { h, ambient, .. } => {
+                    if !(h.is_finite() && *h >= 0.0) {
+                        return bad(&key("h"), format!("must be non-negative, got {h}"));
+                    }
+                    if !ambient.is_finite() {
+                        return bad(&key("ambient"), "must be finite".into());
+                    }
+                }
+                ThermalBcSpec::Source { body, value } => {
+                    if !value.is_finite() {
+                        return bad(&key("value"), "must be finite".into());
+                    }
+                    if !self.bodies.iter().any(|b| &b.name == body) {
+                        return bad(&key("body"), format!("no body named `{body}`"));
+                    }
+                }
+            }
+        }
+        if let Some(m) = &self.mechanics {
+            self.validate_mechanics(m)?;
+        }
+        if let Some(r) = self.solver.rtol {
+            if !(r > 0.0 && r < 1.0) {
+                return bad("solver.rtol", format!("must be in (0, 1), got {r}"));
+            }
+        }
+        for (i, t) in self.output.times.iter().enumerate() {
+            if !(t.is_finite() && *t >= 0.0) {
+                return bad(
+                    &format!("output.times[{i}]"),
+                    format!("must be non-negative, got {t}"),
+                );
+            }
+        }
+        Ok(())
+    }
+
+    fn validate_mechanics(&self, m: &MechanicsSpec) -> Result<(), (String, String)> {
+        let bad = |k: &str, msg: String| Err((k.to_string(), msg));
+        let used: Vec<&str> = self
+            .bodies
+            .iter()
+            .flat_map(|b| {
+                std::iter::once(b.material.as_str()).chain(b.regions.values().map(String::as_str))
+            })
+            .collect();
+        for (i, mat) in self.materials.iter().enumerate() {
+            if !used.contains(&mat.name.as_str()) {
+                continue;
+            }
+            let key = |f: &str| format!("materials[{i}].{f}");
+            match (mat.young, mat.poisson) {
+                (Some(e), Some(nu)) => {
+                    if !(e.is_finite() && e > 0.0) {
+                        return bad(&key("young"), format!("must be positive, got {e}"));
+                    }
+                    if !(nu.is_finite() && nu > -1.0 && nu < 0.5) {
+                        return bad(&key("poisson"), format!("must be in (-1, 0.5), got {nu}"));
+                    }
+                }
+                _ => {
+                    return bad(
+                        &key("young"),
+                        format!(
+                            "material `{}` needs `young` and `poisson` for the mechanics",
+                            mat.name
+                        ),
+                    )
+                }
+            }
+            if !mat.expansion.is_finite() {
+                return bad(&key("expansion"), "must be finite".into());
+            }
+            if !(mat.viscosity.is_finite() && mat.viscosity >= 0.0) {
+                return bad(&key("viscosity"), "must be non-negative".into());
+            }
+        }
+        if let Some(dt) = m.dt {
+            if !(dt.is_finite() && dt > 0.0) {
+                return bad("mechanics.dt", format!("must be positive, got {dt}"));
+            }
+        }
+        if !(m.safety > 0.0 && m.safety <= 1.0) {
+            return bad(
+                "mechanics.safety",
+                format!("must be in (0, 1], got {}", m.safety),
+            );
+        }
+        if m.substeps == Some(0) {
+            return bad("mechanics.substeps", "must be at least 1".into());
+        }
+        if m.gravity.iter().any(|g| !g.is_finite()) {
+            return bad("mechanics.gravity", "must be finite".into());
+        }
+        if !(m.damping.is_finite() && m.damping >= 0.0) {
+            return bad("mechanics.damping", "must be non-negative".into());
+        }
+        if let Some(c) = m.free_damping {
+            if !(c.is_finite() && c >= 0.0) {
+                return bad("mechanics.free_damping", "must be non-negative".into());
+            }
+            if m.contact.is_none() {
+                return bad(
+                    "mechanics.free_damping",
+                    "needs [mechanics.contact]: without contact every body is in free flight"
+                        .into(),
+                );
+            }
+        }
+        for (i, bc) in m.bc.iter().enumerate() {
+            let key = format!("mechanics.bc[{i}]");
+            match bc {
+                MechanicsBcSpec::Fixed {
+                    components: Some(c),
+                    ..
+                } => {
+                    if c.is_empty() || c.iter().any(|x| !["x", "y", "z"].contains(&x.as_str())) {
+                        return bad(
+                            &format!("{key}.components"),
+                            format!("must list some of \"x\", \"y\", \"z\", got {c:?}"),
+                        );
+                    }
+                }
+                MechanicsBcSpec::Fixed { .. } => {}
+                MechanicsBcSpec::Velocity { value, .. } => {
+                    if value.iter().any(|x| x.is_infinite()) {
+                        return bad(&format!("{key}.value"), "must be finite (NaN: free)".into());
+                    }
+                }
+                MechanicsBcSpec::Traction { value, .. } => {
+                    if value.iter().any(|x| !x.is_finite()) {
+                        return bad(&format!("{key}.value"), "must be finite".into());
+                    }
+                }
+            }
+        }
+        if let Some(c) = &m.contact {
+            for (f, v, min) in [
+                ("penalty", c.penalty, f64::MIN_POSITIVE),
+                ("friction", c.friction, 0.0),
+                ("damping_ratio", c.damping_ratio, 0.0),
+                ("slip_velocity", c.slip_velocity, f64::MIN_POSITIVE),
+                ("linear_tolerance", c.linear_tolerance, 0.0),
+            ] {
+                if !(v.is_finite() && v >= min) {
+                    return bad(
+                        &format!("mechanics.contact.{f}"),
+                        format!(
+                            "must be {}, got {v}",
+                            if min > 0.0 {
+                                "positive"
+                            } else {
+                                "non-negative"
+                            }
+                        ),
+                    );
+                }
+            }
+            if let Some(g) = c.margin {
+                if !(g.is_finite() && g > 0.0) {
+                    return bad(
+                        "mechanics.contact.margin",
+                        format!("must be positive, got {g}"),
+                    );
+                }
+            }
+        }
+        Ok(())
+    }
+}

@@ -270,9 +270,20 @@ fn heatup_agrees_on_one_to_four_ranks_and_balances_heat() {
     assert_same_temperatures(&r1, &r2, 1e-8, "heat-up 1 vs 2 ranks");
     // Issue 18: 3 and 4 ranks (oversubscribed), checkpoint of 2 read in pieces.
     for ranks in [3, 4] {
-        let (d, _) = heatup(ranks, &format!("packing/heatup-{ranks}"), &[]);
+        let (d, s) = heatup(ranks, &format!("packing/heatup-{ranks}"), &[]);
         let r = read_results(&d, stem);
         assert_same_temperatures(&r1, &r, 1e-8, &format!("heat-up 1 vs {ranks} ranks"));
+        if ranks == 4 {
+            // The bottom of a settled packing holds more contact pairs per
+            // nut: the first detection on 4 ranks finds the work (elements
+            // and pairs) past 1.05 × the mean, and the bodies are cut
+            // again weighted by it before the thermal system is built.
+            let line = summary_line(&s, "balance").expect("a set-up repartition on 4 ranks");
+            let found = number_before(line, "as found");
+            let last = number_before(line, "at the last");
+            assert!(line.contains("1 repartition(s)"), "{line}");
+            assert!(found > 1.05 && last < found && last <= 1.05, "{line}");
+        }
     }
     // Issue 15: nuts at 0 °C heated from a 300 °C container stay within
     // [0, 300] at every node and output, on 1 and 2 ranks, with the scheme

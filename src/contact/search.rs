@@ -221,6 +221,16 @@ impl ContactSearch {
         ContactSearch::default()
     }
 
+    /// Bytes the kept trees hold (boxes; the tree nodes estimated as two
+    /// boxes per leaf).
+    pub fn held_bytes(&self) -> usize {
+        self.boundary_trees
+            .values()
+            .chain(self.interior_trees.values())
+            .map(|(_, t)| t.boxes.capacity() * 48 * 3)
+            .sum()
+    }
+
     /// The candidate pairs this rank finds: each owned boundary tet of a
     /// body against the tets of every other body it searches (see
     /// [`finds_pair`]) whose boxes come within the margin. `corners(h)`

@@ -77,3 +77,59 @@ impl ExplicitDomain {
             .collect()
     }
 }
+
+/// Bytes a vector of `cap` capacity holds.
+fn held<T>(_: &[T], cap: usize) -> usize {
+    cap * std::mem::size_of::<T>()
+}
+
+impl ExplicitDomain {
+    /// What this rank's domain holds, by array (bytes, from capacities):
+    /// where the memory of a run goes (`FDEM_LOG=memory=debug`).
+    pub fn held_bytes(&self) -> Vec<(&'static str, usize)> {
+        macro_rules! v {
+            ($name:literal, $f:expr) => {
+                ($name, held(&$f, $f.capacity()))
+            };
+        }
+        vec![
+            v!("node arrays x", self.x),
+            v!("elements", self.elements),
+            v!("stress", self.stress),
+            v!("candidates", self.candidates),
+            v!("pair_tets", self.pair_tets),
+            v!("pair_info", self.pair_info),
+            v!("pair_geometry", self.pair_geometry),
+            v!("pair_planes", self.pair_planes),
+            v!("linearized", self.linearized),
+            v!("lin_of", self.lin_of),
+            v!("witness", self.witness),
+            v!("contrib", self.contrib),
+            v!("gather_slot", self.gather_slot),
+            v!("thermal_only", self.thermal_only),
+            v!("thermal_tets", self.thermal_tets),
+            v!("part_tets.tets", self.part_tets.tets),
+            v!("part_tets.x", self.part_tets.x),
+            v!("x_detect", self.x_detect),
+            ("contact_local", self.contact_local.capacity() * 8),
+            ("search trees", self.search.held_bytes()),
+            (
+                "send_slots",
+                self.send_slots.iter().map(|s| s.capacity() * 4).sum(),
+            ),
+        ]
+    }
+
+    /// How many of each: elements, candidate pairs, force contributions
+    /// (of which received from neighbours), pair tets, local nodes.
+    pub fn held_counts(&self) -> Vec<(&'static str, usize)> {
+        vec![
+            ("elements", self.elements.len()),
+            ("candidates", self.candidates.len()),
+            ("contributions", self.contrib.len()),
+            ("received", self.recv_at.iter().map(|r| r.1).sum()),
+            ("pair tets", self.pair_tets.len()),
+            ("nodes", self.x.len()),
+        ]
+    }
+}

@@ -182,15 +182,21 @@ impl ExplicitDomain {
                 *p = [x.x, x.y, x.z];
             }
             let own = std::mem::take(&mut self.part_tets);
+            let r = comm.rank();
+            crate::run::trace_memory(r, "detect start");
             let ghosts = exchange_ghosts(comm, &own, &mut self.pieces, self.margin, self.thermal);
+            crate::run::trace_memory(r, "detect ghosts");
             let og = OwnAndGhosts {
                 own: &own,
                 ghosts: &ghosts,
             };
             let (kept, weights, thermal) = self.find_pairs(&og);
+            crate::run::trace_memory(r, "detect found");
             self.count_pair_work(&og, &kept, &weights);
             let (here, received) = self.balance_pairs(comm, &og, &kept, &weights);
+            crate::run::trace_memory(r, "detect balanced");
             self.install(&og, &here, &received, &thermal);
+            crate::run::trace_memory(r, "detect installed");
             self.part_tets = own;
         } else {
             self.install_none();
@@ -214,7 +220,9 @@ impl ExplicitDomain {
         // Ghost positions and velocities from their owners.
         self.forward_state(comm);
         self.order_elements();
+        crate::run::trace_memory(comm.rank(), "detect halo");
         self.build_assembly(comm);
+        crate::run::trace_memory(comm.rank(), "detect assembly");
         self.x_detect = self.x[..self.n_owned].to_vec();
         self.detected_at = Some(self.counters.substeps);
         self.counters.detections += 1;

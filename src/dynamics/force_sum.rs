@@ -16,16 +16,17 @@ impl ExplicitDomain {
     /// pre-summed, so the sums, and hence the trajectories, are bitwise
     /// the same on any number of ranks.
     pub(super) fn build_assembly(&mut self, comm: &SimpleCommunicator) {
-        const PAIR: u64 = 1 << 63;
         let ne = self.elements.len();
         let pair_base = 4 * ne;
         let nbrs: Vec<i32> = self.halo.neighbours().to_vec();
-        let mut owned: Vec<(u32, u64, u32)> = Vec::with_capacity(4 * ne);
-        let mut ghost: Vec<Vec<(u32, u64, u32)>> = vec![Vec::new(); nbrs.len()];
         let n_owned = self.n_owned as u32;
-        let mut push = |l: u32, key: u64, slot: usize| {
+        // Pass 1: each owned node's count of contributions, and the
+        // contributions to ghost nodes listed by owner as (gid, key, slot).
+        let mut count = vec![0u32; self.n_owned + 1];
+        let mut ghost: Vec<Vec<(u32, u64, u32)>> = vec![Vec::new(); nbrs.len()];
+        self.for_each_slot(|l, key, slot| {
             if l < n_owned {
-                owned.push((l, key, slot as u32));
+                count[l as usize + 1] += 1;
             } else {
                 let g = self.node_gid[l as usize];
                 let r = self.node_owner[l as usize] as i32;
@@ -34,23 +35,7 @@ impl ExplicitDomain {
                     .expect("owner of a ghost is a neighbour");
                 ghost[i].push((g, key, slot as u32));
             }
-        };
-        for (i, el) in self.elements.iter().enumerate() {
-            for k in 0..4 {
-                push(el.nodes[k], u64::from(self.elem_ids[i]), 4 * i + k);
-            }
-        }
-        for (j, c) in self.candidates.iter().enumerate() {
-            let key = PAIR | (u64::from(c.a) << 31) | u64::from(c.b);
-            for k in 0..4 {
-                push(self.pair_tets[c.ta as usize][k], key, pair_base + 8 * j + k);
-                push(
-                    self.pair_tets[c.tb as usize][k],
-                    key,
-                    pair_base + 8 * j + 4 + k,
-                );
-            }
-        }
+        });
         // Tell each owner which contributions (node, key) it will receive.
         let mut counts_out = Vec::with_capacity(nbrs.len());
         let mut keys_out = Vec::with_capacity(nbrs.len());
@@ -69,6 +54,7 @@ impl ExplicitDomain {
                 list.iter().map(|&(_, _, s)| s).collect()
             })
             .collect();
+        drop(ghost);
         let mut counts_in = vec![vec![0.0]; nbrs.len()];
         self.halo.exchange(comm, &counts_out, &mut counts_in, || {});
         let mut keys_in: Vec<Vec<f64>> = counts_in
@@ -76,48 +62,94 @@ impl ExplicitDomain {
             .map(|c| vec![0.0; 2 * c[0].to_bits() as usize])
             .collect();
         self.halo.exchange(comm, &keys_out, &mut keys_in, || {});
-        let mut next = pair_base + 8 * self.candidates.len();
+        drop(keys_out);
+        // Received contributions land after the pairs' slots, by neighbour.
+        let recv_base = pair_base + 8 * self.candidates.len();
+        let n_recv: usize = keys_in.iter().map(|k| k.len() / 2).sum();
+        let mut recv_node: Vec<u32> = Vec::with_capacity(n_recv);
+        let mut recv_key: Vec<u64> = Vec::with_capacity(n_recv);
+        let mut next = recv_base;
         self.recv_at = keys_in
             .iter()
             .map(|keys| {
                 let start = next;
-                for (i, pair) in keys.chunks_exact(2).enumerate() {
+                for pair in keys.chunks_exact(2) {
                     let g = pair[0].to_bits() as u32;
                     let l = self.node_gid[..self.n_owned]
                         .binary_search(&g)
-                        .expect("contributions arrive for owned nodes")
-                        as u32;
-                    debug_assert!(l < n_owned);
-                    owned.push((l, pair[1].to_bits(), (start + i) as u32));
+                        .expect("contributions arrive for owned nodes");
+                    count[l + 1] += 1;
+                    recv_node.push(l as u32);
+                    recv_key.push(pair[1].to_bits());
                 }
                 next += keys.len() / 2;
                 (start, keys.len() / 2)
             })
             .collect();
-        // Bucket by node (counting sort), then each node's few
-        // contributions by key: the order of a full sort of (node, key),
-        // in linear time (keys are unique per node).
-        self.gather_off = vec![0; self.n_owned + 1];
-        for &(l, _, _) in &owned {
-            self.gather_off[l as usize + 1] += 1;
-        }
+        drop(keys_in);
+        // Pass 2: bucket the slots by node (counting sort), then each
+        // node's few slots by key: the order of a full sort of (node,
+        // key), in linear time (keys are unique per node).
         for i in 0..self.n_owned {
-            self.gather_off[i + 1] += self.gather_off[i];
+            count[i + 1] += count[i];
         }
-        let mut fill: Vec<u32> = self.gather_off[..self.n_owned].to_vec();
-        let mut bucket = vec![(0u64, 0u32); owned.len()];
-        for &(l, key, s) in &owned {
+        let total = count[self.n_owned] as usize;
+        let mut slots = std::mem::take(&mut self.gather_slot);
+        refill(&mut slots, total, 0u32);
+        let mut fill: Vec<u32> = count[..self.n_owned].to_vec();
+        self.for_each_slot(|l, _, slot| {
+            if l < n_owned {
+                let at = &mut fill[l as usize];
+                slots[*at as usize] = slot as u32;
+                *at += 1;
+            }
+        });
+        for (i, &l) in recv_node.iter().enumerate() {
             let at = &mut fill[l as usize];
-            bucket[*at as usize] = (key, s);
+            slots[*at as usize] = (recv_base + i) as u32;
             *at += 1;
         }
-        for w in self.gather_off.windows(2) {
-            bucket[w[0] as usize..w[1] as usize].sort_unstable();
+        drop((fill, recv_node));
+        let key_of = |s: u32| -> u64 {
+            let s = s as usize;
+            if s < pair_base {
+                u64::from(self.elem_ids[s / 4])
+            } else if s < recv_base {
+                pair_key(&self.candidates[(s - pair_base) / 8])
+            } else {
+                recv_key[s - recv_base]
+            }
+        };
+        for w in count.windows(2) {
+            slots[w[0] as usize..w[1] as usize].sort_unstable_by_key(|&s| key_of(s));
         }
-        self.gather_slot = bucket.iter().map(|&(_, s)| s).collect();
+        self.gather_slot = slots;
+        self.gather_off = count;
         // Reuse the allocation (hundreds of MB in a large packing).
-        self.contrib.clear();
-        self.contrib.resize(next, Vector3::zeros());
+        refill(&mut self.contrib, next, Vector3::zeros());
+    }
+
+    /// Every contribution slot of the elements and the pairs, in slot
+    /// order, as (local node, global key, slot): 4 per element, keyed by
+    /// its id; 8 per pair (a's nodes, then b's), keyed after all elements.
+    fn for_each_slot(&self, mut f: impl FnMut(u32, u64, usize)) {
+        let pair_base = 4 * self.elements.len();
+        for (i, el) in self.elements.iter().enumerate() {
+            for k in 0..4 {
+                f(el.nodes[k], u64::from(self.elem_ids[i]), 4 * i + k);
+            }
+        }
+        for (j, c) in self.candidates.iter().enumerate() {
+            let key = pair_key(c);
+            let (ta, tb) = (
+                &self.pair_tets[c.ta as usize],
+                &self.pair_tets[c.tb as usize],
+            );
+            for k in 0..4 {
+                f(ta[k], key, pair_base + 8 * j + k);
+                f(tb[k], key, pair_base + 8 * j + 4 + k);
+            }
+        }
     }
 
     /// The force on every owned node: its contributions summed in key
@@ -134,4 +166,23 @@ impl ExplicitDomain {
             self.f[i] = f + self.ext[i];
         }
     }
+}
+
+/// The summation key of a pair's contributions: after every element's
+/// (the top bit), by (a, b).
+fn pair_key(c: &super::candidates::Candidate) -> u64 {
+    const PAIR: u64 = 1 << 63;
+    PAIR | (u64::from(c.a) << 31) | u64::from(c.b)
+}
+
+/// Make `v` hold `n` copies of `value`, keeping its allocation when it is
+/// large enough; else a new one with 1/16 to spare (not the doubling of
+/// a growing vector, and never the old and new allocations at once).
+fn refill<T: Clone>(v: &mut Vec<T>, n: usize, value: T) {
+    v.clear();
+    if v.capacity() < n {
+        *v = Vec::new();
+        v.reserve_exact(n + n / 16);
+    }
+    v.resize(n, value);
 }

@@ -40,7 +40,9 @@ use rebalance::Balance;
 use schedule::Schedule;
 use settle::Settling;
 use setup::Contacts;
-pub use summary::{peak_rss, BalanceSummary, MechanicsSummary, PhaseTimes, RunSummary, Settled};
+pub use summary::{
+    peak_rss, trace_memory, BalanceSummary, MechanicsSummary, PhaseTimes, RunSummary, Settled,
+};
 
 /// How to run.
 #[derive(Debug, Clone, Default)]
@@ -87,12 +89,17 @@ pub fn run(
     let ck = restart.as_ref().map(|r| &r.file.head);
     // Output: only now that the input is known good are files created.
     let mut out = st.start_output(opts.output_dir.as_deref(), ck)?;
+    summary::trace_memory(comm.rank(), "output");
     let show = opts.progress && comm.rank() == 0;
     let mut at = Position::new(&st, ck, &out, show);
     while let Some(target) = at.next_stop() {
         st.advance(at.step, target)?;
         at.reached(target);
         st.stop(&mut at, &mut out)?;
+        if tracing::enabled!(target: "memory", tracing::Level::DEBUG) {
+            summary::trace_memory(comm.rank(), &format!("stop at step {}", at.step));
+        }
+        trace_held(comm.rank(), st.mech.as_ref());
     }
     st.finish(at, out)
 }
@@ -182,10 +189,40 @@ impl<'a, 'p> Stages<'a, 'p> {
         opts: &RunOptions,
         mut times: PhaseTimes,
     ) -> Result<Self> {
+        let rank = comm.rank();
+        summary::trace_memory(rank, "model");
         let part = setup::partition(comm, model, restart, &mut times)?;
+        summary::trace_memory(rank, "part");
         let ck = restart.map(|r| &r.file.head);
         let mut mech = setup::mechanics(comm, model, &part, restart, &mut times)?;
-        let contacts = Contacts::new(comm, model, &part, restart, mech.as_mut())?;
+        summary::trace_memory(rank, "mechanics");
+        trace_held(rank, mech.as_ref());
+        let mut contacts = Contacts::new(comm, model, &part, restart, mech.as_mut())?;
+        summary::trace_memory(rank, "contacts");
+        let mut balance = Balance::new(model, comm.size() as usize);
+        let mut part = part;
+        let clock = Instant::now();
+        if let Some((placed, ratio)) =
+            rebalance::thermal_placements(comm, model, &part, &contacts.set)
+        {
+            // The first detection and the old part go before the new ones
+            // are made (their memory is reused).
+            let earlier = std::mem::replace(&mut contacts, Contacts::empty());
+            let mut counts = Contacts::empty();
+            counts.add_counts(&earlier);
+            drop(earlier);
+            let before = std::mem::take(&mut part.whole_bodies);
+            drop(part);
+            part = Part::build_placed(comm, model, crate::parallel::Placement::Moved(&placed))?;
+            drop(placed);
+            let moved = rebalance::bodies_moved(comm, &before, &part);
+            contacts = Contacts::new(comm, model, &part, restart, mech.as_mut())?;
+            contacts.add_counts(&counts);
+            let after = rebalance::thermal_imbalance(comm, &part, &contacts.set);
+            balance.set_up_repartition(moved, ratio, after, clock.elapsed().as_secs_f64());
+            summary::trace_memory(rank, "contacts after the set-up repartition");
+        }
+        tracing::debug!(target: "memory", rank, elements = part.elem_gid.len(), nodes = part.node_gid.len(), owned = part.n_owned, thermal_pairs = contacts.set.local.len(), whole_bodies = part.whole_bodies.len());
         let sys = setup::thermal(
             petsc,
             comm,
@@ -197,6 +234,7 @@ impl<'a, 'p> Stages<'a, 'p> {
             &mut times,
         )?;
         setup::couple_temperatures(comm, model, &part, sys.as_ref(), mech.as_mut(), ck)?;
+        summary::trace_memory(rank, "thermal");
         Ok(Stages {
             petsc,
             comm,
@@ -206,7 +244,7 @@ impl<'a, 'p> Stages<'a, 'p> {
             mech,
             contacts,
             times,
-            balance: Balance::new(model, comm.size() as usize),
+            balance,
         })
     }
 }
@@ -438,4 +476,26 @@ fn check_finite(
         time: step as f64 * dt,
         node: node as usize,
     })
+}
+
+/// Log what the mechanics domain holds, by array (debug level, target
+/// `memory`), after set-up and at each stop.
+fn trace_held(rank: i32, mech: Option<&Mechanics>) {
+    let Some(m) = mech else { return };
+    if !tracing::enabled!(target: "memory", tracing::Level::DEBUG) {
+        return;
+    }
+    let mib: Vec<String> = m
+        .domain
+        .held_bytes()
+        .iter()
+        .map(|(n, b)| format!("{n} {:.2}", *b as f64 / 1048576.0))
+        .collect();
+    let counts: Vec<String> = m
+        .domain
+        .held_counts()
+        .iter()
+        .map(|(n, c)| format!("{n} {c}"))
+        .collect();
+    tracing::debug!(target: "memory", rank, "held MiB: {}; counts: {}", mib.join(", "), counts.join(", "));
 }

@@ -79,6 +79,18 @@ impl Balance {
         }
     }
 
+    /// Count a repartition at set-up (a thermal run's, after its first
+    /// detection found the work `ratio` × the mean on its busiest rank).
+    pub fn set_up_repartition(&mut self, moved: u64, ratio: f64, after: f64, time: f64) {
+        self.checks += 1;
+        self.last = after;
+        self.repartitions += 1;
+        self.bodies_moved += moved;
+        self.worst_found = self.worst_found.max(ratio);
+        self.worst_evaluated = self.worst_evaluated.max(ratio);
+        self.time += time;
+    }
+
     /// Whether `step` is a check.
     fn due(&self, step: u64) -> bool {
         self.spec.is_some_and(|s| step.is_multiple_of(s.every))
@@ -131,17 +143,31 @@ fn placements(
     part: &Part,
     m: &ExplicitDomain,
 ) -> HashMap<u32, ([f64; 3], f64)> {
+    let loads = m.body_loads(model, part);
+    to_body_blocks(
+        comm,
+        model,
+        loads.iter().map(|l| (l.body, l.centre, l.work)),
+    )
+}
+
+/// Collective. (body, centre, work) records sent to the rank whose block
+/// of body ids holds each body.
+fn to_body_blocks(
+    comm: &SimpleCommunicator,
+    model: &Model,
+    loads: impl Iterator<Item = (u32, [f64; 3], f64)>,
+) -> HashMap<u32, ([f64; 3], f64)> {
     let size = comm.size() as usize;
     let nb = model.bodies.len() as u64;
     let mut send: Vec<Vec<f64>> = vec![Vec::new(); size];
-    for l in m.body_loads(model, part) {
-        let c = l.centre;
-        send[block_owner(u64::from(l.body), nb, size)].extend_from_slice(&[
-            f64::from(l.body),
+    for (body, c, work) in loads {
+        send[block_owner(u64::from(body), nb, size)].extend_from_slice(&[
+            f64::from(body),
             c[0],
             c[1],
             c[2],
-            l.work,
+            work,
         ]);
     }
     all_to_all(comm, &send)
@@ -149,6 +175,101 @@ fn placements(
         .flat_map(|v| v.chunks_exact(5))
         .map(|r| (r[0] as u32, ([r[1], r[2], r[3]], r[4])))
         .collect()
+}
+
+/// Work of one thermal contact pair against one element (1), in the
+/// partition's units: measured on the N = 2000 heat-up on 8 ranks, the
+/// ranks with 27 k more pairs peaked 10.3 MiB higher (~390 B a pair)
+/// against ~1.5 kB for an element with its nodes and matrix rows.
+pub(super) const THERMAL_PAIR_WORK: f64 = 0.25;
+
+/// Max/mean work per rank past which a thermal run's first detection
+/// cuts the bodies again: the cut costs one more detection (about 2 % of
+/// the N = 2000 heat-up), the imbalance costs its share of every step.
+const SETUP_THRESHOLD: f64 = 1.05;
+
+/// Collective. Max/mean over the ranks of a thermal run's work: elements
+/// and [`THERMAL_PAIR_WORK`] per contact pair.
+pub(super) fn thermal_imbalance(
+    comm: &SimpleCommunicator,
+    part: &Part,
+    pairs: &crate::contact::ContactSet,
+) -> f64 {
+    let mine = part.elem_gid.len() as f64 + THERMAL_PAIR_WORK * pairs.local.len() as f64;
+    let (mut total, mut most) = (0.0f64, 0.0f64);
+    comm.all_reduce_into(&mine, &mut total, SystemOperation::sum());
+    comm.all_reduce_into(&mine, &mut most, SystemOperation::max());
+    most * f64::from(comm.size()) / total.max(f64::MIN_POSITIVE)
+}
+
+/// Collective. A thermal run on several ranks, after its first
+/// detection: when the ranks' work (elements, and their thermal contact
+/// pairs) is past [`SETUP_THRESHOLD`] × the mean (a settled packing has
+/// far more contacts at its bottom), the centre and work of every whole
+/// body, for [`Part::build_placed`] to cut them again before the thermal
+/// system exists; with the max/mean work found. None when the cut stands.
+#[allow(clippy::type_complexity)]
+pub(super) fn thermal_placements(
+    comm: &SimpleCommunicator,
+    model: &Model,
+    part: &Part,
+    pairs: &crate::contact::ContactSet,
+) -> Option<(HashMap<u32, ([f64; 3], f64)>, f64)> {
+    if comm.size() < 2 || model.mechanics.is_some() {
+        return None;
+    }
+    let ratio = thermal_imbalance(comm, part, pairs);
+    if ratio <= SETUP_THRESHOLD {
+        return None;
+    }
+    // Each pair's work to the body of its tet on this rank held whole.
+    let mut body_pairs: HashMap<u32, f64> = HashMap::new();
+    for d in &pairs.dofs {
+        if let Some(&b) = d
+            .bodies
+            .iter()
+            .find(|b| part.whole_bodies.binary_search(b).is_ok())
+        {
+            *body_pairs.entry(b).or_default() += THERMAL_PAIR_WORK;
+        }
+    }
+    // Centres of the whole bodies: the mean of their elements' nodes.
+    let mut sum: HashMap<u32, ([f64; 3], f64)> = HashMap::new();
+    for (e, t) in part.mesh.tets.iter().enumerate() {
+        let b = part.mesh.body[e];
+        if part.whole_bodies.binary_search(&b).is_err() {
+            continue;
+        }
+        let (c, n) = sum.entry(b).or_insert(([0.0; 3], 0.0));
+        for &v in t {
+            let x = part.mesh.nodes[v as usize];
+            for d in 0..3 {
+                c[d] += x[d];
+            }
+        }
+        *n += 4.0;
+    }
+    let loads = part.whole_bodies.iter().map(|&b| {
+        let (c, n) = sum.get(&b).copied().unwrap_or(([0.0; 3], 1.0));
+        let body = &model.bodies[b as usize];
+        let elements = f64::from(body.elem_range.1 - body.elem_range.0);
+        let work = elements + body_pairs.get(&b).copied().unwrap_or(0.0);
+        (b, c.map(|v| v / n), work)
+    });
+    Some((to_body_blocks(comm, model, loads), ratio))
+}
+
+/// Collective. How many whole bodies changed rank from `before` (this
+/// rank's whole bodies, ascending) to `part`, over all ranks.
+pub(super) fn bodies_moved(comm: &SimpleCommunicator, before: &[u32], part: &Part) -> u64 {
+    let moved = part
+        .whole_bodies
+        .iter()
+        .filter(|b| before.binary_search(b).is_err())
+        .count() as u64;
+    let mut all_moved = 0u64;
+    comm.all_reduce_into(&moved, &mut all_moved, SystemOperation::sum());
+    all_moved
 }
 
 impl Stages<'_, '_> {
@@ -223,13 +344,7 @@ impl Stages<'_, '_> {
             .map_or((0, 0), |s| (s.iterations, s.assemblies));
         drop(old_sys);
 
-        let moved = part
-            .whole_bodies
-            .iter()
-            .filter(|b| self.part.whole_bodies.binary_search(b).is_err())
-            .count() as u64;
-        let mut all_moved = 0u64;
-        comm.all_reduce_into(&moved, &mut all_moved, SystemOperation::sum());
+        let all_moved = bodies_moved(comm, &self.part.whole_bodies, &part);
         self.part = part;
         let part = &self.part;
 

@@ -172,6 +172,18 @@ impl Contacts {
         Ok(contacts)
     }
 
+    /// No contacts (a placeholder while a set is rebuilt).
+    pub fn empty() -> Contacts {
+        Contacts {
+            source: Source::None,
+            set: ContactSet::default(),
+            detections: 0,
+            searches: 0,
+            search_time: 0.0,
+            surface_time: 0.0,
+        }
+    }
+
     /// Count the detections and searches of `earlier` (the contacts of
     /// the parts before a repartition) as this one's.
     pub fn add_counts(&mut self, earlier: &Contacts) {

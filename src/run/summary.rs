@@ -264,15 +264,29 @@ impl std::fmt::Display for RunSummary {
 
 /// Peak resident set size of this process (VmHWM), bytes.
 pub fn peak_rss() -> u64 {
+    status_kib("VmHWM:") * 1024
+}
+
+/// A `/proc/self/status` figure in KiB (0 where there is none).
+fn status_kib(key: &str) -> u64 {
     std::fs::read_to_string("/proc/self/status")
         .ok()
         .and_then(|s| {
             s.lines()
-                .find(|l| l.starts_with("VmHWM:"))
+                .find(|l| l.starts_with(key))
                 .and_then(|l| l.split_whitespace().nth(1))
                 .and_then(|v| v.parse::<u64>().ok())
         })
-        .map_or(0, |kb| kb * 1024)
+        .unwrap_or(0)
+}
+
+/// Log this rank's resident and peak memory after `stage` (debug level,
+/// target `memory`: `FDEM_LOG=memory=debug`), to find where a peak forms.
+pub fn trace_memory(rank: i32, stage: &str) {
+    if tracing::enabled!(target: "memory", tracing::Level::DEBUG) {
+        let (rss, hwm) = (status_kib("VmRSS:"), status_kib("VmHWM:"));
+        tracing::debug!(target: "memory", rank, stage, rss_mib = rss as f64 / 1024.0, peak_mib = hwm as f64 / 1024.0);
+    }
 }
 
 impl PhaseTimes {

@@ -156,15 +156,24 @@ pub fn exchange_ghosts<C: Communicator>(
         }
     }
     let asked = all_to_all(comm, &requests);
-    // 4. The tets asked for, with their nodes.
+    // 4. The tets asked for, each piece's nodes once: per piece a header
+    //    (nodes, tets), its nodes (gid, owner, PETSc number, boundary,
+    //    x, y, z), then its tets (gid, body, material, mask, volume, and
+    //    four indices into the piece's nodes).
+    const NODE: usize = 7;
+    const TET: usize = 9;
     let mut data: Vec<Vec<f64>> = vec![Vec::new(); size];
+    let mut local_of: Vec<u32> = vec![u32::MAX; own.x.len()];
+    let mut picked: Vec<usize> = Vec::new();
+    let mut piece_nodes: Vec<u32> = Vec::new();
     for (r, list) in asked.iter().enumerate() {
         for rec in list.chunks_exact(7) {
             let (body, near) = (rec[0] as u32, f64_box(&rec[1..]));
             let Ok(i) = mine.binary_search_by_key(&body, |p| p.body) else {
                 continue;
             };
-            let out = &mut data[r];
+            picked.clear();
+            piece_nodes.clear();
             for &t in &mine[i].tets {
                 let t = t as usize;
                 if !interior && own.mask[t] == 0 {
@@ -177,6 +186,34 @@ pub fn exchange_ghosts<C: Communicator>(
                 if !overlap(&tb, &near, margin) {
                     continue;
                 }
+                picked.push(t);
+                for &n in &own.tets[t] {
+                    if local_of[n as usize] == u32::MAX {
+                        local_of[n as usize] = piece_nodes.len() as u32;
+                        piece_nodes.push(n);
+                    }
+                }
+            }
+            if picked.is_empty() {
+                continue;
+            }
+            let out = &mut data[r];
+            out.reserve(2 + NODE * piece_nodes.len() + TET * picked.len());
+            out.extend_from_slice(&[piece_nodes.len() as f64, picked.len() as f64]);
+            for &n in &piece_nodes {
+                let n = n as usize;
+                let x = own.x[n];
+                out.extend_from_slice(&[
+                    f64::from(own.node_gid[n]),
+                    f64::from(own.node_owner[n]),
+                    f64::from(own.node_petsc[n]),
+                    f64::from(u8::from(own.node_boundary[n])),
+                    x[0],
+                    x[1],
+                    x[2],
+                ]);
+            }
+            for &t in &picked {
                 out.extend_from_slice(&[
                     f64::from(own.gid[t]),
                     f64::from(own.body[t]),
@@ -184,44 +221,46 @@ pub fn exchange_ghosts<C: Communicator>(
                     f64::from(own.mask[t]),
                     own.volume0[t],
                 ]);
-                for &n in &own.tets[t] {
-                    let n = n as usize;
-                    let x = own.x[n];
-                    out.extend_from_slice(&[
-                        f64::from(own.node_gid[n]),
-                        f64::from(own.node_owner[n]),
-                        f64::from(own.node_petsc[n]),
-                        f64::from(u8::from(own.node_boundary[n])),
-                        x[0],
-                        x[1],
-                        x[2],
-                    ]);
-                }
+                out.extend(own.tets[t].iter().map(|&n| f64::from(local_of[n as usize])));
+            }
+            for &n in &piece_nodes {
+                local_of[n as usize] = u32::MAX;
             }
         }
     }
+    drop(local_of);
     let received = all_to_all(comm, &data);
+    drop(data);
     // Assemble, each node once.
-    const TET: usize = 5 + 4 * 7;
-    let mut nodes: Vec<[f64; 7]> = Vec::new();
+    let mut nodes: Vec<[f64; NODE]> = Vec::new();
     let mut g = ContactTets::default();
     let mut tet_nodes: Vec<[u32; 4]> = Vec::new();
     for list in &received {
-        for rec in list.chunks_exact(TET) {
-            g.gid.push(rec[0] as u32);
-            g.body.push(rec[1] as u32);
-            g.material.push(rec[2] as u32);
-            g.mask.push(rec[3] as u8);
-            g.volume0.push(rec[4]);
-            let mut t = [0u32; 4];
-            for (k, slot) in t.iter_mut().enumerate() {
-                let n = &rec[5 + 7 * k..12 + 7 * k];
-                *slot = n[0] as u32;
-                nodes.push(n.try_into().expect("seven values"));
+        let mut at = 0;
+        while at < list.len() {
+            let (nn, nt) = (list[at] as usize, list[at + 1] as usize);
+            at += 2;
+            let piece = &list[at..at + NODE * nn];
+            at += NODE * nn;
+            nodes.extend(
+                piece
+                    .chunks_exact(NODE)
+                    .map(|n| <[f64; NODE]>::try_from(n).expect("seven values")),
+            );
+            for rec in list[at..at + TET * nt].chunks_exact(TET) {
+                g.gid.push(rec[0] as u32);
+                g.body.push(rec[1] as u32);
+                g.material.push(rec[2] as u32);
+                g.mask.push(rec[3] as u8);
+                g.volume0.push(rec[4]);
+                tet_nodes.push(std::array::from_fn(|k| {
+                    piece[NODE * rec[5 + k] as usize] as u32
+                }));
             }
-            tet_nodes.push(t);
+            at += TET * nt;
         }
     }
+    drop(received);
     nodes.sort_by_key(|n| n[0] as u32);
     nodes.dedup_by_key(|n| n[0] as u32);
     for n in &nodes {

@@ -86,6 +86,8 @@ enum Source {
     /// The contact search at the model's positions (a thermal run; bodies
     /// with a prescribed velocity move between detections).
     Search(Box<ThermalSearch>),
+    /// A thermal run's search after its only detection (`contact.every = 0`).
+    Spent,
 }
 
 /// A thermal run's own contact search: this rank's tets at their current
@@ -169,6 +171,13 @@ impl Contacts {
             contacts.set = contacts.find(comm, model, mech)?;
             contacts.detections = 1;
         }
+        // A run that never detects again frees its search (the tets'
+        // copy, the kept trees) before the thermal system is built.
+        if model.contact.as_ref().is_some_and(|c| c.every == 0)
+            && matches!(contacts.source, Source::Search(_))
+        {
+            contacts.source = Source::Spent;
+        }
         Ok(contacts)
     }
 
@@ -237,6 +246,7 @@ impl Contacts {
                 pairs
             }
             (Source::Mechanics, None) => unreachable!("a coupled run has mechanics"),
+            (Source::Spent, _) => unreachable!("contact.every = 0 detects once"),
             (Source::Search(ts), _) => {
                 let t = Instant::now();
                 let ghosts =

@@ -423,6 +423,13 @@ impl ExplicitDomain {
         }
         self.pair_share = shares[rank];
         let mut at: f64 = found[..rank].iter().sum();
+        // The pairs this rank keeps are the middle of its stretch of the
+        // sequence; the ends go to other ranks. Hot pairs go first to the
+        // ends: the same work handed over in the fewest pairs, hence the
+        // fewest force contributions that travel back every substep (a
+        // pair's forces do not depend on the rank that evaluates it).
+        let front = (ends[rank] - at).clamp(0.0, found[rank]);
+        let order = hot_to_the_ends(weights, front);
         // Per destination: its tets (each once) and its pairs (tet slots,
         // stiffness, reduced mass).
         let mut tets: Vec<Vec<f64>> = vec![Vec::new(); size];
@@ -430,7 +437,8 @@ impl ExplicitDomain {
         let mut slot: Vec<HashMap<u32, u32>> = vec![HashMap::new(); size];
         let mut here = Vec::with_capacity(kept.len());
         let mut dest = 0usize;
-        for (&(a, b), &w) in kept.iter().zip(weights) {
+        for i in order {
+            let ((a, b), w) = (kept[i], weights[i]);
             // The rank whose run holds the pair's mid-point.
             let mid = at + 0.5 * w as f64;
             at += w as f64;
@@ -732,7 +740,25 @@ fn pair_shares(found: &[f64], elements: &[f64]) -> Vec<f64> {
 
 #[cfg(test)]
 mod shares {
-    use super::pair_shares;
+    use super::{hot_to_the_ends, pair_shares};
+
+    #[test]
+    fn hot_pairs_carry_the_ends_of_a_ranks_stretch() {
+        let w = [1, 32, 1, 1, 32, 1, 32, 1];
+        // 40 of work to the ranks before: two hot pairs (64 >= 40), then
+        // the cold ones, then the last hot one.
+        let order = hot_to_the_ends(&w, 40.0);
+        assert_eq!(order, vec![1, 4, 0, 2, 3, 5, 7, 6]);
+        // Nothing before: the cold ones first, every hot pair at the end.
+        assert_eq!(hot_to_the_ends(&w, 0.0), vec![0, 2, 3, 5, 7, 1, 4, 6]);
+        // Equal weights, or none: the order found.
+        assert_eq!(hot_to_the_ends(&[1, 1, 1], 2.0), vec![0, 1, 2]);
+        assert!(hot_to_the_ends(&[], 1.0).is_empty());
+        // Always a permutation.
+        let mut o = hot_to_the_ends(&w, 1e9);
+        o.sort_unstable();
+        assert_eq!(o, (0..w.len()).collect::<Vec<_>>());
+    }
 
     #[test]
     fn shares_fill_the_ranks_up_to_the_mean_work() {
@@ -752,4 +778,25 @@ mod shares {
         // No pairs: no shares.
         assert!(close(&pair_shares(&[0.0, 0.0], &[1.0, 2.0]), &[0.0, 0.0]));
     }
+}
+
+/// An order of pairs of `weights` with hot pairs (above the least weight)
+/// first until `front` work is reached, then the cold ones, then the rest
+/// of the hot ones: the work at either end of the sequence, which other
+/// ranks take, is carried by as few pairs as the weights allow.
+fn hot_to_the_ends(weights: &[u64], front: f64) -> Vec<usize> {
+    let cold = weights.iter().copied().min().unwrap_or(0);
+    let (hot, cool): (Vec<usize>, Vec<usize>) =
+        (0..weights.len()).partition(|&i| weights[i] > cold);
+    let mut order = Vec::with_capacity(weights.len());
+    let mut w = 0.0;
+    let mut rest = hot.iter().copied().peekable();
+    while w < front {
+        let Some(i) = rest.next() else { break };
+        w += weights[i] as f64;
+        order.push(i);
+    }
+    order.extend(cool);
+    order.extend(rest);
+    order
 }

@@ -738,6 +738,27 @@ fn pair_shares(found: &[f64], elements: &[f64]) -> Vec<f64> {
     }
 }
 
+/// An order of pairs of `weights` with hot pairs (above the least weight)
+/// first until `front` work is reached, then the cold ones, then the rest
+/// of the hot ones: the work at either end of the sequence, which other
+/// ranks take, is carried by as few pairs as the weights allow.
+fn hot_to_the_ends(weights: &[u64], front: f64) -> Vec<usize> {
+    let cold = weights.iter().copied().min().unwrap_or(0);
+    let (hot, cool): (Vec<usize>, Vec<usize>) =
+        (0..weights.len()).partition(|&i| weights[i] > cold);
+    let mut order = Vec::with_capacity(weights.len());
+    let mut w = 0.0;
+    let mut rest = hot.iter().copied().peekable();
+    while w < front {
+        let Some(i) = rest.next() else { break };
+        w += weights[i] as f64;
+        order.push(i);
+    }
+    order.extend(cool);
+    order.extend(rest);
+    order
+}
+
 #[cfg(test)]
 mod shares {
     use super::{hot_to_the_ends, pair_shares};
@@ -778,25 +799,4 @@ mod shares {
         // No pairs: no shares.
         assert!(close(&pair_shares(&[0.0, 0.0], &[1.0, 2.0]), &[0.0, 0.0]));
     }
-}
-
-/// An order of pairs of `weights` with hot pairs (above the least weight)
-/// first until `front` work is reached, then the cold ones, then the rest
-/// of the hot ones: the work at either end of the sequence, which other
-/// ranks take, is carried by as few pairs as the weights allow.
-fn hot_to_the_ends(weights: &[u64], front: f64) -> Vec<usize> {
-    let cold = weights.iter().copied().min().unwrap_or(0);
-    let (hot, cool): (Vec<usize>, Vec<usize>) =
-        (0..weights.len()).partition(|&i| weights[i] > cold);
-    let mut order = Vec::with_capacity(weights.len());
-    let mut w = 0.0;
-    let mut rest = hot.iter().copied().peekable();
-    while w < front {
-        let Some(i) = rest.next() else { break };
-        w += weights[i] as f64;
-        order.push(i);
-    }
-    order.extend(cool);
-    order.extend(rest);
-    order
 }

@@ -160,13 +160,30 @@ impl TetSlots {
 }
 
 impl ExplicitDomain {
+    /// Free the arrays sized by the last detection's pairs before the
+    /// search allocates its own: they are rebuilt for the new pairs, and
+    /// kept alive through the search they would add to its peak (about a
+    /// fifth of a busy rank's memory in a deposition).
+    fn release_pair_arrays(&mut self) {
+        self.candidates = Vec::new();
+        self.contrib = Vec::new();
+        self.gather_slot = Vec::new();
+        self.pair_geometry = Vec::new();
+        self.pair_planes = Vec::new();
+        self.planes_stamp = Vec::new();
+        self.lin_of = Vec::new();
+        self.linearized = Vec::new();
+        self.witness = Vec::new();
+        crate::run::release_free_memory();
+    }
+
     /// Collective. Rebuild the contact candidates from the one contact
     /// search over this rank's tets and the ghost copies of the tets of
     /// other ranks within the margin, the contact ghosts and the halo;
     /// reorder elements so those touching the halo come first.
     pub(super) fn detect(&mut self, comm: &SimpleCommunicator) -> Result<()> {
         let clock = std::time::Instant::now();
-        self.candidates.clear();
+        self.release_pair_arrays();
         self.thermal_only.clear();
         self.margin = self.adapted_margin(comm);
         // The contact ghosts of the last detection go.
@@ -207,7 +224,6 @@ impl ExplicitDomain {
         self.pair_planes = vec![TetPlanes::new(&[[0.0; 3]; 4]); nt];
         self.planes_stamp = vec![0; nt];
         self.lin_of = vec![super::NONE; self.candidates.len()];
-        self.linearized.clear();
         self.witness = vec![0; self.candidates.len()];
         let ghosts: Vec<(u32, u32, u32)> = (self.n_owned..self.node_gid.len())
             .map(|l| (self.node_gid[l], self.node_owner[l], l as u32))
@@ -224,6 +240,8 @@ impl ExplicitDomain {
         self.build_assembly(comm);
         crate::run::trace_memory(comm.rank(), "detect assembly");
         self.x_detect = self.x[..self.n_owned].to_vec();
+        // The search's lists are gone: their pages too.
+        crate::run::release_free_memory();
         self.detected_at = Some(self.counters.substeps);
         self.counters.detections += 1;
         self.counters.detect_time += clock.elapsed().as_secs_f64();

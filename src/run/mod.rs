@@ -41,7 +41,8 @@ use schedule::Schedule;
 use settle::Settling;
 use setup::Contacts;
 pub use summary::{
-    peak_rss, trace_memory, BalanceSummary, MechanicsSummary, PhaseTimes, RunSummary, Settled,
+    peak_rss, release_free_memory, trace_memory, BalanceSummary, MechanicsSummary, PhaseTimes,
+    RunSummary, Settled,
 };
 
 /// How to run.
@@ -89,6 +90,7 @@ pub fn run(
     let ck = restart.as_ref().map(|r| &r.file.head);
     // Output: only now that the input is known good are files created.
     let mut out = st.start_output(opts.output_dir.as_deref(), ck)?;
+    summary::release_free_memory();
     summary::trace_memory(comm.rank(), "output");
     let show = opts.progress && comm.rank() == 0;
     let mut at = Position::new(&st, ck, &out, show);

@@ -280,6 +280,21 @@ fn status_kib(key: &str) -> u64 {
         .unwrap_or(0)
 }
 
+extern "C" {
+    /// glibc: give the free pages of every malloc arena back to the system.
+    fn malloc_trim(pad: usize) -> std::os::raw::c_int;
+}
+
+/// Return the heap's free pages to the system (glibc `malloc_trim`): after
+/// a detection the old candidate arrays are freed but, scattered between
+/// live blocks, would stay resident and add up to the peak.
+pub fn release_free_memory() {
+    // SAFETY: malloc_trim only touches the allocator's own free lists.
+    unsafe {
+        malloc_trim(0);
+    }
+}
+
 /// Log this rank's resident and peak memory after `stage` (debug level,
 /// target `memory`: `FDEM_LOG=memory=debug`), to find where a peak forms.
 pub fn trace_memory(rank: i32, stage: &str) {

@@ -215,6 +215,9 @@ impl ExplicitDomain {
             self.install(&og, &here, &received, &thermal);
             crate::run::trace_memory(r, "detect installed");
             self.part_tets = own;
+            // The ghosts and the found lists are gone: their pages too,
+            // before the force-sum order allocates.
+            crate::run::release_free_memory();
         } else {
             self.install_none();
         }

@@ -214,15 +214,25 @@ impl ExplicitDomain {
                 buf
             })
             .collect();
-        let mut recv: Vec<Vec<f64>> = self
+        // Contributions from the neighbours land in place, after the pairs'.
+        let recv_base = self
+            .recv_at
+            .first()
+            .map_or(rest.len(), |&(s, _)| s - pair_base);
+        let mut landing: &mut [f64] = bytemuck::cast_slice_mut(&mut rest[recv_base..]);
+        let recv: Vec<&mut [f64]> = self
             .recv_at
             .iter()
-            .map(|&(_, n)| vec![0.0; 3 * n])
+            .map(|&(_, n)| {
+                let (here, after) = std::mem::take(&mut landing).split_at_mut(3 * n);
+                landing = after;
+                here
+            })
             .collect();
         let interior = &self.elements[nb..];
         let (materials, x, v) = (&self.materials, &self.x, &self.v);
         let mut inner: std::result::Result<f64, crate::mechanics::MechanicsError> = Ok(0.0);
-        self.halo.exchange(comm, &send, &mut recv, || {
+        self.halo.exchange_into(comm, &send, recv, || {
             inner = element_forces(
                 interior,
                 materials,
@@ -237,11 +247,6 @@ impl ExplicitDomain {
             Ok(w) => strain += w,
             Err(e) => {
                 elem_error.get_or_insert((e, nb));
-            }
-        }
-        for (&(start, n), buf) in self.recv_at.iter().zip(&recv) {
-            for i in 0..n {
-                self.contrib[start + i] = Vector3::new(buf[3 * i], buf[3 * i + 1], buf[3 * i + 2]);
             }
         }
         if let Some((e, offset)) = elem_error {

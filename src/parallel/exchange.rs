@@ -35,20 +35,9 @@ where
             .map(|(_, v)| std::mem::size_of_val(&v[..]))
             .sum(),
     );
-    let mut recv_counts = vec![0i32; size];
-    comm.all_to_all_into(&send_counts[..], &mut recv_counts[..]);
     let flat: Vec<T> = send.iter().flatten().copied().collect();
-    let total: usize = recv_counts.iter().map(|&c| c as usize).sum();
-    let mut recv = vec![T::default(); total];
-    {
-        let s = Partition::new(&flat[..], send_counts.clone(), displacements(&send_counts));
-        let mut r = PartitionMut::new(
-            &mut recv[..],
-            recv_counts.clone(),
-            displacements(&recv_counts),
-        );
-        comm.all_to_all_varcount_into(&s, &mut r);
-    }
+    let (recv, recv_counts) = all_to_all_flat(comm, &flat, &send_counts);
+    drop(flat);
     let mut out = Vec::with_capacity(size);
     let mut at = 0usize;
     for &c in &recv_counts {
@@ -56,6 +45,33 @@ where
         at += c as usize;
     }
     out
+}
+
+/// Collective. `flat` holds the lists for ranks 0, 1, … one after the
+/// other, `send_counts[r]` values for rank r; returns what every rank sent
+/// here, one after the other by source rank, and the counts. No list is
+/// copied: the caller fills `flat` in place.
+pub fn all_to_all_flat<T, C>(comm: &C, flat: &[T], send_counts: &[i32]) -> (Vec<T>, Vec<i32>)
+where
+    T: Equivalence + Copy + Default,
+    C: Communicator,
+{
+    let size = comm.size() as usize;
+    assert_eq!(send_counts.len(), size, "one send count per rank");
+    let mut recv_counts = vec![0i32; size];
+    comm.all_to_all_into(send_counts, &mut recv_counts[..]);
+    let total: usize = recv_counts.iter().map(|&c| c as usize).sum();
+    let mut recv = vec![T::default(); total];
+    {
+        let s = Partition::new(flat, send_counts.to_vec(), displacements(send_counts));
+        let mut r = PartitionMut::new(
+            &mut recv[..],
+            recv_counts.clone(),
+            displacements(&recv_counts),
+        );
+        comm.all_to_all_varcount_into(&s, &mut r);
+    }
+    (recv, recv_counts)
 }
 
 /// Collective. Every rank's `local` values, concatenated in rank order.
@@ -111,16 +127,39 @@ pub fn to_blocks<C: Communicator>(
     total: u64,
 ) -> (u64, Vec<f64>) {
     let size = comm.size() as usize;
-    let mut send: Vec<Vec<f64>> = vec![Vec::new(); size];
-    for (i, &g) in ids.iter().enumerate() {
-        let r = block_owner(u64::from(g), total, size);
-        send[r].push(f64::from(g));
-        send[r].extend_from_slice(&values[width * i..width * (i + 1)]);
+    let me = comm.rank() as usize;
+    // Rows packed by destination in one array (a counting sort): the
+    // output's only copies are this, what arrives and the block.
+    let owners: Vec<u32> = ids
+        .iter()
+        .map(|&g| block_owner(u64::from(g), total, size) as u32)
+        .collect();
+    let mut counts = vec![0i32; size];
+    for &r in &owners {
+        counts[r as usize] += (width + 1) as i32;
     }
-    let got = all_to_all(comm, &send);
-    let (lo, hi) = block(total, size, comm.rank() as usize);
+    let mut at: Vec<usize> = displacements(&counts).iter().map(|&d| d as usize).collect();
+    let mut flat = vec![0.0; ids.len() * (width + 1)];
+    for (i, (&g, &r)) in ids.iter().zip(&owners).enumerate() {
+        let p = &mut at[r as usize];
+        flat[*p] = f64::from(g);
+        flat[*p + 1..*p + 1 + width].copy_from_slice(&values[width * i..width * (i + 1)]);
+        *p += width + 1;
+    }
+    drop(owners);
+    super::count_sent(
+        counts
+            .iter()
+            .enumerate()
+            .filter(|&(r, _)| r != me)
+            .map(|(_, &c)| c as usize * std::mem::size_of::<f64>())
+            .sum(),
+    );
+    let (got, _) = all_to_all_flat(comm, &flat, &counts);
+    drop(flat);
+    let (lo, hi) = block(total, size, me);
     let mut out = vec![0.0; (hi - lo) as usize * width];
-    for rec in got.iter().flat_map(|v| v.chunks_exact(width + 1)) {
+    for rec in got.chunks_exact(width + 1) {
         let row = (rec[0] as u64 - lo) as usize;
         out[width * row..width * (row + 1)].copy_from_slice(&rec[1..]);
     }

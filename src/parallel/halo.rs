@@ -192,6 +192,20 @@ impl Halo {
         recv: &mut [Vec<f64>],
         work: impl FnOnce(),
     ) {
+        let into: Vec<&mut [f64]> = recv.iter_mut().map(|b| &mut b[..]).collect();
+        self.exchange_into(comm, send, into, work);
+    }
+
+    /// Collective over the neighbours. [`Halo::exchange`] receiving into
+    /// slices the caller owns (for example the tail of a larger array), so
+    /// no receive buffer is allocated.
+    pub fn exchange_into<C: Communicator>(
+        &self,
+        comm: &C,
+        send: &[Vec<f64>],
+        mut recv: Vec<&mut [f64]>,
+        work: impl FnOnce(),
+    ) {
         if self.neighbours.is_empty() {
             work();
             return;
@@ -202,7 +216,7 @@ impl Halo {
                 if !buf.is_empty() {
                     requests.push(
                         comm.process_at_rank(*r)
-                            .immediate_receive_into(scope, &mut buf[..]),
+                            .immediate_receive_into(scope, &mut **buf),
                     );
                 }
             }

@@ -96,6 +96,9 @@ pub fn run(
     let mut at = Position::new(&st, ck, &out, show);
     while let Some(target) = at.next_stop() {
         st.advance(at.step, target)?;
+        if tracing::enabled!(target: "memory", tracing::Level::DEBUG) {
+            summary::trace_memory(comm.rank(), &format!("advanced to step {target}"));
+        }
         at.reached(target);
         st.stop(&mut at, &mut out)?;
         if tracing::enabled!(target: "memory", tracing::Level::DEBUG) {
@@ -287,6 +290,9 @@ impl Stages<'_, '_> {
         self.record(out, step)?;
         if at.schedule.is_output(step) || (settled && step < self.model.steps) {
             at.schedule.output_written();
+            // The substeps' message buffers are free: give their pages back
+            // before the output allocates its blocks.
+            release_free_memory();
             self.write(out, step)?;
         }
         self.times.output += clock.elapsed().as_secs_f64();

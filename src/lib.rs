@@ -6,6 +6,7 @@
 //! - [`contact`]: contact detection (BVH broad phase, clipping narrow phase), contact surfaces and conductances.
 //! - [`mesh`]: Tet4 meshes, boundary faces, quality checks, Gmsh import, generators.
 //! - [`mechanics`]: finite-strain Tet4 stress/forces with thermal expansion (seed 004 eqs 1–38), explicit kernels.
+//! - [`fracture`]: cohesive-zone joints (seed 004 sec 2.7): insertion, the damage law, the 6-node joint's forces.
 //! - [`dynamics`]: the per-rank explicit dynamics (subdomain, substeps, contact candidates, ordered force sums).
 //! - [`thermal`]: element matrices and loads (seed 000 eqs 14–20), theta integrator (eq 22).
 //! - [`parallel`]: METIS partition, owned/ghost numbering matching PETSc ownership, halos, collectives.
@@ -23,6 +24,7 @@
 pub mod contact;
 pub mod dynamics;
 pub mod error;
+pub mod fracture;
 pub mod geometry;
 pub mod io;
 pub mod mechanics;

@@ -174,7 +174,6 @@ impl ExplicitDomain {
         self.lin_of = Vec::new();
         self.linearized = Vec::new();
         self.witness = Vec::new();
-        crate::run::release_free_memory();
     }
 
     /// Collective. Rebuild the contact candidates from the one contact
@@ -215,9 +214,6 @@ impl ExplicitDomain {
             self.install(&og, &here, &received, &thermal);
             crate::run::trace_memory(r, "detect installed");
             self.part_tets = own;
-            // The ghosts and the found lists are gone: their pages too,
-            // before the force-sum order allocates.
-            crate::run::release_free_memory();
         } else {
             self.install_none();
         }
@@ -243,8 +239,6 @@ impl ExplicitDomain {
         self.build_assembly(comm);
         crate::run::trace_memory(comm.rank(), "detect assembly");
         self.x_detect = self.x[..self.n_owned].to_vec();
-        // The search's lists are gone: their pages too.
-        crate::run::release_free_memory();
         self.detected_at = Some(self.counters.substeps);
         self.counters.detections += 1;
         self.counters.detect_time += clock.elapsed().as_secs_f64();

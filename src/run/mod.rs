@@ -90,7 +90,7 @@ pub fn run(
     let ck = restart.as_ref().map(|r| &r.file.head);
     // Output: only now that the input is known good are files created.
     let mut out = st.start_output(opts.output_dir.as_deref(), ck)?;
-    summary::release_free_memory();
+    release_free_memory();
     summary::trace_memory(comm.rank(), "output");
     let show = opts.progress && comm.rank() == 0;
     let mut at = Position::new(&st, ck, &out, show);

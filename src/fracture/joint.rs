@@ -89,21 +89,11 @@ pub fn joint_energy(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fracture::law::FractureMaterial;
     use nalgebra::{Rotation3, Vector3};
 
+    /// Seed 004 Table 2's joint at h = 5 mm (the paper's mesh).
     fn law() -> CohesiveLaw {
-        FractureMaterial {
-            tensile_strength: 10e6,
-            cohesion: 20e6,
-            friction_angle: 30f64.to_radians(),
-            g_i: 50.0,
-            g_ii: 100.0,
-            penalty: 1e12,
-            bk_exponent: 1.0,
-        }
-        .law(5e-3)
-        .unwrap()
+        crate::fracture::law::table2().law(5e-3).unwrap()
     }
 
     fn face() -> [Vector3<f64>; 3] {

@@ -247,23 +247,24 @@ impl CohesiveLaw {
     }
 }
 
+/// Seed 004 Table 2's joint: f_t 10 MPa, c 20 MPa, φ 30°, G_I 50,
+/// G_II 100 J/m², p_f 10³ GPa (B–K exponent 1).
+#[cfg(test)]
+pub(crate) fn table2() -> FractureMaterial {
+    FractureMaterial {
+        tensile_strength: 10e6,
+        cohesion: 20e6,
+        friction_angle: 30f64.to_radians(),
+        g_i: 50.0,
+        g_ii: 100.0,
+        penalty: 1e12,
+        bk_exponent: 1.0,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// Seed 004 Table 2's joint: f_t 10 MPa, c 20 MPa, φ 30°, G_I 50,
-    /// G_II 100 J/m², p_f 10³ GPa; h = 5 mm (the paper's mesh).
-    fn table2() -> FractureMaterial {
-        FractureMaterial {
-            tensile_strength: 10e6,
-            cohesion: 20e6,
-            friction_angle: 30f64.to_radians(),
-            g_i: 50.0,
-            g_ii: 100.0,
-            penalty: 1e12,
-            bk_exponent: 1.0,
-        }
-    }
 
     /// Load along a path (dn(t), s(t)) in `n` steps; returns the peak of
     /// the traction along the path, the area under traction·d(displacement)

@@ -1,0 +1,183 @@
+//! The joints of a rank: their faces, laws and histories, advanced together
+//! at each substep, with the counts a run reports (broken joints, crack
+//! area, energy dissipated). Free of MPI and PETSc: the caller owns the
+//! node positions and places the six forces of each joint in its force sum.
+
+use super::insert::{joint_size, JointFaces};
+use super::joint::{joint_energy, joint_forces};
+use super::law::{CohesiveLaw, FractureMaterial, JointState};
+use nalgebra::Vector3;
+
+/// Joints with their laws and histories.
+#[derive(Debug, Clone)]
+pub struct JointSet {
+    pub faces: Vec<JointFaces>,
+    pub laws: Vec<CohesiveLaw>,
+    pub states: Vec<JointState>,
+    /// Time at which each joint broke (s; NaN while intact).
+    pub broke_at: Vec<f64>,
+}
+
+/// What a step of the joints gives back besides the forces.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct JointTotals {
+    /// Elastic energy stored in the intact joints (J).
+    pub stored: f64,
+    /// Energy dissipated by damage since the start (J).
+    pub dissipated: f64,
+    /// Joints broken so far.
+    pub broken: usize,
+    /// Area of the broken joints' faces, one side (m²).
+    pub crack_area: f64,
+}
+
+impl JointSet {
+    /// The joints `faces` of one material. Errors name the joint whose
+    /// size makes the law snap back (its tets and area).
+    pub fn new(faces: Vec<JointFaces>, material: &FractureMaterial) -> Result<JointSet, String> {
+        material.validate()?;
+        let laws = faces
+            .iter()
+            .map(|f| {
+                material.law(joint_size(f.area)).map_err(|e| {
+                    format!(
+                        "joint between tets {} and {} (area {:.3e} m^2): {e}",
+                        f.tets[0], f.tets[1], f.area
+                    )
+                })
+            })
+            .collect::<Result<Vec<_>, String>>()?;
+        let n = faces.len();
+        Ok(JointSet {
+            faces,
+            laws,
+            states: vec![JointState::default(); n],
+            broke_at: vec![f64::NAN; n],
+        })
+    }
+
+    /// Advance every joint to the positions `x` (indexed by the faces'
+    /// node numbers) at time `t` and write its six forces (a's corners,
+    /// then b's) to `out` (one entry per joint). Returns the totals.
+    pub fn forces(
+        &mut self,
+        x: &[Vector3<f64>],
+        t: f64,
+        out: &mut [[Vector3<f64>; 6]],
+    ) -> JointTotals {
+        let mut tot = JointTotals::default();
+        for (j, f) in self.faces.iter().enumerate() {
+            let xa = f.a.map(|n| x[n as usize]);
+            let xb = f.b.map(|n| x[n as usize]);
+            let (mut fa, mut fb) = ([Vector3::zeros(); 3], [Vector3::zeros(); 3]);
+            let st = &mut self.states[j];
+            let was_broken = st.broken.is_some();
+            joint_forces(&self.laws[j], f.area, &xa, &xb, st, &mut fa, &mut fb);
+            if st.broken.is_some() && !was_broken {
+                self.broke_at[j] = t;
+            }
+            out[j] = [fa[0], fa[1], fa[2], fb[0], fb[1], fb[2]];
+            tot.stored += joint_energy(&self.laws[j], f.area, &xa, &xb, st);
+            tot.dissipated += st.dissipated * f.area;
+            if st.broken.is_some() {
+                tot.broken += 1;
+                tot.crack_area += f.area;
+            }
+        }
+        tot
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fracture::insert::make_discontinuous;
+    use crate::fracture::law::table2;
+    use crate::mechanics::element::to_vectors;
+
+    /// Two tets sharing the face z = 0 (apexes at z = ∓h), jointed; the
+    /// upper tet is pulled up rigidly, the lower held: the joint's force
+    /// on the upper corners, summed, is the traction × area; its work is
+    /// G_I × area when it breaks.
+    #[test]
+    fn two_tets_pulled_apart_give_f_t_and_g_i() {
+        let h = 0.01;
+        let nodes = vec![
+            [0.0, 0.0, 0.0],
+            [h, 0.0, 0.0],
+            [0.0, h, 0.0],
+            [0.0, 0.0, -h],
+            [0.0, 0.0, h],
+        ];
+        let tets = vec![[0, 2, 1, 3], [0, 1, 2, 4]];
+        // Both positively oriented.
+        for t in &tets {
+            let x = to_vectors(&t.map(|n| nodes[n as usize]));
+            assert!((x[1] - x[0]).cross(&(x[2] - x[0])).dot(&(x[3] - x[0])) > 0.0);
+        }
+        let j = make_discontinuous(&nodes, &tets, &[true, true]);
+        assert_eq!(j.joints.len(), 1);
+        let m = table2();
+        let mut set = JointSet::new(j.joints.clone(), &m).unwrap();
+        let area = set.faces[0].area;
+        assert!((area - 0.5 * h * h).abs() < 1e-15);
+        let upper: Vec<usize> = (0..j.nodes.len())
+            .filter(|&n| j.tets[1].contains(&(n as u32)))
+            .collect();
+        let x0: Vec<Vector3<f64>> = j.nodes.iter().map(|p| Vector3::from(*p)).collect();
+        let nf = 2.0 * m.g_i / m.tensile_strength;
+        let steps = 20000;
+        let (mut peak, mut work, mut prev) = (0.0f64, 0.0, 0.0);
+        let mut out = vec![[Vector3::zeros(); 6]];
+        let mut last = JointTotals::default();
+        for i in 0..=steps {
+            let lift = 1.1 * nf * i as f64 / steps as f64;
+            let mut x = x0.clone();
+            for &n in &upper {
+                x[n].z += lift;
+            }
+            last = set.forces(&x, i as f64, &mut out);
+            // Upward pull on the upper tet = −(the joint's force on it).
+            let b_is_upper = upper.contains(&(set.faces[0].b[0] as usize));
+            let on_upper: f64 = if b_is_upper {
+                out[0][3..].iter().map(|f| f.z).sum()
+            } else {
+                out[0][..3].iter().map(|f| f.z).sum()
+            };
+            let pull = -on_upper;
+            peak = peak.max(pull / area);
+            if i > 0 {
+                work += 0.5 * (pull + prev) * (1.1 * nf / steps as f64);
+            }
+            prev = pull;
+        }
+        assert!(
+            (peak / m.tensile_strength - 1.0).abs() < 1e-2,
+            "peak {peak}"
+        );
+        assert!((work / (m.g_i * area) - 1.0).abs() < 1e-2, "work {work}");
+        assert_eq!(last.broken, 1);
+        assert!((last.crack_area - area).abs() < 1e-18);
+        assert!((last.dissipated / (m.g_i * area) - 1.0).abs() < 1e-12);
+        assert_eq!(last.stored, 0.0);
+        assert!(set.broke_at[0] > 0.0 && set.broke_at[0] <= steps as f64);
+    }
+
+    #[test]
+    fn a_joint_too_large_for_its_penalty_is_named() {
+        let nodes = vec![
+            [0.0, 0.0, 0.0],
+            [3.0, 0.0, 0.0],
+            [0.0, 3.0, 0.0],
+            [0.0, 0.0, -3.0],
+            [0.0, 0.0, 3.0],
+        ];
+        let tets = vec![[0, 2, 1, 3], [0, 1, 2, 4]];
+        let j = make_discontinuous(&nodes, &tets, &[true, true]);
+        let err = JointSet::new(j.joints, &table2()).unwrap_err();
+        assert!(
+            err.contains("tets 0 and 1") && err.contains("`g_i`"),
+            "{err}"
+        );
+    }
+}

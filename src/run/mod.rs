@@ -206,27 +206,15 @@ impl<'a, 'p> Stages<'a, 'p> {
         summary::trace_memory(rank, "contacts");
         let mut balance = Balance::new(model, comm.size() as usize);
         let mut part = part;
-        let clock = Instant::now();
-        if let Some((placed, ratio)) =
-            rebalance::thermal_placements(comm, model, &part, &contacts.set)
-        {
-            // The first detection and the old part go before the new ones
-            // are made (their memory is reused).
-            let earlier = std::mem::replace(&mut contacts, Contacts::empty());
-            let mut counts = Contacts::empty();
-            counts.add_counts(&earlier);
-            drop(earlier);
-            let before = std::mem::take(&mut part.whole_bodies);
-            drop(part);
-            part = Part::build_placed(comm, model, crate::parallel::Placement::Moved(&placed))?;
-            drop(placed);
-            let moved = rebalance::bodies_moved(comm, &before, &part);
-            contacts = Contacts::new(comm, model, &part, restart, mech.as_mut())?;
-            contacts.add_counts(&counts);
-            let after = rebalance::thermal_imbalance(comm, &part, &contacts.set);
-            balance.set_up_repartition(moved, ratio, after, clock.elapsed().as_secs_f64());
-            summary::trace_memory(rank, "contacts after the set-up repartition");
-        }
+        rebalance::set_up_thermal_balance(
+            comm,
+            model,
+            restart,
+            &mut part,
+            &mut contacts,
+            mech.as_mut(),
+            &mut balance,
+        )?;
         tracing::debug!(target: "memory", rank, elements = part.elem_gid.len(), nodes = part.node_gid.len(), owned = part.n_owned, thermal_pairs = contacts.set.local.len(), whole_bodies = part.whole_bodies.len());
         let sys = setup::thermal(
             petsc,

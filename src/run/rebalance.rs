@@ -29,7 +29,7 @@ use crate::parallel::exchange::{all_to_all, block_owner};
 use crate::parallel::{Part, Placement};
 use crate::scenario::RebalanceSpec;
 
-use super::checkpoint::{self, Saved, Snapshot};
+use super::checkpoint::{self, Restart, Saved, Snapshot};
 use super::output::Output;
 use super::setup::{self, Contacts};
 use super::{Mechanics, Stages};
@@ -257,6 +257,43 @@ pub(super) fn thermal_placements(
         (b, c.map(|v| v / n), work)
     });
     Some((to_body_blocks(comm, model, loads), ratio))
+}
+
+/// Collective. A thermal run on several ranks whose first detection left
+/// the work (elements + pairs / 4) past the set-up threshold on some rank:
+/// drop the contacts and the part, cut the whole bodies again weighted by
+/// that work, and detect again before the thermal system exists. Counted
+/// on the summary's `balance` line.
+pub(super) fn set_up_thermal_balance(
+    comm: &SimpleCommunicator,
+    model: &Model,
+    restart: Option<&Restart>,
+    part: &mut Part,
+    contacts: &mut Contacts,
+    mech: Option<&mut Mechanics>,
+    balance: &mut Balance,
+) -> Result<()> {
+    let clock = Instant::now();
+    let Some((placed, ratio)) = thermal_placements(comm, model, part, &contacts.set) else {
+        return Ok(());
+    };
+    // The first detection and the old part go before the new ones are
+    // made (their memory is reused).
+    let earlier = std::mem::replace(contacts, Contacts::empty());
+    let mut counts = Contacts::empty();
+    counts.add_counts(&earlier);
+    drop(earlier);
+    let before = std::mem::take(&mut part.whole_bodies);
+    *part = Part::default();
+    *part = Part::build_placed(comm, model, Placement::Moved(&placed))?;
+    drop(placed);
+    let moved = bodies_moved(comm, &before, part);
+    *contacts = Contacts::new(comm, model, part, restart, mech)?;
+    contacts.add_counts(&counts);
+    let after = thermal_imbalance(comm, part, &contacts.set);
+    balance.set_up_repartition(moved, ratio, after, clock.elapsed().as_secs_f64());
+    super::summary::trace_memory(comm.rank(), "contacts after the set-up repartition");
+    Ok(())
 }
 
 /// Collective. How many whole bodies changed rank from `before` (this

@@ -147,6 +147,7 @@ fn main() -> ExitCode {
     let result = match Petsc::init(&world, &petsc_args) {
         Err(e) => Err(Error::from(e)),
         Ok(petsc) => {
+            fdem::run::allocator_settings();
             let r = dispatch(&cli.command, &petsc, &world);
             drop(petsc);
             r

@@ -16,7 +16,7 @@ use nalgebra::Matrix3;
 
 use super::domain::PairTet;
 use super::{ExplicitDomain, NONE};
-use crate::contact::penalty::pair_stiffness;
+use crate::contact::penalty::{pair_stiffness, LinearizedOverlap};
 use crate::contact::{
     tet_pair_contact, ContactPair, OwnAndGhosts, PairDofs, SearchOptions, TetFaces,
 };
@@ -122,13 +122,13 @@ impl TetRecord {
     }
 }
 
-/// A penalty pair as it travels: its two tets, stiffness and reduced mass.
-#[derive(Debug, Clone, Copy)]
-struct PairRecord {
-    a: TetRecord,
-    b: TetRecord,
-    stiffness: f64,
-    reduced_mass: f64,
+/// The penalty pairs other ranks passed this one: their tets (each once
+/// per source rank) and, per pair, its two tets' indices in `tets`,
+/// stiffness and reduced mass.
+#[derive(Default)]
+struct ReceivedPairs {
+    tets: Vec<TetRecord>,
+    pairs: Vec<(u32, u32, f64, f64)>,
 }
 
 /// Local index of a node of the part by global id (`gids`: owned ones
@@ -165,6 +165,7 @@ impl ExplicitDomain {
     /// kept alive through the search they would add to its peak (about a
     /// fifth of a busy rank's memory in a deposition).
     fn release_pair_arrays(&mut self) {
+        self.send_buf = Vec::new();
         self.candidates = Vec::new();
         self.contrib = Vec::new();
         self.gather_slot = Vec::new();
@@ -176,12 +177,21 @@ impl ExplicitDomain {
         self.witness = Vec::new();
     }
 
+    /// Room for the linearised overlaps of the coming substeps: a quarter
+    /// more than the last detection's pairs used (about as many pairs
+    /// touch from one detection to the next), so the array is not
+    /// doubled, old and new at once, while the substeps fill it.
+    fn linearized_room(&self, used_before: usize) -> Vec<LinearizedOverlap> {
+        Vec::with_capacity(used_before + used_before / 4)
+    }
+
     /// Collective. Rebuild the contact candidates from the one contact
     /// search over this rank's tets and the ghost copies of the tets of
     /// other ranks within the margin, the contact ghosts and the halo;
     /// reorder elements so those touching the halo come first.
     pub(super) fn detect(&mut self, comm: &SimpleCommunicator) -> Result<()> {
         let clock = std::time::Instant::now();
+        let linearized_before = self.linearized.len();
         self.release_pair_arrays();
         self.thermal_only.clear();
         self.margin = self.adapted_margin(comm);
@@ -223,6 +233,7 @@ impl ExplicitDomain {
         self.pair_planes = vec![TetPlanes::new(&[[0.0; 3]; 4]); nt];
         self.planes_stamp = vec![0; nt];
         self.lin_of = vec![super::NONE; self.candidates.len()];
+        self.linearized = self.linearized_room(linearized_before);
         self.witness = vec![0; self.candidates.len()];
         let ghosts: Vec<(u32, u32, u32)> = (self.n_owned..self.node_gid.len())
             .map(|l| (self.node_gid[l], self.node_owner[l], l as u32))
@@ -411,13 +422,13 @@ impl ExplicitDomain {
         og: &OwnAndGhosts,
         kept: &[(u32, u32)],
         weights: &[u64],
-    ) -> (Vec<(u32, u32)>, Vec<PairRecord>) {
+    ) -> (Vec<(u32, u32)>, ReceivedPairs) {
         let size = comm.size() as usize;
         let rank = comm.rank() as usize;
         let mine: u64 = weights.iter().sum();
         self.pair_share = mine as f64;
         if size == 1 {
-            return (kept.to_vec(), Vec::new());
+            return (kept.to_vec(), ReceivedPairs::default());
         }
         let local = [mine as f64, self.element_work];
         let mut all = vec![0.0f64; 2 * size];
@@ -425,7 +436,7 @@ impl ExplicitDomain {
         let found: Vec<f64> = all.iter().step_by(2).copied().collect();
         let total: f64 = found.iter().sum();
         if total == 0.0 {
-            return (kept.to_vec(), Vec::new());
+            return (kept.to_vec(), ReceivedPairs::default());
         }
         let shares = pair_shares(
             &found,
@@ -476,6 +487,7 @@ impl ExplicitDomain {
                 pairs[dest].extend_from_slice(&[sa, sb, stiffness, reduced_mass]);
             }
         }
+        drop(slot);
         let out: Vec<Vec<f64>> = tets
             .into_iter()
             .zip(pairs)
@@ -487,17 +499,18 @@ impl ExplicitDomain {
                 m
             })
             .collect();
-        let mut received = Vec::new();
-        for m in all_to_all(comm, &out).iter().filter(|m| !m.is_empty()) {
+        let mut received = ReceivedPairs::default();
+        for m in all_to_all(comm, out).iter().filter(|m| !m.is_empty()) {
             let nt = m[0] as usize;
             let (t, p) = m[1..].split_at(nt * TET_F64S);
-            let t: Vec<TetRecord> = t.chunks_exact(TET_F64S).map(TetRecord::read).collect();
-            received.extend(p.chunks_exact(PAIR_F64S).map(|r| PairRecord {
-                a: t[r[0] as usize],
-                b: t[r[1] as usize],
-                stiffness: r[2],
-                reduced_mass: r[3],
-            }));
+            let base = received.tets.len() as u32;
+            received
+                .tets
+                .extend(t.chunks_exact(TET_F64S).map(TetRecord::read));
+            received.pairs.extend(
+                p.chunks_exact(PAIR_F64S)
+                    .map(|r| (base + r[0] as u32, base + r[1] as u32, r[2], r[3])),
+            );
         }
         (here, received)
     }
@@ -520,7 +533,7 @@ impl ExplicitDomain {
         &mut self,
         og: &OwnAndGhosts,
         here: &[(u32, u32)],
-        received: &[PairRecord],
+        received: &ReceivedPairs,
         thermal: &[(u32, u32)],
     ) {
         let (np, no) = (self.n_part_nodes, self.n_owned);
@@ -552,7 +565,7 @@ impl ExplicitDomain {
             }
             slot_of[h as usize]
         };
-        let mut candidates: Vec<Candidate> = Vec::with_capacity(here.len() + received.len());
+        let mut candidates: Vec<Candidate> = Vec::with_capacity(here.len() + received.pairs.len());
         for &(a, b) in here {
             let r = self.pair_record_values(og, a, b);
             let (ta, tb) = (slot(self, a, &mut pt), slot(self, b, &mut pt));
@@ -569,7 +582,8 @@ impl ExplicitDomain {
         }
         // Pairs from other ranks: their tets by global id.
         let mut by_gid: HashMap<u32, u32> = HashMap::new();
-        for p in received {
+        for &(a, b, stiffness, reduced_mass) in &received.pairs {
+            let (a, b) = (&received.tets[a as usize], &received.tets[b as usize]);
             let mut tslot = |dom: &mut ExplicitDomain, t: &TetRecord| -> u32 {
                 *by_gid.entry(t.info.gid).or_insert_with(|| {
                     let nodes = t.nodes.map(|[gid, owner, petsc]| {
@@ -583,16 +597,16 @@ impl ExplicitDomain {
                     pt.push(nodes, t.info)
                 })
             };
-            let (ta, tb) = (tslot(self, &p.a), tslot(self, &p.b));
+            let (ta, tb) = (tslot(self, a), tslot(self, b));
             candidates.push(Candidate {
-                a: p.a.info.gid,
-                b: p.b.info.gid,
+                a: a.info.gid,
+                b: b.info.gid,
                 ta,
                 tb,
-                body_a: p.a.info.body,
-                body_b: p.b.info.body,
-                stiffness: p.stiffness,
-                reduced_mass: p.reduced_mass,
+                body_a: a.info.body,
+                body_b: b.info.body,
+                stiffness,
+                reduced_mass,
             });
         }
         let mut tt = TetSlots::default();

@@ -132,6 +132,9 @@ pub struct ExplicitDomain {
     /// Per halo neighbour: slots sent to it, and where its slots land.
     pub(super) send_slots: Vec<Vec<u32>>,
     pub(super) recv_at: Vec<(usize, usize)>,
+    /// Per neighbour, the buffer its ghost contributions are packed into
+    /// each substep (kept: the same sizes every substep of a detection).
+    pub(super) send_buf: Vec<Vec<f64>>,
     /// Owned velocities before the last substep (v^{n−½}), for energies at t_n.
     pub(super) v_prev: Vec<Vector3<f64>>,
     /// Time step (s).
@@ -322,6 +325,7 @@ impl ExplicitDomain {
             gather_slot: Vec::new(),
             send_slots: Vec::new(),
             recv_at: Vec::new(),
+            send_buf: Vec::new(),
             dt,
             gravity: Vector3::from(mm.gravity),
             damping: mm.damping,

@@ -197,23 +197,20 @@ impl ExplicitDomain {
             Err(e) => elem_error = Some((e, 0)),
         }
         // Ghost contributions, one by one, to their owners.
-        let send: Vec<Vec<f64>> = self
-            .send_slots
-            .iter()
-            .map(|slots| {
-                let mut buf = Vec::with_capacity(3 * slots.len());
-                for &s in slots {
-                    let s = s as usize;
-                    let f = if s < pair_base {
-                        f_b[s / 4][s % 4]
-                    } else {
-                        rest[s - pair_base]
-                    };
-                    buf.extend_from_slice(&[f.x, f.y, f.z]);
-                }
-                buf
-            })
-            .collect();
+        let mut send = std::mem::take(&mut self.send_buf);
+        send.resize(self.send_slots.len(), Vec::new());
+        for (buf, slots) in send.iter_mut().zip(&self.send_slots) {
+            buf.clear();
+            for &s in slots {
+                let s = s as usize;
+                let f = if s < pair_base {
+                    f_b[s / 4][s % 4]
+                } else {
+                    rest[s - pair_base]
+                };
+                buf.extend_from_slice(&[f.x, f.y, f.z]);
+            }
+        }
         // Contributions from the neighbours land in place, after the pairs'.
         let recv_base = self
             .recv_at
@@ -243,6 +240,7 @@ impl ExplicitDomain {
                 Some(s_i),
             );
         });
+        self.send_buf = send;
         match inner {
             Ok(w) => strain += w,
             Err(e) => {

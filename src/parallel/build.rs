@@ -167,7 +167,7 @@ impl Part {
             send[r as usize].extend_from_slice(id);
         }
         let mut held: std::collections::BTreeMap<u32, Held> = Default::default();
-        for rec in all_to_all(comm, &send)
+        for rec in all_to_all(comm, send)
             .iter()
             .flat_map(|v| v.chunks_exact(2))
         {
@@ -339,7 +339,7 @@ fn number(comm: &SimpleCommunicator, m: Made) -> Part {
             ask[g as usize % size].push(g);
         }
     }
-    let asked = all_to_all(comm, &ask);
+    let asked = all_to_all(comm, ask);
     let mut holders: HashMap<u32, Vec<u32>> = HashMap::new();
     for (r, list) in asked.iter().enumerate() {
         for &g in list {
@@ -354,7 +354,7 @@ fn number(comm: &SimpleCommunicator, m: Made) -> Part {
         }
     }
     let mut owner_of: HashMap<u32, u32> = HashMap::new();
-    for rec in all_to_all(comm, &reply)
+    for rec in all_to_all(comm, reply)
         .iter()
         .flat_map(|v| v.chunks_exact(2))
     {
@@ -389,7 +389,7 @@ fn number(comm: &SimpleCommunicator, m: Made) -> Part {
         }
     }
     let mut forward: Vec<Vec<u32>> = vec![Vec::new(); size];
-    for rec in all_to_all(comm, &tell)
+    for rec in all_to_all(comm, tell)
         .iter()
         .flat_map(|v| v.chunks_exact(2))
     {
@@ -397,7 +397,7 @@ fn number(comm: &SimpleCommunicator, m: Made) -> Part {
             forward[h as usize].extend_from_slice(rec);
         }
     }
-    for rec in all_to_all(comm, &forward)
+    for rec in all_to_all(comm, forward)
         .iter()
         .flat_map(|v| v.chunks_exact(2))
     {

@@ -17,9 +17,39 @@ fn displacements(counts: &[i32]) -> Vec<i32> {
         .collect()
 }
 
+/// What every rank sent here, one list per source rank, in one array
+/// (not one allocation per list).
+pub struct Received<T> {
+    data: Vec<T>,
+    start: Vec<usize>,
+}
+
+impl<T> Received<T> {
+    /// The lists by source rank.
+    pub fn iter(&self) -> impl Iterator<Item = &[T]> + '_ {
+        self.start.windows(2).map(|w| &self.data[w[0]..w[1]])
+    }
+}
+
+impl<T> std::ops::Index<usize> for Received<T> {
+    type Output = [T];
+    fn index(&self, r: usize) -> &[T] {
+        &self.data[self.start[r]..self.start[r + 1]]
+    }
+}
+
+impl<'a, T> IntoIterator for &'a Received<T> {
+    type Item = &'a [T];
+    type IntoIter = Box<dyn Iterator<Item = &'a [T]> + 'a>;
+    fn into_iter(self) -> Self::IntoIter {
+        Box::new(self.iter())
+    }
+}
+
 /// Collective. `send[r]` goes to rank r; returns what each rank sent here,
-/// by source rank.
-pub fn all_to_all<T, C>(comm: &C, send: &[Vec<T>]) -> Vec<Vec<T>>
+/// by source rank. Each list is freed as it is packed, so the exchange
+/// holds about one copy of what is sent and one of what is received.
+pub fn all_to_all<T, C>(comm: &C, send: Vec<Vec<T>>) -> Received<T>
 where
     T: Equivalence + Copy + Default,
     C: Communicator,
@@ -35,16 +65,18 @@ where
             .map(|(_, v)| std::mem::size_of_val(&v[..]))
             .sum(),
     );
-    let flat: Vec<T> = send.iter().flatten().copied().collect();
-    let (recv, recv_counts) = all_to_all_flat(comm, &flat, &send_counts);
-    drop(flat);
-    let mut out = Vec::with_capacity(size);
-    let mut at = 0usize;
-    for &c in &recv_counts {
-        out.push(recv[at..at + c as usize].to_vec());
-        at += c as usize;
+    let mut flat: Vec<T> = Vec::with_capacity(send_counts.iter().map(|&c| c as usize).sum());
+    for list in send {
+        flat.extend_from_slice(&list);
     }
-    out
+    let (data, recv_counts) = all_to_all_flat(comm, &flat, &send_counts);
+    drop(flat);
+    let mut start = Vec::with_capacity(size + 1);
+    start.push(0usize);
+    for &c in &recv_counts {
+        start.push(start.last().copied().unwrap_or(0) + c as usize);
+    }
+    Received { data, start }
 }
 
 /// Collective. `flat` holds the lists for ranks 0, 1, … one after the
@@ -182,7 +214,7 @@ pub fn from_blocks<C: Communicator>(
     for &g in ids {
         ask[block_owner(u64::from(g), total, size)].push(g);
     }
-    let asked = all_to_all(comm, &ask);
+    let asked = all_to_all(comm, ask);
     let reply: Vec<Vec<f64>> = asked
         .iter()
         .map(|list| {
@@ -194,7 +226,7 @@ pub fn from_blocks<C: Communicator>(
                 .collect()
         })
         .collect();
-    let got = all_to_all(comm, &reply);
+    let got = all_to_all(comm, reply);
     // Replies come per block owner in the order asked.
     let mut next = vec![0usize; size];
     let mut out = Vec::with_capacity(ids.len() * width);

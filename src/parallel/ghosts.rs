@@ -135,7 +135,7 @@ pub fn exchange_ghosts<C: Communicator>(
             }
         }
     }
-    let offered = all_to_all(comm, &send);
+    let offered = all_to_all(comm, send);
     // 3. Requests for the offered pieces near own pieces of other bodies,
     //    each with the box of those own pieces (the owner sends only the
     //    tets near it).
@@ -155,7 +155,7 @@ pub fn exchange_ghosts<C: Communicator>(
             }
         }
     }
-    let asked = all_to_all(comm, &requests);
+    let asked = all_to_all(comm, requests);
     // 4. The tets asked for, each piece's nodes once: per piece a header
     //    (nodes, tets), its nodes (gid, owner, PETSc number, boundary,
     //    x, y, z), then its tets (gid, body, material, mask, volume, and
@@ -229,8 +229,8 @@ pub fn exchange_ghosts<C: Communicator>(
         }
     }
     drop(local_of);
-    let received = all_to_all(comm, &data);
-    drop(data);
+    let received = all_to_all(comm, data);
+
     // Assemble, each node once.
     let mut nodes: Vec<[f64; NODE]> = Vec::new();
     let mut g = ContactTets::default();

@@ -190,7 +190,7 @@ impl Part {
                 }
             }
         }
-        let received = super::exchange::all_to_all(comm, &ghost_terms);
+        let received = super::exchange::all_to_all(comm, ghost_terms);
         for rec in received.iter().flat_map(|r| r.chunks_exact(3)) {
             let l = self
                 .local_node(rec[0] as u32)
@@ -210,7 +210,7 @@ impl Part {
         for l in self.n_owned..self.node_gid.len() {
             ask[self.node_owner[l] as usize].push(self.node_gid[l]);
         }
-        let asked = super::exchange::all_to_all(comm, &ask);
+        let asked = super::exchange::all_to_all(comm, ask);
         let mut shared = vec![false; self.n_owned];
         for &g in asked.iter().flatten() {
             if let Some(l) = self.local_node(g) {

@@ -170,7 +170,7 @@ fn to_body_blocks(
             work,
         ]);
     }
-    all_to_all(comm, &send)
+    all_to_all(comm, send)
         .iter()
         .flat_map(|v| v.chunks_exact(5))
         .map(|r| (r[0] as u32, ([r[1], r[2], r[3]], r[4])))

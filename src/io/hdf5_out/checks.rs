@@ -1,0 +1,145 @@
+//! Checks that every rank of a collective write passes the same thing
+//! (names, shapes, times: an FNV-1a signature agreed over the ranks), that
+//! the row blocks tile the global arrays, and that a mesh part is sound;
+//! and the agreement on a local step's outcome.
+
+use std::path::Path;
+
+use mpi::collective::SystemOperation;
+use mpi::topology::SimpleCommunicator;
+use mpi::traits::{Communicator, CommunicatorCollectives};
+
+use super::super::IoError;
+use super::MeshPart;
+
+/// FNV-1a, used to check that all ranks pass the same names, shapes and times.
+#[derive(Clone, Copy)]
+pub(super) struct Fnv(pub(super) u64);
+
+impl Fnv {
+    pub(super) fn new() -> Self {
+        Self(0xcbf2_9ce4_8422_2325)
+    }
+    pub(super) fn bytes(mut self, b: &[u8]) -> Self {
+        for &x in b {
+            self.0 ^= u64::from(x);
+            self.0 = self.0.wrapping_mul(0x0100_0000_01b3);
+        }
+        self
+    }
+    pub(super) fn u64(self, v: u64) -> Self {
+        self.bytes(&v.to_le_bytes())
+    }
+    pub(super) fn str(self, s: &str) -> Self {
+        self.u64(s.len() as u64).bytes(s.as_bytes())
+    }
+}
+
+/// Agrees on the outcome of a local step: returns the local error, or
+/// [`IoError::OtherRank`] if this rank succeeded but another did not.
+pub(super) fn agree<T>(
+    comm: &SimpleCommunicator,
+    path: &Path,
+    what: &str,
+    local: Result<T, IoError>,
+) -> Result<T, IoError> {
+    let ok = i32::from(local.is_ok());
+    let mut all_ok = 0_i32;
+    comm.all_reduce_into(&ok, &mut all_ok, SystemOperation::min());
+    match local {
+        Err(e) => Err(e),
+        Ok(_) if all_ok == 0 => Err(IoError::OtherRank {
+            path: path.to_path_buf(),
+            what: what.to_string(),
+        }),
+        Ok(v) => Ok(v),
+    }
+}
+
+/// Like [`agree`], and also checks that every rank passed the same `signature`.
+pub(super) fn agree_signature(
+    comm: &SimpleCommunicator,
+    path: &Path,
+    what: &str,
+    local: Result<(), IoError>,
+    signature: u64,
+) -> Result<(), IoError> {
+    let mine = [u64::from(local.is_ok()), signature];
+    let mut all = vec![0_u64; 2 * comm.size() as usize];
+    comm.all_gather_into(&mine[..], &mut all[..]);
+    local?;
+    if all.chunks(2).any(|r| r[0] == 0) {
+        return Err(IoError::OtherRank {
+            path: path.to_path_buf(),
+            what: what.to_string(),
+        });
+    }
+    if all.chunks(2).any(|r| r[1] != signature) {
+        return Err(IoError::invalid(
+            path,
+            format!("{what}: ranks passed different names, component counts or times"),
+        ));
+    }
+    Ok(())
+}
+
+/// Checks that the non-empty blocks `(offset, count)` tile `0..global` exactly.
+pub(super) fn check_tiling(
+    kind: &str,
+    global: u64,
+    mut blocks: Vec<(u64, u64)>,
+) -> Result<(), String> {
+    blocks.retain(|b| b.1 > 0);
+    blocks.sort_unstable();
+    let mut next = 0_u64;
+    for (offset, count) in blocks {
+        if offset != next {
+            return Err(format!(
+                "{kind} blocks of the ranks do not tile 0..{global}: expected a block at row {next}, found one at {offset}"
+            ));
+        }
+        next = offset + count;
+    }
+    if next != global {
+        return Err(format!(
+            "{kind} blocks of the ranks cover 0..{next}, but the global count is {global}"
+        ));
+    }
+    Ok(())
+}
+
+/// Local checks of a mesh part (no communication).
+pub(super) fn check_mesh_local(mesh: &MeshPart) -> Result<(), String> {
+    let n = mesh.coords.len() as u64;
+    let e = mesh.cells.len() as u64;
+    if mesh
+        .node_offset
+        .checked_add(n)
+        .is_none_or(|end| end > mesh.global_nodes)
+    {
+        return Err(format!(
+            "owned nodes {}..{}+{n} exceed global_nodes = {}",
+            mesh.node_offset, mesh.node_offset, mesh.global_nodes
+        ));
+    }
+    if mesh
+        .cell_offset
+        .checked_add(e)
+        .is_none_or(|end| end > mesh.global_cells)
+    {
+        return Err(format!(
+            "owned cells {}..{}+{e} exceed global_cells = {}",
+            mesh.cell_offset, mesh.cell_offset, mesh.global_cells
+        ));
+    }
+    for (i, cell) in mesh.cells.iter().enumerate() {
+        if let Some(&bad) = cell.iter().find(|&&v| u64::from(v) >= mesh.global_nodes) {
+            return Err(format!(
+                "cell {} refers to node {bad}, but global_nodes = {}",
+                mesh.cell_offset + i as u64,
+                mesh.global_nodes
+            ));
+        }
+    }
+    Ok(())
+}

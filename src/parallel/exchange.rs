@@ -57,14 +57,6 @@ where
     let size = comm.size() as usize;
     assert_eq!(send.len(), size, "one send list per rank");
     let send_counts: Vec<i32> = send.iter().map(|v| v.len() as i32).collect();
-    let me = comm.rank() as usize;
-    super::count_sent(
-        send.iter()
-            .enumerate()
-            .filter(|&(r, _)| r != me)
-            .map(|(_, v)| std::mem::size_of_val(&v[..]))
-            .sum(),
-    );
     let mut flat: Vec<T> = Vec::with_capacity(send_counts.iter().map(|&c| c as usize).sum());
     for list in send {
         flat.extend_from_slice(&list);
@@ -90,6 +82,15 @@ where
 {
     let size = comm.size() as usize;
     assert_eq!(send_counts.len(), size, "one send count per rank");
+    let me = comm.rank() as usize;
+    super::count_sent(
+        send_counts
+            .iter()
+            .enumerate()
+            .filter(|&(r, _)| r != me)
+            .map(|(_, &c)| c as usize * std::mem::size_of::<T>())
+            .sum(),
+    );
     let mut recv_counts = vec![0i32; size];
     comm.all_to_all_into(send_counts, &mut recv_counts[..]);
     let total: usize = recv_counts.iter().map(|&c| c as usize).sum();
@@ -179,14 +180,6 @@ pub fn to_blocks<C: Communicator>(
         *p += width + 1;
     }
     drop(owners);
-    super::count_sent(
-        counts
-            .iter()
-            .enumerate()
-            .filter(|&(r, _)| r != me)
-            .map(|(_, &c)| c as usize * std::mem::size_of::<f64>())
-            .sum(),
-    );
     let (got, _) = all_to_all_flat(comm, &flat, &counts);
     drop(flat);
     let (lo, hi) = block(total, size, me);

@@ -3,7 +3,8 @@
 //! and moving, with a temperature field (thermal split active).
 //! Run: cargo run --release --example mech_kernel_bench [cells_per_side] [repetitions]
 
-use std::time::Instant;
+#[path = "common/timing.rs"]
+mod timing;
 
 use fdem::mechanics::explicit::{internal_forces, mesh_elements, ThermalLoad};
 use fdem::mechanics::ElasticMaterial;
@@ -45,7 +46,7 @@ fn main() {
         rate: None,
     };
     // Headline figure: viscous material, no stress output.
-    let (best, cpu) = time_best(reps, || {
+    let (best, cpu) = timing::time_best(reps, || {
         f.iter_mut().for_each(|x| *x = Vector3::zeros());
         internal_forces(&elems, &[mat], &x, &v, thermal, &mut f, None).expect("forces");
     });
@@ -55,32 +56,18 @@ fn main() {
         viscosity: 0.0,
         ..mat
     };
-    let (best, cpu) = time_best(reps, || {
+    let (best, cpu) = timing::time_best(reps, || {
         f.iter_mut().for_each(|x| *x = Vector3::zeros());
         internal_forces(&elems, &[elastic], &x, &v, thermal, &mut f, None).expect("forces");
     });
     report("  viscosity 0", elems.len(), reps, best, cpu);
     let mut stress = vec![Matrix3::zeros(); elems.len()];
-    let (best, cpu) = time_best(reps, || {
+    let (best, cpu) = timing::time_best(reps, || {
         f.iter_mut().for_each(|x| *x = Vector3::zeros());
         internal_forces(&elems, &[mat], &x, &v, thermal, &mut f, Some(&mut stress))
             .expect("forces");
     });
     report("  with stresses", elems.len(), reps, best, cpu);
-}
-
-/// Best wall-clock time and best on-CPU time (s) of `reps` calls of `run`.
-fn time_best(reps: usize, mut run: impl FnMut()) -> (f64, Option<f64>) {
-    let (mut best, mut cpu) = (f64::MAX, None::<f64>);
-    for _ in 0..reps {
-        let (t0, c0) = (Instant::now(), thread_cpu_time());
-        run();
-        best = best.min(t0.elapsed().as_secs_f64());
-        if let (Some(c0), Some(c1)) = (c0, thread_cpu_time()) {
-            cpu = Some(cpu.map_or(c1 - c0, |c| c.min(c1 - c0)));
-        }
-    }
-    (best, cpu)
 }
 
 fn report(what: &str, tets: usize, reps: usize, best: f64, cpu: Option<f64>) {
@@ -94,28 +81,4 @@ fn report(what: &str, tets: usize, reps: usize, best: f64, cpu: Option<f64>) {
         Some(c) => println!(" (on-CPU: {:.2} M/s)", tets as f64 / c / 1e6),
         None => println!(),
     }
-}
-
-/// Time this thread has spent on a CPU (s), from
-/// `clock_gettime(CLOCK_THREAD_CPUTIME_ID)` (ns resolution); `None` off 64-bit Linux.
-#[cfg(all(target_os = "linux", target_pointer_width = "64"))]
-fn thread_cpu_time() -> Option<f64> {
-    #[repr(C)]
-    struct Timespec {
-        sec: i64,
-        nsec: i64,
-    }
-    extern "C" {
-        fn clock_gettime(clock: i32, ts: *mut Timespec) -> i32;
-    }
-    const CLOCK_THREAD_CPUTIME_ID: i32 = 3;
-    let mut ts = Timespec { sec: 0, nsec: 0 };
-    // SAFETY: `ts` is a valid, writable timespec (two 64-bit fields on 64-bit Linux).
-    let rc = unsafe { clock_gettime(CLOCK_THREAD_CPUTIME_ID, &mut ts) };
-    (rc == 0).then_some(ts.sec as f64 + ts.nsec as f64 * 1e-9)
-}
-
-#[cfg(not(all(target_os = "linux", target_pointer_width = "64")))]
-fn thread_cpu_time() -> Option<f64> {
-    None
 }

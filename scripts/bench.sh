@@ -149,6 +149,11 @@ cargo build --release --example mech_kernel_bench
 kernel_line=$(target/release/examples/mech_kernel_bench)
 echo "$kernel_line" >&2
 
+# Cohesive joint kernel throughput (issue 19).
+cargo build --release --example joint_kernel_bench
+joint_lines=$(target/release/examples/joint_kernel_bench)
+echo "$joint_lines" >&2
+
 {
   echo "# Benchmarks"
   echo
@@ -223,6 +228,14 @@ echo "$kernel_line" >&2
   echo "10 million tet updates per second per core):"
   echo
   echo "- $kernel_line"
+  echo
+  echo "## Joint kernel"
+  echo
+  echo "\`cargo run --release --example joint_kernel_bench\` (the cohesive joints of every"
+  echo "internal face of a 24^3-cell box made discontinuous, advanced together, one core;"
+  echo "issue 19 asks at least 20 million joint updates per second per core):"
+  echo
+  echo "$joint_lines" | sed 's/^/- /'
   echo
   echo "## Commands"
   echo

@@ -17,18 +17,22 @@ fn split(d: Vector3<f64>, n: &Vector3<f64>) -> (f64, f64, Vector3<f64>) {
 /// Unit normal of the joint's mid-surface, from face a towards face b
 /// (the a face's corners are ordered counter-clockwise seen from b).
 fn mid_normal(xa: &[Vector3<f64>; 3], xb: &[Vector3<f64>; 3]) -> Vector3<f64> {
-    let m = |i: usize| 0.5 * (xa[i] + xb[i]);
+    // Twice the mid-points: the normal is the same (scaling by 2 is exact).
+    let m = |i: usize| xa[i] + xb[i];
     let (m0, m1, m2) = (m(0), m(1), m(2));
-    (m1 - m0).cross(&(m2 - m0)).normalize()
+    let c = (m1 - m0).cross(&(m2 - m0));
+    // One division, not three.
+    c * (1.0 / c.norm())
 }
 
 /// Advance one joint to the current positions of its faces' corners `xa`
 /// and `xb` (matching corners, coincident when inserted) and write the
-/// forces on them, `fa` and `fb` (N). `area` is the face's reference area
-/// (m²). The damage follows the relative displacement of the centroids;
-/// the tractions act at the three corner pairs with a third of the area
-/// each (nodal integration, exact for a uniform opening). A broken joint
-/// exerts no force.
+/// forces on them, `fa` and `fb` (N); returns the elastic energy it stores
+/// after the step (J, [`joint_energy`] from the same displacements).
+/// `area` is the face's reference area (m²). The damage follows the
+/// relative displacement of the centroids; the tractions act at the three
+/// corner pairs with a third of the area each (nodal integration, exact
+/// for a uniform opening). A broken joint exerts no force.
 pub fn joint_forces(
     law: &CohesiveLaw,
     area: f64,
@@ -37,31 +41,39 @@ pub fn joint_forces(
     st: &mut JointState,
     fa: &mut [Vector3<f64>; 3],
     fb: &mut [Vector3<f64>; 3],
-) {
+) -> f64 {
     *fa = [Vector3::zeros(); 3];
     *fb = [Vector3::zeros(); 3];
     if st.broken.is_some() {
-        return;
+        return 0.0;
     }
     let n = mid_normal(xa, xb);
-    let mean = (0..3).map(|i| xb[i] - xa[i]).sum::<Vector3<f64>>() / 3.0;
-    let (dn, s, _) = split(mean, &n);
-    law.update(dn, s, st);
+    let d = [xb[0] - xa[0], xb[1] - xa[1], xb[2] - xa[2]];
+    let mean = (d[0] + d[1] + d[2]) * (1.0 / 3.0);
+    let dn = mean.dot(&n);
+    law.update_squared(dn, (mean - n * dn).norm_squared(), st);
     if st.broken.is_some() {
-        return;
+        return 0.0;
     }
     let w = area / 3.0;
-    for i in 0..3 {
-        let (dn, s, sv) = split(xb[i] - xa[i], &n);
-        let (tn, ts) = law.traction(dn, s, st.damage);
-        let mut t = n * tn;
-        if s > 0.0 {
-            t += sv * (ts / s);
-        }
+    // Shear stiffness left, (1 − D) k: the shear traction is that times the
+    // sliding vector (its length and direction at once, no square root).
+    let ks = (1.0 - st.damage) * law.k;
+    let mut stored = 0.0;
+    for (i, d) in d.iter().enumerate() {
+        let dn = d.dot(&n);
+        let sv = d - n * dn;
+        // Opening is softened by 1 − D, compression is the undamaged
+        // penalty ([`CohesiveLaw::traction`], [`CohesiveLaw::stored`]).
+        let kn = if dn > 0.0 { ks } else { law.k };
+        let t = n * (kn * dn) + sv * ks;
         // The traction resists the separation: b is pulled back to a, a to b.
-        fb[i] = -t * w;
-        fa[i] = t * w;
+        let tw = t * w;
+        fb[i] = -tw;
+        fa[i] = tw;
+        stored += kn * dn * dn + ks * sv.norm_squared();
     }
+    0.5 * stored * w
 }
 
 /// Elastic energy stored in an intact joint at the current positions (J).
@@ -127,7 +139,7 @@ mod tests {
         let xb = xa.map(|p| p + Vector3::new(0.3 * d, 0.0, d));
         let mut st = JointState::default();
         let (mut fa, mut fb) = ([Vector3::zeros(); 3], [Vector3::zeros(); 3]);
-        joint_forces(&law, area, &xa, &xb, &mut st, &mut fa, &mut fb);
+        let stored = joint_forces(&law, area, &xa, &xb, &mut st, &mut fa, &mut fb);
         let total: Vector3<f64> = fa.iter().chain(&fb).sum();
         assert!(total.norm() < 1e-9 * fa[0].norm());
         // Each b corner is pulled back by k δ area / 3 (no damage yet).
@@ -137,6 +149,7 @@ mod tests {
         }
         // Stored energy ½ k |δ|² A.
         let e = joint_energy(&law, area, &xa, &xb, &st);
+        assert!((stored / e - 1.0).abs() < 1e-12, "{stored} vs {e}");
         let want = 0.5 * law.k * (d * d * 1.09) * area;
         assert!((e / want - 1.0).abs() < 1e-9);
     }

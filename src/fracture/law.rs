@@ -81,7 +81,13 @@ impl FractureMaterial {
                 self.g_ii, peak_ii
             ));
         }
-        Ok(CohesiveLaw {
+        Ok(self.unchecked_law(h))
+    }
+
+    /// The law of a joint of size `h` without the snap-back check.
+    pub(crate) fn unchecked_law(&self, h: f64) -> CohesiveLaw {
+        let k = self.penalty / h;
+        CohesiveLaw {
             k,
             ft: self.tensile_strength,
             c: self.cohesion,
@@ -89,7 +95,8 @@ impl FractureMaterial {
             g_i: self.g_i,
             g_ii: self.g_ii,
             eta: self.bk_exponent,
-        })
+            min_strength2: self.tensile_strength.min(self.cohesion).powi(2),
+        }
     }
 }
 
@@ -104,6 +111,10 @@ pub struct CohesiveLaw {
     g_i: f64,
     g_ii: f64,
     eta: f64,
+    /// The square of the smaller strength, min(f_t, c)² (Pa²): below the
+    /// onset displacement min(f_t, c) / k no mixity or compression damages
+    /// the joint.
+    min_strength2: f64,
 }
 
 /// How a joint broke.
@@ -159,9 +170,17 @@ struct Envelope {
 }
 
 impl CohesiveLaw {
+    /// The same law for a joint of another size: stiffness `k` (Pa/m).
+    /// A [`super::set::JointSet`] keeps one law per material and one
+    /// stiffness per joint.
+    #[inline]
+    pub fn with_stiffness(&self, k: f64) -> CohesiveLaw {
+        CohesiveLaw { k, ..*self }
+    }
+
     /// The envelope at normal opening `dn` (m, > 0 opens) and sliding `s`
     /// (m, >= 0).
-    fn envelope(&self, dn: f64, s: f64) -> Envelope {
+    fn envelope(&self, dn: f64, s2: f64) -> Envelope {
         if dn < 0.0 {
             // Mohr–Coulomb under compression: τ_0 = c + σ_n tan φ, pure sliding.
             let sigma = -self.k * dn;
@@ -172,10 +191,10 @@ impl CohesiveLaw {
                 mixity: 1.0,
             };
         }
-        let l2 = dn * dn + s * s;
+        let l2 = dn * dn + s2;
         // Camanho–Dávila: B = δ_s² / (δ_s² + δ_n²), the shear share of the energy.
-        let b = if l2 > 0.0 { s * s / l2 } else { 0.0 };
-        let be = b.powf(self.eta);
+        let b = if l2 > 0.0 { s2 / l2 } else { 0.0 };
+        let be = if self.eta == 1.0 { b } else { b.powf(self.eta) };
         let (n0, nf) = (self.ft / self.k, 2.0 * self.g_i / self.ft);
         let (s0, sf) = (self.c / self.k, 2.0 * self.g_ii / self.c);
         // Camanho–Dávila onset δ_0² = δ_n0² + (δ_s0² − δ_n0²) B^η, final δ_f = (δ_n0 δ_nf + (δ_s0 δ_sf − δ_n0 δ_nf) B^η) / δ_0.
@@ -192,12 +211,23 @@ impl CohesiveLaw {
     /// of the joint, adding the energy dissipated on the way (per unit
     /// area), and mark it broken when D reaches 1.
     pub fn update(&self, dn: f64, s: f64, st: &mut JointState) {
+        self.update_squared(dn, s * s, st);
+    }
+
+    /// [`Self::update`] given the square of the sliding, `s2` (m²).
+    pub fn update_squared(&self, dn: f64, s2: f64, st: &mut JointState) {
         if st.broken.is_some() {
             return;
         }
-        let e = self.envelope(dn, s);
         let open = dn.max(0.0);
-        let lam = (open * open + s * s).sqrt();
+        let lam2 = open * open + s2;
+        // Below every onset (the envelope's lies between δ_n0 and δ_s0, and
+        // grows with compression): no new damage, without the envelope.
+        if lam2 * (self.k * self.k) <= self.min_strength2 {
+            return;
+        }
+        let lam = lam2.sqrt();
+        let e = self.envelope(dn, s2);
         let d_trial = if lam <= e.onset {
             0.0
         } else if lam >= e.last {

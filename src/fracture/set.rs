@@ -4,7 +4,7 @@
 //! node positions and places the six forces of each joint in its force sum.
 
 use super::insert::{joint_size, JointFaces};
-use super::joint::{joint_energy, joint_forces};
+use super::joint::joint_forces;
 use super::law::{CohesiveLaw, FractureMaterial, JointState};
 use nalgebra::Vector3;
 
@@ -12,7 +12,11 @@ use nalgebra::Vector3;
 #[derive(Debug, Clone)]
 pub struct JointSet {
     pub faces: Vec<JointFaces>,
-    pub laws: Vec<CohesiveLaw>,
+    /// The material's law (at the first joint's size).
+    pub law: CohesiveLaw,
+    /// Each joint's penalty stiffness p_f / h (Pa/m): the law of joint j
+    /// is `law.with_stiffness(stiffness[j])`.
+    pub stiffness: Vec<f64>,
     pub states: Vec<JointState>,
     /// Time at which each joint broke (s; NaN while intact).
     pub broke_at: Vec<f64>,
@@ -36,21 +40,25 @@ impl JointSet {
     /// size makes the law snap back (its tets and area).
     pub fn new(faces: Vec<JointFaces>, material: &FractureMaterial) -> Result<JointSet, String> {
         material.validate()?;
-        let laws = faces
+        let stiffness = faces
             .iter()
             .map(|f| {
-                material.law(joint_size(f.area)).map_err(|e| {
+                let law = material.law(joint_size(f.area)).map_err(|e| {
                     format!(
                         "joint between tets {} and {} (area {:.3e} m^2): {e}",
                         f.tets[0], f.tets[1], f.area
                     )
-                })
+                })?;
+                Ok(law.k)
             })
             .collect::<Result<Vec<_>, String>>()?;
+        // Only the stiffness depends on a joint's size.
+        let law = material.unchecked_law(1.0);
         let n = faces.len();
         Ok(JointSet {
             faces,
-            laws,
+            law,
+            stiffness,
             states: vec![JointState::default(); n],
             broke_at: vec![f64::NAN; n],
         })
@@ -67,17 +75,21 @@ impl JointSet {
     ) -> JointTotals {
         let mut tot = JointTotals::default();
         for (j, f) in self.faces.iter().enumerate() {
-            let xa = f.a.map(|n| x[n as usize]);
-            let xb = f.b.map(|n| x[n as usize]);
-            let (mut fa, mut fb) = ([Vector3::zeros(); 3], [Vector3::zeros(); 3]);
+            // Gathered element by element (an array `map` here went through
+            // the stack and stalled on store forwarding).
+            let p = |n: u32| x[n as usize];
+            let xa = [p(f.a[0]), p(f.a[1]), p(f.a[2])];
+            let xb = [p(f.b[0]), p(f.b[1]), p(f.b[2])];
             let st = &mut self.states[j];
             let was_broken = st.broken.is_some();
-            joint_forces(&self.laws[j], f.area, &xa, &xb, st, &mut fa, &mut fb);
+            let (fa, fb) = out[j].split_at_mut(3);
+            let fa: &mut [Vector3<f64>; 3] = fa.try_into().expect("three corners");
+            let fb: &mut [Vector3<f64>; 3] = fb.try_into().expect("three corners");
+            let law = self.law.with_stiffness(self.stiffness[j]);
+            tot.stored += joint_forces(&law, f.area, &xa, &xb, st, fa, fb);
             if st.broken.is_some() && !was_broken {
                 self.broke_at[j] = t;
             }
-            out[j] = [fa[0], fa[1], fa[2], fb[0], fb[1], fb[2]];
-            tot.stored += joint_energy(&self.laws[j], f.area, &xa, &xb, st);
             tot.dissipated += st.dissipated * f.area;
             if st.broken.is_some() {
                 tot.broken += 1;

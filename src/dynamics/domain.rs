@@ -148,6 +148,8 @@ pub struct ExplicitDomain {
     /// Per body, this substep: 1 if some pair of it overlaps (any rank).
     pub(super) touching: Vec<u8>,
     pub(super) strain_energy: f64,
+    /// Cohesive joints of the jointed bodies held here.
+    pub(super) joints: super::joints::DomainJoints,
     pub(super) contact_energy: f64,
     pub(super) dissipated: f64,
     pub(super) active_pairs: u64,
@@ -237,6 +239,10 @@ impl ExplicitDomain {
             .unwrap_or(0.5 * min_len_all);
         let n_owned = part.num_owned();
         let np = part.node_gid.len();
+        let joints = crate::parallel::agree(
+            comm,
+            super::joints::DomainJoints::new(model, part, &body_held),
+        )?;
         let mut dom = ExplicitDomain {
             n_owned,
             node_gid: part.node_gid.clone(),
@@ -337,6 +343,7 @@ impl ExplicitDomain {
                 .collect(),
             touching: vec![0; model.bodies.len()],
             strain_energy: 0.0,
+            joints,
             contact_energy: 0.0,
             dissipated: 0.0,
             active_pairs: 0,

@@ -40,12 +40,15 @@
 //!   candidates in a coupled run (`thermal_contacts`);
 //! - `force_sum`: the global-order force summation that makes the
 //!   trajectories bitwise the same on any number of ranks;
-//! - `state`: energies, output fields, checkpoint save and restore.
+//! - `state`: energies, output fields, checkpoint save and restore;
+//! - `joints`: the cohesive joints of the jointed bodies (issue 19),
+//!   whose forces are added to the owned nodes after the force sum.
 
 mod balance;
 mod candidates;
 mod domain;
 mod force_sum;
+mod joints;
 mod state;
 mod substep;
 mod time_step;

@@ -43,6 +43,14 @@ pub struct MechanicsState {
     pub active_pairs: u64,
     /// Candidate pairs.
     pub candidate_pairs: u64,
+    /// Elastic energy stored in the intact cohesive joints (J).
+    pub joint: f64,
+    /// Energy dissipated by joint damage so far (J).
+    pub fracture: f64,
+    /// Broken joints.
+    pub broken_joints: u64,
+    /// Area of the broken joints, one face each (m²).
+    pub crack_area: f64,
 }
 
 /// Counters for the run summary.
@@ -96,8 +104,12 @@ impl ExplicitDomain {
             mom[2],
             self.active_pairs as f64,
             self.candidates.len() as f64,
+            self.joints.totals.stored,
+            self.joints.totals.dissipated,
+            self.joints.totals.broken as f64,
+            self.joints.totals.crack_area,
         ];
-        let mut sum = [0.0; 9];
+        let mut sum = [0.0; 13];
         comm.all_reduce_into(&local[..], &mut sum[..], SystemOperation::sum());
         MechanicsState {
             kinetic: sum[0],
@@ -107,6 +119,10 @@ impl ExplicitDomain {
             momentum: [sum[4], sum[5], sum[6]],
             active_pairs: sum[7] as u64,
             candidate_pairs: sum[8] as u64,
+            joint: sum[9],
+            fracture: sum[10],
+            broken_joints: sum[11] as u64,
+            crack_area: sum[12],
         }
     }
 

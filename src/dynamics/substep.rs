@@ -254,6 +254,11 @@ impl ExplicitDomain {
         self.counters.element_updates += ne as u64;
         // Owned node forces, summed in key order; then the owners advance.
         self.sum_owned_forces();
+        if !self.joints.is_empty() {
+            // Positions at t_n = substeps × Δt.
+            let t = self.counters.substeps as f64 * self.dt;
+            self.joints.add_forces(&self.x, t, &mut self.f);
+        }
         let no = self.n_owned;
         let p = NodeUpdate {
             dt: self.dt,

@@ -46,6 +46,7 @@ pub(super) fn time_step(
     }
     let mut shapes: Vec<(BodyShape, f64)> = Vec::new();
     let mut local_error = None;
+    let joint_w2 = joint_frequencies(model, part);
     for (&b, owned) in &body_elems {
         for &e in owned {
             min_len = min_len.min(characteristic_length(&to_vectors(&mesh.element_coords(e))));
@@ -63,6 +64,9 @@ pub(super) fn time_step(
             None
         }) {
             Some((omega, eta_over_m, m_min)) => {
+                // Joints add their springs: ω² ≤ ω_body² + ω_joints² (both
+                // stiffnesses positive semi-definite over the same masses).
+                let omega = (omega * omega + joint_w2.get(&b).copied().unwrap_or(0.0)).sqrt();
                 dt_local = dt_local.min(stable_step(omega, eta_over_m * omega));
                 if let Some(pn) = pn {
                     // Not numbered in the seeds: a penalty p_n acts like a modulus, Δt ≤ (2/ω) sqrt(M/p_n).
@@ -73,7 +77,16 @@ pub(super) fn time_step(
                 for &e in owned {
                     let xe = to_vectors(&mesh.element_coords(e));
                     let mat = &materials[part.elem_material[e] as usize];
-                    dt_local = dt_local.min(element_critical_dt(&xe, mat));
+                    match joint_w2.get(&b) {
+                        None => dt_local = dt_local.min(element_critical_dt(&xe, mat)),
+                        Some(w2) => {
+                            // Not numbered in the seeds: ω_e = 2c/L, with the joints' ω² added.
+                            let omega_e = 2.0 * mat.p_wave_speed() / characteristic_length(&xe);
+                            let omega = (omega_e * omega_e + w2).sqrt();
+                            let eta_over_m = mat.viscosity / mat.p_wave_modulus();
+                            dt_local = dt_local.min(stable_step(omega, eta_over_m * omega));
+                        }
+                    }
                     if let Some(pn) = pn {
                         // Not numbered in the seeds: a penalty p_n acts like a modulus, Δt ≤ L sqrt(ρ/p_n).
                         dt_local =
@@ -109,6 +122,52 @@ pub(super) fn time_step(
         }
     };
     Ok((dt, substeps, min_len_all))
+}
+
+/// Per jointed body: a bound on the square of the highest frequency of its
+/// joints' springs alone, max over nodes of 2 Σ k_j / m (Gershgorin; each
+/// joint corner pair is an isotropic spring k_j = p_f / h × A / 3, the
+/// node's mass at least ρ V / 4 of its tet).
+fn joint_frequencies(model: &Model, part: &Part) -> std::collections::HashMap<u32, f64> {
+    let mut out = std::collections::HashMap::new();
+    if part.joints.is_empty() {
+        return out;
+    }
+    let mesh = &part.mesh;
+    let nl = part.node_gid.len();
+    let (mut k_sum, mut m_min) = (vec![0.0; nl], vec![f64::INFINITY; nl]);
+    let local_elem = |g: u32| {
+        part.elem_gid
+            .binary_search(&g)
+            .expect("a joint's tet is held")
+    };
+    for j in &part.joints {
+        let f = &j.faces;
+        let Some(fm) = model.materials[j.material as usize].fracture else {
+            continue;
+        };
+        let k = fm.penalty / crate::fracture::insert::joint_size(f.area) * f.area / 3.0;
+        for (side, corners) in [(0, &f.a), (1, &f.b)] {
+            let e = local_elem(f.tets[side]);
+            let m = model.materials[part.elem_material[e] as usize].density
+                * mesh.element_volume(e)
+                / 4.0;
+            for &l in corners {
+                k_sum[l as usize] += k;
+                m_min[l as usize] = f64::min(m_min[l as usize], m);
+            }
+        }
+    }
+    for j in &part.joints {
+        let e = local_elem(j.faces.tets[0]);
+        let body = mesh.body[e];
+        for &l in j.faces.a.iter().chain(&j.faces.b) {
+            let w2 = 2.0 * k_sum[l as usize] / m_min[l as usize];
+            let at = out.entry(body).or_insert(0.0f64);
+            *at = at.max(w2);
+        }
+    }
+    out
 }
 
 /// For a free body of elements `elems` small enough for its exact highest

@@ -139,6 +139,72 @@ pub fn make_discontinuous(nodes: &[[f64; 3]], tets: &[[u32; 4]], in_set: &[bool]
     }
 }
 
+/// A body's mesh made discontinuous on the tets of `in_set`, with its
+/// named sets carried over: a node set holds every copy of its nodes, a
+/// face set the copies on the tet that has the face (the first, for a
+/// face two tets share), element sets are unchanged.
+pub fn jointed_mesh(
+    mesh: &crate::mesh::TetMesh,
+    in_set: &[bool],
+) -> (crate::mesh::TetMesh, Jointed) {
+    let j = make_discontinuous(&mesh.nodes, &mesh.tets, in_set);
+    let mut copies: Vec<Vec<u32>> = vec![Vec::new(); mesh.nodes.len()];
+    for (new, &old) in j.origin.iter().enumerate() {
+        copies[old as usize].push(new as u32);
+    }
+    let node_sets = mesh
+        .node_sets
+        .iter()
+        .map(|(name, nodes)| {
+            let mut v: Vec<u32> = nodes
+                .iter()
+                .flat_map(|&n| copies[n as usize].iter().copied())
+                .collect();
+            v.sort_unstable();
+            (name.clone(), v)
+        })
+        .collect();
+    let mut tet_of_face: HashMap<[u32; 3], u32> = HashMap::new();
+    for (t, tet) in mesh.tets.iter().enumerate() {
+        for loc in FACES {
+            let mut key = loc.map(|l| tet[l]);
+            key.sort_unstable();
+            tet_of_face.entry(key).or_insert(t as u32);
+        }
+    }
+    let face_sets = mesh
+        .face_sets
+        .iter()
+        .map(|(name, faces)| {
+            let v = faces
+                .iter()
+                .map(|f| {
+                    let mut key = *f;
+                    key.sort_unstable();
+                    let t = tet_of_face[&key] as usize;
+                    f.map(|n| {
+                        let k = mesh.tets[t]
+                            .iter()
+                            .position(|&c| c == n)
+                            .expect("a face set's face is a face of a tet");
+                        j.tets[t][k]
+                    })
+                })
+                .collect();
+            (name.clone(), v)
+        })
+        .collect();
+    let out = crate::mesh::TetMesh {
+        nodes: j.nodes.clone(),
+        tets: j.tets.clone(),
+        body: mesh.body.clone(),
+        node_sets,
+        face_sets,
+        elem_sets: mesh.elem_sets.clone(),
+    };
+    (out, j)
+}
+
 /// The size h of a joint for its stiffness p_f / h: the edge of the
 /// equilateral triangle of its area (m).
 pub fn joint_size(area: f64) -> f64 {

@@ -47,7 +47,7 @@ impl FractureMaterial {
         positive("cohesion", self.cohesion)?;
         positive("g_i", self.g_i)?;
         positive("g_ii", self.g_ii)?;
-        positive("penalty", self.penalty)?;
+        positive("fracture_penalty", self.penalty)?;
         positive("bk_exponent", self.bk_exponent)?;
         let phi = self.friction_angle;
         if !(phi.is_finite() && (0.0..std::f64::consts::FRAC_PI_2).contains(&phi)) {
@@ -70,14 +70,14 @@ impl FractureMaterial {
         let peak_i = 0.5 * self.tensile_strength * self.tensile_strength / k;
         if peak_i >= self.g_i {
             return Err(format!(
-                "`g_i` = {} J/m^2 is not above the elastic energy at the peak, f_t^2 h / (2 p_f) = {:.4e} J/m^2 for a joint of size h = {h:.4e} m (snap-back): raise `g_i` or `penalty`",
+                "`g_i` = {} J/m^2 is not above the elastic energy at the peak, f_t^2 h / (2 p_f) = {:.4e} J/m^2 for a joint of size h = {h:.4e} m (snap-back): raise `g_i` or `fracture_penalty`",
                 self.g_i, peak_i
             ));
         }
         let peak_ii = 0.5 * self.cohesion * self.cohesion / k;
         if peak_ii >= self.g_ii {
             return Err(format!(
-                "`g_ii` = {} J/m^2 is not above the elastic energy at the peak, c^2 h / (2 p_f) = {:.4e} J/m^2 for a joint of size h = {h:.4e} m (snap-back): raise `g_ii` or `penalty`",
+                "`g_ii` = {} J/m^2 is not above the elastic energy at the peak, c^2 h / (2 p_f) = {:.4e} J/m^2 for a joint of size h = {h:.4e} m (snap-back): raise `g_ii` or `fracture_penalty`",
                 self.g_ii, peak_ii
             ));
         }

@@ -21,6 +21,17 @@ pub struct SourceMesh {
     pub face_mask: Vec<u8>,
     /// Per node: on the boundary.
     pub boundary_node: Vec<bool>,
+    /// The cohesive joints of a jointed mesh (issue 19).
+    pub joints: Option<SourceJoints>,
+}
+
+/// The joints of a source mesh made discontinuous: faces in its node and
+/// element numbering, and the fracture material (index into the model's
+/// materials).
+#[derive(Debug, Clone)]
+pub struct SourceJoints {
+    pub faces: Vec<crate::fracture::insert::JointFaces>,
+    pub material: u32,
 }
 
 impl SourceMesh {
@@ -32,6 +43,36 @@ impl SourceMesh {
             boundary_node: bt.boundary_node,
             material,
             mesh,
+            joints: None,
+        }
+    }
+
+    /// A source mesh made discontinuous on the tets of `in_set`, tied by
+    /// joints of fracture material `fracture`. Its boundary is the
+    /// continuous mesh's: the joints' faces are not boundary faces while
+    /// intact.
+    pub fn jointed(
+        mesh: TetMesh,
+        material: Vec<u32>,
+        in_set: &[bool],
+        fracture: u32,
+    ) -> SourceMesh {
+        let bt = crate::contact::BoundaryTets::new(&mesh);
+        let (split, j) = crate::fracture::insert::jointed_mesh(&mesh, in_set);
+        drop(mesh);
+        SourceMesh {
+            face_mask: bt.mask,
+            boundary_node: j
+                .origin
+                .iter()
+                .map(|&o| bt.boundary_node[o as usize])
+                .collect(),
+            material,
+            mesh: split,
+            joints: Some(SourceJoints {
+                faces: j.joints,
+                material: fracture,
+            }),
         }
     }
 }
@@ -108,6 +149,8 @@ pub struct BodyMesh<'a> {
     pub boundary_node: std::borrow::Cow<'a, [bool]>,
     /// The source mesh, for its named sets (none for a checkpoint body).
     pub source: Option<&'a TetMesh>,
+    /// Its joints (body-local node and element numbers), if jointed.
+    pub joints: Option<&'a SourceJoints>,
 }
 
 impl super::Model {
@@ -128,6 +171,7 @@ impl super::Model {
                     face_mask: std::borrow::Cow::Borrowed(&src.face_mask),
                     boundary_node: std::borrow::Cow::Borrowed(&src.boundary_node),
                     source: Some(&src.mesh),
+                    joints: src.joints.as_ref(),
                 })
             }
             BodySource::Saved { file, body, offset } => {
@@ -180,6 +224,7 @@ impl super::Model {
                     face_mask: std::borrow::Cow::Owned(src.face_mask),
                     boundary_node: std::borrow::Cow::Owned(src.boundary_node),
                     source: None,
+                    joints: None,
                 })
             }
         }

@@ -11,7 +11,7 @@ mod bcs;
 mod bodies;
 
 pub use bcs::{body_bcs, BodyBcs, MechanicsKind, SetTarget, ThermalKind};
-pub use bodies::{BodyMesh, BodySource, Motion, SourceMesh};
+pub use bodies::{BodyMesh, BodySource, Motion, SourceJoints, SourceMesh};
 
 use crate::contact::DeltaT;
 use crate::error::{Error, Result};
@@ -36,6 +36,8 @@ pub struct Material {
     pub density: f64,
     /// Elastic constants, when the scenario gives them.
     pub elastic: Option<ElasticMaterial>,
+    /// Fracture constants of joints made of it (issue 19).
+    pub fracture: Option<crate::fracture::law::FractureMaterial>,
 }
 
 /// One body: a connected Tet4 mesh region with one material.
@@ -234,6 +236,7 @@ impl Model {
                         expansion: m.expansion,
                         viscosity: m.viscosity,
                     }),
+                fracture: m.fracture().ok().flatten(),
             })
             .collect();
         let material_index = |n: &str| {
@@ -472,6 +475,50 @@ impl Model {
                 }
             }
             let material_vec = mat_of_elem;
+            let source = match &b.fracture {
+                None => SourceMesh::new(m, material_vec),
+                Some(f) => {
+                    let in_set = match &f.set {
+                        None => vec![true; m.tets.len()],
+                        Some(set) => {
+                            let elems = m.elem_sets.get(set).ok_or_else(|| {
+                                let names: Vec<&str> =
+                                    m.elem_sets.keys().map(String::as_str).collect();
+                                model_err(format!(
+                                    "body `{}`: fracture.set: no element set `{set}` in its mesh; available: {}",
+                                    b.name,
+                                    names.join(", ")
+                                ))
+                            })?;
+                            let mut v = vec![false; m.tets.len()];
+                            elems.iter().for_each(|&e| v[e as usize] = true);
+                            v
+                        }
+                    };
+                    let fm = material_index(f.material.as_deref().unwrap_or(&b.material));
+                    let src = SourceMesh::jointed(m, material_vec, &in_set, fm);
+                    // Snap-back is worst at the largest joint (f_t² h / (2 p_f) grows with h).
+                    let largest = src
+                        .joints
+                        .iter()
+                        .flat_map(|j| &j.faces)
+                        .map(|f| f.area)
+                        .fold(0.0, f64::max);
+                    if let Some(law) = materials[fm as usize].fracture {
+                        if largest > 0.0 {
+                            law.law(crate::fracture::insert::joint_size(largest))
+                                .map_err(|e| {
+                                    model_err(format!(
+                                        "body `{}`: material `{}` ({}): {e}",
+                                        b.name, materials[fm as usize].name, "at its largest joint"
+                                    ))
+                                })?;
+                        }
+                    }
+                    src
+                }
+            };
+            let m = &source.mesh;
             // The body itself, its copies on a lattice, or a pack of
             // particles: refused before they are placed if the model would
             // exceed the element limit.
@@ -492,7 +539,7 @@ impl Model {
                 let interior =
                     crate::pack::ContainerInterior::from_spec(&into.mesh, into.translate)
                         .expect("validated");
-                let placed = crate::pack::place(&b.name, &m, p, &interior, &|f| sc.resolve(f))
+                let placed = crate::pack::place(&b.name, m, p, &interior, &|f| sc.resolve(f))
                     .map_err(|msg| model_err(format!("body `{}`: pack: {msg}", b.name)))?;
                 for (name, motion) in placed {
                     let source = BodySource::Mesh { mesh: mi, motion };
@@ -542,7 +589,7 @@ impl Model {
                     ));
                 }
             }
-            meshes.push(SourceMesh::new(m, material_vec));
+            meshes.push(source);
         }
         drop(files);
         let names: Vec<String> = bodies.iter().map(|b| b.name.clone()).collect();
@@ -815,6 +862,11 @@ impl Model {
     /// Whether any body has a prescribed heating.
     pub fn has_heating(&self) -> bool {
         self.bodies.iter().any(|b| b.heating.is_some())
+    }
+
+    /// Whether any body is jointed (issue 19).
+    pub fn has_joints(&self) -> bool {
+        self.meshes.iter().any(|m| m.joints.is_some())
     }
 
     /// Whether any body moves.

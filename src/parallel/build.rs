@@ -215,6 +215,7 @@ fn split_bodies(model: &Model, size: usize) -> Vec<bool> {
             BodySource::Mesh { mesh, .. } => {
                 size > 1
                     && users[mesh as usize] == 1
+                    && model.meshes[mesh as usize].joints.is_none()
                     && (model.mechanics.is_none()
                         || (b.node_range.1 - b.node_range.0) as usize > BODY_EIGEN_MAX_NODES)
             }
@@ -246,6 +247,8 @@ struct Made {
     convection: Vec<([u32; 3], f64, f64)>,
     /// Per node: whether it belongs to a split body.
     shared: Vec<bool>,
+    /// Joints of the jointed bodies (global node and element ids).
+    joints: Vec<super::PartJoint>,
 }
 
 /// Make the bodies and elements `held` by this rank.
@@ -303,6 +306,18 @@ fn make_bodies(
                 m.traction.push(bc.traction[n]);
             }
             m.shared.push(!whole);
+        }
+        if let Some(j) = mesh.joints {
+            debug_assert!(whole, "a jointed body is held whole");
+            m.joints.extend(j.faces.iter().map(|f| super::PartJoint {
+                faces: crate::fracture::insert::JointFaces {
+                    a: f.a.map(|n| n0 + n),
+                    b: f.b.map(|n| n0 + n),
+                    tets: f.tets.map(|e| e0 + e),
+                    area: f.area,
+                },
+                material: j.material,
+            }));
         }
         let here = |f: &[u32; 3]| {
             whole || {
@@ -459,5 +474,17 @@ fn number(comm: &SimpleCommunicator, m: Made) -> Part {
         bc,
         whole: None,
         whole_bodies: Vec::new(),
+        joints: m
+            .joints
+            .iter()
+            .map(|j| super::PartJoint {
+                faces: crate::fracture::insert::JointFaces {
+                    a: j.faces.a.map(l),
+                    b: j.faces.b.map(l),
+                    ..j.faces
+                },
+                material: j.material,
+            })
+            .collect(),
     }
 }

@@ -17,7 +17,7 @@ pub mod rcb;
 
 pub use build::{element_work, Placement, IMBALANCE};
 pub use halo::Halo;
-pub use part::{GlobalBcs, LocalBcs, Part, WholeMaps};
+pub use part::{GlobalBcs, LocalBcs, Part, PartJoint, WholeMaps};
 pub use partition::{
     dual_graph, dual_graph_with, partition_collective, partition_elements,
     partition_elements_weighted,

@@ -69,6 +69,19 @@ pub struct Part {
     /// The bodies this rank holds whole (global ids, ascending): all their
     /// elements and nodes are here and owned here.
     pub whole_bodies: Vec<u32>,
+    /// The cohesive joints of the jointed bodies held (issue 19; a jointed
+    /// body is held whole, so all its joints are here): corners over local
+    /// nodes, tets by global id, in the order of the body's joints.
+    pub joints: Vec<PartJoint>,
+}
+
+/// One cohesive joint of a part.
+#[derive(Debug, Clone, Copy)]
+pub struct PartJoint {
+    /// Corners (local nodes), the two tets (global ids) and the area.
+    pub faces: crate::fracture::insert::JointFaces,
+    /// Fracture material (index into the model's materials).
+    pub material: u32,
 }
 
 /// Per element and node of the whole mesh: its rank and PETSc number.
@@ -413,6 +426,7 @@ impl Part {
                 petsc_of,
             }),
             whole_bodies: Vec::new(),
+            joints: Vec::new(),
         }
     }
 

@@ -112,6 +112,16 @@ impl Output {
             ] {
                 header.push(h.into());
             }
+            if model.has_joints() {
+                for h in [
+                    "joint_energy",
+                    "fracture_energy",
+                    "broken_joints",
+                    "crack_area",
+                ] {
+                    header.push(h.into());
+                }
+            }
         }
         // Per-body columns, or per scenario entry when there are many bodies.
         let moments = body_moments(comm, model, part);
@@ -270,6 +280,14 @@ impl Output {
                 st.active_pairs as f64,
                 st.candidate_pairs as f64,
             ]);
+            if model.has_joints() {
+                row.extend_from_slice(&[
+                    st.joint,
+                    st.fracture,
+                    st.broken_joints as f64,
+                    st.crack_area,
+                ]);
+            }
         }
         if let Some(t) = &t {
             for s in self.groups.reduce(&self.stats.compute(comm, t)) {

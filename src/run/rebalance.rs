@@ -72,7 +72,10 @@ impl Balance {
             .mechanics
             .as_ref()
             .map(|m| m.rebalance)
-            .filter(|r| r.every > 0 && size > 1);
+            .filter(|r| r.every > 0 && size > 1)
+            // Not yet with joints: their damage would not move with the
+            // bodies (a repartition rebuilds the parts from the model).
+            .filter(|_| !model.meshes.iter().any(|m| m.joints.is_some()));
         Balance {
             spec,
             ..Balance::default()

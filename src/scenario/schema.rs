@@ -136,6 +136,43 @@ pub struct MaterialSpec {
     /// Viscous damping η of the stress 2 η D (Pa s, seed 004 eq 35), default 0.
     #[serde(default)]
     pub viscosity: f64,
+    /// Fracture: tensile strength f_t of the joints (Pa).
+    #[serde(default)]
+    pub tensile_strength: Option<f64>,
+    /// Fracture: cohesion c, the shear strength without normal stress (Pa).
+    #[serde(default)]
+    pub cohesion: Option<f64>,
+    /// Fracture: internal friction angle φ (degrees), shear strength
+    /// c + σ_n tan φ under compression.
+    #[serde(default)]
+    pub friction_angle: Option<f64>,
+    /// Fracture: mode I fracture energy G_I (J/m²).
+    #[serde(default)]
+    pub g_i: Option<f64>,
+    /// Fracture: mode II fracture energy G_II (J/m²).
+    #[serde(default)]
+    pub g_ii: Option<f64>,
+    /// Fracture: joint penalty p_f (Pa); a joint of size h has the
+    /// stiffness p_f / h per unit area.
+    #[serde(default)]
+    pub fracture_penalty: Option<f64>,
+    /// Fracture: Benzeggagh–Kenane exponent η of the mixed-mode energy
+    /// G_I + (G_II − G_I) B^η (default 1).
+    #[serde(default)]
+    pub bk_exponent: Option<f64>,
+}
+
+/// Joints that can break (issue 19): the body's tets of `set` made
+/// discontinuous, tied by cohesive joints of `material`'s fracture keys.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FractureSpec {
+    /// Element set of the body's mesh (default: every tet).
+    #[serde(default)]
+    pub set: Option<String>,
+    /// Material with the fracture keys (default: the body's material).
+    #[serde(default)]
+    pub material: Option<String>,
 }
 
 /// One body.
@@ -188,6 +225,10 @@ pub struct BodySpec {
     /// `{ <element set> = "<material>" }` (a bonded multi-material body).
     #[serde(default)]
     pub regions: BTreeMap<String, String>,
+    /// Cohesive joints between the tets of an element set, which break
+    /// (mechanics only, issue 19): `{ set = "...", material = "..." }`.
+    #[serde(default)]
+    pub fracture: Option<FractureSpec>,
 }
 
 /// A prescribed uniform temperature ramp.

@@ -354,6 +354,7 @@ impl Scenario {
         if let Some(m) = &self.mechanics {
             self.validate_mechanics(m)?;
         }
+        self.validate_fracture()?;
         if let Some(r) = self.solver.rtol {
             if !(r > 0.0 && r < 1.0) {
                 return bad("solver.rtol", format!("must be in (0, 1), got {r}"));
@@ -365,6 +366,59 @@ impl Scenario {
                     &format!("output.times[{i}]"),
                     format!("must be non-negative, got {t}"),
                 );
+            }
+        }
+        Ok(())
+    }
+
+    /// The bodies' `fracture` tables and their materials' fracture keys.
+    /// Joints so far run in mechanics without a thermal problem and without
+    /// checkpoints (joint damage is not saved yet).
+    fn validate_fracture(&self) -> Result<(), (String, String)> {
+        for (i, b) in self.bodies.iter().enumerate() {
+            let Some(f) = &b.fracture else { continue };
+            let key = |k: &str| format!("bodies[{i}].fracture{k}");
+            if self.mechanics.is_none() {
+                return Err((key(""), "joints need a [mechanics] table".into()));
+            }
+            if self.has_thermal() {
+                return Err((
+                    key(""),
+                    "joints do not run with a thermal problem yet (mechanics with a \
+                     prescribed `heating` does)"
+                        .into(),
+                ));
+            }
+            if self.output.checkpoint {
+                return Err((
+                    key(""),
+                    "joints cannot be checkpointed yet: set output.checkpoint = false".into(),
+                ));
+            }
+            if matches!(b.mesh, MeshSpec::Checkpoint { .. }) {
+                return Err((key(""), "bodies from a checkpoint cannot be jointed".into()));
+            }
+            let name = f.material.as_deref().unwrap_or(&b.material);
+            let Some(m) = self.materials.iter().position(|m| m.name == name) else {
+                return Err((key(".material"), format!("no material named `{name}`")));
+            };
+            match self.materials[m].fracture() {
+                Ok(Some(_)) => {}
+                Ok(None) => {
+                    return Err((
+                        format!("materials[{m}]"),
+                        format!(
+                            "material `{name}` has no fracture keys (tensile_strength, \
+                             cohesion, friction_angle, g_i, g_ii, fracture_penalty)"
+                        ),
+                    ))
+                }
+                Err((k, msg)) => return Err((format!("materials[{m}].{k}"), msg)),
+            }
+        }
+        for (m, mat) in self.materials.iter().enumerate() {
+            if let Err((k, msg)) = mat.fracture() {
+                return Err((format!("materials[{m}].{k}"), msg));
             }
         }
         Ok(())
@@ -501,5 +555,53 @@ impl Scenario {
             }
         }
         Ok(())
+    }
+}
+
+impl MaterialSpec {
+    /// The fracture constants, when any fracture key is given: all six
+    /// are then needed; errors are (key, message).
+    pub fn fracture(
+        &self,
+    ) -> Result<Option<crate::fracture::law::FractureMaterial>, (String, String)> {
+        let keys = [
+            ("tensile_strength", self.tensile_strength),
+            ("cohesion", self.cohesion),
+            ("friction_angle", self.friction_angle),
+            ("g_i", self.g_i),
+            ("g_ii", self.g_ii),
+            ("fracture_penalty", self.fracture_penalty),
+        ];
+        if keys.iter().all(|(_, v)| v.is_none()) && self.bk_exponent.is_none() {
+            return Ok(None);
+        }
+        let mut v = [0.0; 6];
+        for (slot, (k, value)) in v.iter_mut().zip(keys) {
+            *slot = value.ok_or_else(|| {
+                (
+                    k.to_string(),
+                    format!(
+                        "missing (material `{}`): a fracture material needs tensile_strength, \
+                         cohesion, friction_angle, g_i, g_ii and fracture_penalty",
+                        self.name
+                    ),
+                )
+            })?;
+        }
+        let m = crate::fracture::law::FractureMaterial {
+            tensile_strength: v[0],
+            cohesion: v[1],
+            friction_angle: v[2].to_radians(),
+            g_i: v[3],
+            g_ii: v[4],
+            penalty: v[5],
+            bk_exponent: self.bk_exponent.unwrap_or(1.0),
+        };
+        m.validate().map_err(|msg| {
+            // The law names the key between backquotes.
+            let k = msg.split('`').nth(1).unwrap_or("fracture").to_string();
+            (k, msg)
+        })?;
+        Ok(Some(m))
     }
 }

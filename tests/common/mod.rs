@@ -188,3 +188,66 @@ pub fn assert_within_bounds(r: &Results, lo: f64, hi: f64, what: &str) -> (f64, 
     }
     (tmin, tmax)
 }
+
+/// Mechanical output of a run, nodes by original id.
+pub struct Mech {
+    pub times: Vec<f64>,
+    pub coords: Vec<[f64; 3]>,
+    /// Cells as original node ids, in file order.
+    pub cells: Vec<[usize; 4]>,
+    /// Displacement per output step, by node id.
+    pub disp: Vec<Vec<[f64; 3]>>,
+    /// Cauchy stress (full symmetric 3×3) per output step, in file cell order.
+    pub stress: Vec<Vec<[[f64; 3]; 3]>>,
+    /// Temperature per output step when the thermal problem ran.
+    pub temperature: Vec<Vec<f64>>,
+}
+
+pub fn read_mech(dir: &Path, stem: &str) -> Mech {
+    let h5 = dir.join(format!("{stem}.h5"));
+    let (times, mesh, ids, coords) = read_nodes(&h5);
+    let n = ids.len();
+    let cells = mesh
+        .cells
+        .iter()
+        .map(|c| c.map(|row| ids[row as usize] as usize))
+        .collect();
+    let by_id3 = |v: Vec<f64>| {
+        let mut out = vec![[0.0; 3]; n];
+        for (row, &id) in ids.iter().enumerate() {
+            out[id as usize] = [v[3 * row], v[3 * row + 1], v[3 * row + 2]];
+        }
+        out
+    };
+    let disp = (0..times.len())
+        .map(|k| by_id3(fdem::io::read_node_field_step(&h5, "displacement", k).unwrap()))
+        .collect();
+    // The file holds XDMF Tensor6 rows: xx, xy, xz, yy, yz, zz.
+    let stress = (0..times.len())
+        .map(|k| {
+            fdem::io::read_cell_field_step(&h5, "stress", k)
+                .unwrap()
+                .chunks_exact(6)
+                .map(|c| [[c[0], c[1], c[2]], [c[1], c[3], c[4]], [c[2], c[4], c[5]]])
+                .collect()
+        })
+        .collect();
+    let temperature = (0..times.len())
+        .filter_map(|k| {
+            let t = fdem::io::read_node_field_step(&h5, "temperature", k).ok()?;
+            let mut out = vec![0.0; n];
+            for (row, &id) in ids.iter().enumerate() {
+                out[id as usize] = t[row];
+            }
+            Some(out)
+        })
+        .collect();
+    Mech {
+        times,
+        coords,
+        cells,
+        disp,
+        stress,
+        temperature,
+    }
+}

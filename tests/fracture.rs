@@ -340,3 +340,137 @@ fn bad_fracture_input_names_the_key() {
         assert!(err.contains("fracture-bar.toml"), "{tag}: {err}");
     }
 }
+
+/// Radial cracks of a ring: the points where copies of one mesh node have
+/// parted by more than `open` (m) at output `k`, clustered by angle (runs
+/// of occupied 5° bins); per crack (first angle, r_min, r_max).
+fn radial_cracks(m: &Mech, k: usize, open: f64) -> Vec<(f64, f64, f64)> {
+    let mut groups: std::collections::BTreeMap<[i64; 3], Vec<usize>> = Default::default();
+    for (id, x) in m.coords.iter().enumerate() {
+        groups
+            .entry(x.map(|c| (c * 1e9).round() as i64))
+            .or_default()
+            .push(id);
+    }
+    const BINS: usize = 72;
+    let mut bins: Vec<Option<(f64, f64)>> = vec![None; BINS];
+    for ids in groups.values().filter(|ids| ids.len() > 1) {
+        let at = |i: usize| [0, 1, 2].map(|d| m.coords[i][d] + m.disp[k][i][d]);
+        let mut gap = 0.0f64;
+        for &i in ids {
+            for &j in ids {
+                let (p, q) = (at(i), at(j));
+                gap = gap.max((0..3).map(|d| (p[d] - q[d]).powi(2)).sum::<f64>().sqrt());
+            }
+        }
+        if gap <= open {
+            continue;
+        }
+        let x = m.coords[ids[0]];
+        let (r, th) = (
+            x[0].hypot(x[1]),
+            x[1].atan2(x[0]).rem_euclid(std::f64::consts::TAU),
+        );
+        let b = ((th / std::f64::consts::TAU) * BINS as f64) as usize % BINS;
+        let e = bins[b].get_or_insert((r, r));
+        *e = (e.0.min(r), e.1.max(r));
+    }
+    // Runs of occupied bins, joined across 0°.
+    let start = (0..BINS).find(|&b| bins[b].is_none());
+    let Some(start) = start else {
+        return vec![(0.0, 0.0, f64::INFINITY)];
+    };
+    let mut cracks = Vec::new();
+    let mut run: Option<(f64, f64, f64)> = None;
+    for s in 1..=BINS {
+        let b = (start + s) % BINS;
+        match (bins[b], run.as_mut()) {
+            (Some((lo, hi)), Some(c)) => {
+                c.1 = c.1.min(lo);
+                c.2 = c.2.max(hi);
+            }
+            (Some((lo, hi)), None) => run = Some((b as f64 * 5.0, lo, hi)),
+            (None, _) => cracks.extend(run.take()),
+        }
+    }
+    cracks.extend(run);
+    cracks
+}
+
+/// Issue 19, seed 004 sec 4 (Fig 15, the experiment of Fig 11): a steel
+/// core heated with its concrete ring by 100 °C over 5 ms pushes the ring
+/// apart. Before cracking, the hoop stress follows eq 40 at the current
+/// temperature; then radial cracks start at the interface, at least three,
+/// and at least one reaches the outer boundary.
+#[test]
+fn steel_in_concrete_cracks_radially() {
+    use fdem::validation::thermoelastic::BondedDisc;
+    let out = out_dir("steel-in-concrete-cracking");
+    run_ok(
+        1,
+        &root().join("scenarios/steel-in-concrete-cracking.toml"),
+        &out,
+        &[],
+    );
+    let m = read_mech(&out, "steel-in-concrete-cracking");
+    let (h, rows) = history(&out, "steel-in-concrete-cracking");
+    let broken = col(&h, "broken_joints");
+    let first = rows
+        .iter()
+        .find(|r| r[broken] > 0.0)
+        .map(|r| r[col(&h, "time")])
+        .expect("no joint broke");
+    eprintln!("first broken joint by t = {first:e} s");
+    // Eq 40 at an output before any joint broke, where the temperature has
+    // risen by ΔT = 100 t / 5 ms (undamped: the ring rings about the
+    // quasi-static state; 15 % of the peak).
+    let mut bd = BondedDisc::seed_004_experiment();
+    let (a, b) = (bd.core_radius, bd.outer_radius);
+    let k = m
+        .times
+        .iter()
+        .rposition(|&t| t < first - 1e-9 && t <= 2.0e-3 + 1e-9)
+        .expect("an output before cracking");
+    let t = m.times[k];
+    bd.delta_t = 100.0 * t / 5e-3;
+    let peak = bd.stress(a * 1.0001).1;
+    let bins = binned(&m.polar_stress(k, 0.0, 0.0), a + 0.01, b - 0.01, 6);
+    for &(r, _, stt) in &bins {
+        let (_, et) = bd.stress(r);
+        eprintln!("t = {t:e}: r = {r:.4}: s_tt {stt:.4e} (eq 40: {et:.4e})");
+        assert!(
+            (stt - et).abs() < 0.15 * peak,
+            "t = {t}, r = {r}: hoop stress {stt:.4e} vs eq 40 {et:.4e} (15 % of {peak:.4e})"
+        );
+    }
+    // The crack pattern at the end: points parted by more than the final
+    // opening of the law, 2 G_I / f_t = 10 µm.
+    let end = m.times.len() - 1;
+    let cracks = radial_cracks(&m, end, 1e-5);
+    for c in &cracks {
+        eprintln!("crack at {:.0} deg: r from {:.4} to {:.4} m", c.0, c.1, c.2);
+    }
+    let hz = 0.01;
+    // Points parted only at r = a are the interface letting go (its
+    // joints debond all round); a radial crack runs into the concrete.
+    let from_interface: Vec<_> = cracks
+        .iter()
+        .filter(|c| c.1 <= a + 1.5 * hz && c.2 >= a + hz)
+        .collect();
+    assert!(
+        from_interface.len() >= 3,
+        "{} radial crack(s) start at the interface and run into the concrete: {cracks:?}",
+        from_interface.len()
+    );
+    assert!(
+        from_interface.iter().any(|c| c.2 >= b - 0.5 * hz),
+        "no crack reaches the outer boundary: {cracks:?}"
+    );
+    let last = rows.last().unwrap();
+    eprintln!(
+        "{} broken joints, crack area {:.4e} m^2, fracture energy {:.4e} J",
+        last[broken],
+        last[col(&h, "crack_area")],
+        last[col(&h, "fracture_energy")]
+    );
+}

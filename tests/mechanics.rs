@@ -29,52 +29,6 @@ impl Mech {
             .map(|c| tet_volume(c.map(|n| self.deformed(k, n))))
             .sum()
     }
-
-    fn centroid(&self, c: usize) -> [f64; 3] {
-        let c = self.cells[c].map(|n| self.coords[n]);
-        [0, 1, 2].map(|d| 0.25 * (c[0][d] + c[1][d] + c[2][d] + c[3][d]))
-    }
-
-    /// (r, σ_rr, σ_θθ) of every cell about the z axis through (cx, cy).
-    fn polar_stress(&self, k: usize, cx: f64, cy: f64) -> Vec<(f64, f64, f64)> {
-        (0..self.cells.len())
-            .map(|c| {
-                let p = self.centroid(c);
-                let (x, y) = (p[0] - cx, p[1] - cy);
-                let r = x.hypot(y);
-                let (nx, ny) = (x / r, y / r);
-                let s = self.stress[k][c];
-                let (sxx, sxy, syy) = (s[0][0], s[0][1], s[1][1]);
-                let srr = sxx * nx * nx + 2.0 * sxy * nx * ny + syy * ny * ny;
-                let stt = sxx * ny * ny - 2.0 * sxy * nx * ny + syy * nx * nx;
-                (r, srr, stt)
-            })
-            .collect()
-    }
-}
-
-/// Mean of (σ_rr, σ_θθ) over the cells whose radius falls in each of `bins`
-/// equal bins of [r0, r1], with the bin centres.
-fn binned(p: &[(f64, f64, f64)], r0: f64, r1: f64, bins: usize) -> Vec<(f64, f64, f64)> {
-    let mut acc = vec![(0.0, 0.0, 0.0, 0usize); bins];
-    for &(r, a, b) in p {
-        if r < r0 || r >= r1 {
-            continue;
-        }
-        let i = (((r - r0) / (r1 - r0)) * bins as f64) as usize;
-        let e = &mut acc[i.min(bins - 1)];
-        e.0 += r;
-        e.1 += a;
-        e.2 += b;
-        e.3 += 1;
-    }
-    acc.into_iter()
-        .filter(|e| e.3 > 0)
-        .map(|e| {
-            let n = e.3 as f64;
-            (e.0 / n, e.1 / n, e.2 / n)
-        })
-        .collect()
 }
 
 /// Seed 004 sec 3.1, Table 1: every element of a fixed cube heated by

@@ -211,6 +211,17 @@ impl BondedDisc {
         }
     }
 
+    /// Seed 004 sec 4 with the experiment's expansion coefficients (Table 3,
+    /// ten times [`Self::seed_004_sec4`]'s: 2.2e-5 /°C for the steel, 7.2e-6
+    /// /°C for the concrete as the text gives it; Table 3 prints 7.0e-6):
+    /// the case that cracks.
+    pub fn seed_004_experiment() -> Self {
+        let mut d = Self::seed_004_sec4();
+        d.core.alpha = 2.2e-5;
+        d.ring.alpha = 7.2e-6;
+        d
+    }
+
     /// `β = (b² + a²)/(b² − a²)`.
     pub fn beta(&self) -> f64 {
         let (a2, b2) = (self.core_radius.powi(2), self.outer_radius.powi(2));

@@ -257,7 +257,9 @@ impl ExplicitDomain {
         if !self.joints.is_empty() {
             // Positions at t_n = substeps × Δt.
             let t = self.counters.substeps as f64 * self.dt;
-            self.joints.add_forces(&self.x, t, &mut self.f);
+            if let Err(e) = self.joints.add_forces(&self.x, t, &mut self.f) {
+                error.get_or_insert(e);
+            }
         }
         let no = self.n_owned;
         let p = NodeUpdate {

@@ -342,6 +342,47 @@ fn make_bodies(
     Ok(m)
 }
 
+/// The nodes tied by the joints `joints` (global ids; each pair of
+/// corners a[i], b[i] is one node of the continuous mesh while the joint
+/// is intact), each mapped to the lowest id of its class.
+fn joint_classes(joints: &[super::PartJoint]) -> HashMap<u32, u32> {
+    let mut parent: HashMap<u32, u32> = HashMap::new();
+    fn root(parent: &mut HashMap<u32, u32>, g: u32) -> u32 {
+        let mut r = g;
+        while let Some(&p) = parent.get(&r) {
+            if p == r {
+                break;
+            }
+            r = p;
+        }
+        // Path compression.
+        let mut x = g;
+        while x != r {
+            let next = parent[&x];
+            parent.insert(x, r);
+            x = next;
+        }
+        r
+    }
+    for j in joints {
+        for (&a, &b) in j.faces.a.iter().zip(&j.faces.b) {
+            parent.entry(a).or_insert(a);
+            parent.entry(b).or_insert(b);
+            let (ra, rb) = (root(&mut parent, a), root(&mut parent, b));
+            // The lower id becomes the root, so roots are the classes' lowest.
+            if ra < rb {
+                parent.insert(rb, ra);
+            } else if rb < ra {
+                parent.insert(ra, rb);
+            }
+        }
+    }
+    let keys: Vec<u32> = parent.keys().copied().collect();
+    keys.into_iter()
+        .map(|g| (g, root(&mut parent, g)))
+        .collect()
+}
+
 /// Collective. Owners and PETSc numbers of the made nodes, and the part.
 fn number(comm: &SimpleCommunicator, m: Made) -> Part {
     let size = comm.size() as usize;
@@ -381,9 +422,18 @@ fn number(comm: &SimpleCommunicator, m: Made) -> Part {
         .zip(&m.shared)
         .map(|(g, &s)| if s { owner_of[g] } else { rank as u32 })
         .collect();
-    // PETSc numbers: each rank's owned nodes in ascending id from its start.
+    // PETSc numbers (the thermal rows): each rank's owned nodes in
+    // ascending id from its start, the copies of a node that intact joints
+    // tie (a jointed body, held whole here) sharing the row of the lowest.
     let n_owned = owner.iter().filter(|&&o| o as usize == rank).count();
-    let counts: Vec<u64> = all_gather(comm, &[n_owned as u64]);
+    let tied = joint_classes(&m.joints);
+    let n_rows = m
+        .node_gid
+        .iter()
+        .zip(&owner)
+        .filter(|(g, &o)| o as usize == rank && tied.get(g).is_none_or(|r| r == *g))
+        .count();
+    let counts: Vec<u64> = all_gather(comm, &[n_rows as u64]);
     let mut starts = vec![0usize; size + 1];
     for r in 0..size {
         starts[r + 1] = starts[r] + counts[r] as usize;
@@ -392,8 +442,17 @@ fn number(comm: &SimpleCommunicator, m: Made) -> Part {
     let mut next = starts[rank] as u32;
     for (i, &g) in m.node_gid.iter().enumerate() {
         if owner[i] as usize == rank {
-            petsc_of.insert(g, next);
-            next += 1;
+            match tied.get(&g) {
+                // The lowest of its class comes first (ascending ids).
+                Some(&r) if r != g => {
+                    let row = petsc_of[&r];
+                    petsc_of.insert(g, row);
+                }
+                _ => {
+                    petsc_of.insert(g, next);
+                    next += 1;
+                }
+            }
         }
     }
     // Ghosts' numbers: owners tell the rendezvous rank, which tells the holders.

@@ -55,9 +55,11 @@ pub struct Part {
     pub n_owned: usize,
     /// Owning rank of every local node.
     pub node_owner: Vec<u32>,
-    /// PETSc number of every local node.
+    /// PETSc number (thermal row) of every local node. The copies of a
+    /// node that intact joints tie share one row (issue 19); otherwise
+    /// each owned node has its own, in local order.
     pub petsc: Vec<u32>,
-    /// First PETSc number of each rank, and the total at the end.
+    /// First PETSc row of each rank, and the total at the end.
     pub starts: Vec<usize>,
     /// Per local node: whether it lies on its body's boundary.
     pub boundary_node: Vec<bool>,
@@ -109,6 +111,39 @@ impl Part {
     /// This rank's PETSc rows [start, end).
     pub fn owned_range(&self) -> (usize, usize) {
         (self.starts[self.rank], self.starts[self.rank + 1])
+    }
+
+    /// Number of this rank's PETSc rows: its owned nodes, less the copies
+    /// that share a row with a node tied to them by intact joints.
+    pub fn owned_rows(&self) -> usize {
+        self.starts[self.rank + 1] - self.starts[self.rank]
+    }
+
+    /// A value per owned node from a value per owned PETSc row.
+    pub fn rows_to_nodes(&self, rows: &[f64]) -> Vec<f64> {
+        if rows.len() == self.n_owned {
+            return rows.to_vec();
+        }
+        let lo = self.starts[self.rank];
+        self.petsc[..self.n_owned]
+            .iter()
+            .map(|&p| rows[p as usize - lo])
+            .collect()
+    }
+
+    /// A value per owned PETSc row from a value per owned node (the copies
+    /// sharing a row hold the same value; the last one's is taken).
+    pub fn nodes_to_rows(&self, nodes: &[f64]) -> Vec<f64> {
+        let n = self.owned_rows();
+        if n == self.n_owned {
+            return nodes[..n].to_vec();
+        }
+        let lo = self.starts[self.rank];
+        let mut rows = vec![0.0; n];
+        for (&p, &v) in self.petsc[..self.n_owned].iter().zip(nodes) {
+            rows[p as usize - lo] = v;
+        }
+        rows
     }
 
     /// Number of local elements.

@@ -352,7 +352,7 @@ impl Stages<'_, '_> {
 
     /// Collective. Record the particle statistics of `step`.
     fn record(&self, out: &mut Output, step: u64) -> Result<()> {
-        out.record(self.comm, self.model, &self.sys, step)
+        out.record(self.comm, self.model, &self.part, &self.sys, step)
     }
 
     /// Collective. Write the checkpoint of `step`.
@@ -396,7 +396,7 @@ impl Stages<'_, '_> {
                 let clock = Instant::now();
                 let span = *n as f64 * m.dt;
                 if let Some(s) = self.sys.as_ref() {
-                    let t = s.t.to_local_vec()?;
+                    let t = s.node_temperatures(part)?;
                     m.set_temperatures(comm, &t, Some(span));
                 } else if model.has_heating() {
                     // The ramp's value at the end of this step, reached over the substeps.

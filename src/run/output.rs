@@ -203,7 +203,7 @@ impl Output {
     ) -> Result<()> {
         let time = step as f64 * model.dt;
         let t = match sys.as_ref() {
-            Some(s) => Some(s.t.to_local_vec()?),
+            Some(s) => Some(s.node_temperatures(part)?),
             None => None,
         };
         let mut node_fields: Vec<(&str, usize, Vec<f64>)> = Vec::new();
@@ -304,11 +304,12 @@ impl Output {
         &mut self,
         comm: &SimpleCommunicator,
         model: &Model,
+        part: &Part,
         sys: &Option<ThermalSystem>,
         step: u64,
     ) -> Result<()> {
         if let (Some(r), Some(s)) = (self.report.as_mut(), sys.as_ref()) {
-            let t = s.t.to_local_vec()?;
+            let t = s.node_temperatures(part)?;
             let st = self.stats.compute(comm, &t);
             let time = step as f64 * model.dt;
             r.record(time, &st);

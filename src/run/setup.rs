@@ -361,7 +361,7 @@ pub(super) fn couple_temperatures(
         return Ok(());
     };
     if let Some(s) = sys {
-        let t = s.t.to_local_vec()?;
+        let t = s.node_temperatures(part)?;
         m.set_temperatures(comm, &t, None);
     } else if let Some(ck) = restart {
         if model.has_heating() {

@@ -372,22 +372,14 @@ impl Scenario {
     }
 
     /// The bodies' `fracture` tables and their materials' fracture keys.
-    /// Joints so far run in mechanics without a thermal problem and without
-    /// checkpoints (joint damage is not saved yet).
+    /// Joints so far run without checkpoints (joint damage is not saved
+    /// yet).
     fn validate_fracture(&self) -> Result<(), (String, String)> {
         for (i, b) in self.bodies.iter().enumerate() {
             let Some(f) = &b.fracture else { continue };
             let key = |k: &str| format!("bodies[{i}].fracture{k}");
             if self.mechanics.is_none() {
                 return Err((key(""), "joints need a [mechanics] table".into()));
-            }
-            if self.has_thermal() {
-                return Err((
-                    key(""),
-                    "joints do not run with a thermal problem yet (mechanics with a \
-                     prescribed `heating` does)"
-                        .into(),
-                ));
             }
             if self.output.checkpoint {
                 return Err((

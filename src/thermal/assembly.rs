@@ -102,7 +102,7 @@ pub fn assemble<'p>(
         Some(ContactOperator::RankOne) => rank_one_conductance_block,
         _ => local_conductance_block,
     };
-    let owned = part.num_owned();
+    let owned = part.owned_rows();
     let g = |l: u32| part.petsc[l as usize] as i32;
     let elem_idx = |e: usize| part.mesh.tets[e].map(g);
     // The average-ΔT rows, and the bodies' weights they couple to.

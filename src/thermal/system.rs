@@ -153,7 +153,9 @@ enum Scheme<'p> {
 pub struct ThermalSystem<'p> {
     ops: Operators<'p>,
     scheme: Scheme<'p>,
-    /// Temperatures of the owned nodes (PETSc order).
+    /// Temperatures of the owned PETSc rows (one per owned node, in their
+    /// order, unless intact joints tie copies of nodes to one row: see
+    /// [`Self::node_temperatures`]).
     pub t: Vector<'p>,
     t_next: Vector<'p>,
     t0: Vector<'p>,
@@ -192,23 +194,26 @@ impl<'p> ThermalSystem<'p> {
             .is_none_or(|c| c.delta_t == DeltaT::Local || contacts.total_pairs == 0);
         let theta = model.thermal.theta;
         let dt = model.dt;
-        let owned = part.num_owned();
+        let owned = part.owned_rows();
+        let (lo, _) = part.owned_range();
 
         let mut t = Vector::new(petsc, owned)?;
         {
             let mut v = t.view_mut()?;
-            v.copy_from_slice(&part.bc.initial_t[..owned]);
+            v.copy_from_slice(&part.nodes_to_rows(&part.bc.initial_t[..part.num_owned()]));
             for &(l, value) in &part.bc.dirichlet {
-                v[l as usize] = value;
+                v[part.petsc[l as usize] as usize - lo] = value;
             }
         }
-        let (lo, _) = part.owned_range();
-        let d_rows: Vec<i32> = part
+        // One row per prescribed node (the copies of a jointed node share one).
+        let mut d_rows: Vec<i32> = part
             .bc
             .dirichlet
             .iter()
             .map(|&(l, _)| part.petsc[l as usize] as i32)
             .collect();
+        d_rows.sort_unstable();
+        d_rows.dedup();
         let mut dmask = t.duplicate()?;
         dmask.set(0.0)?;
         {
@@ -366,6 +371,11 @@ impl<'p> ThermalSystem<'p> {
         self.steps_total += 1;
         self.iterations += stats.iterations.max(0) as u64;
         Ok(stats)
+    }
+
+    /// The temperature of every owned node of `part` (part order).
+    pub fn node_temperatures(&self, part: &Part) -> Result<Vec<f64>> {
+        Ok(part.rows_to_nodes(&self.t.to_local_vec()?))
     }
 
     /// Steps taken.

@@ -39,6 +39,9 @@ fn bar(ranks: usize, tag: &str, mesh: &str) -> BarRun {
         &["--set", &file],
     );
     let m = read_mech(&out, "fracture-bar");
+    let png = out.join("fracture-bar_cracks.png");
+    let size = std::fs::metadata(&png).map_or(0, |m| m.len());
+    assert!(size > 10_000, "{png:?}: {size} bytes");
     let peak_stress = m
         .stress
         .iter()

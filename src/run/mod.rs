@@ -462,8 +462,11 @@ fn check_finite(
     if bad.is_none() {
         return Ok(());
     }
+    // Row i is the first owned node numbered lo + i (copies tied by joints share a row).
+    let lo = part.owned_range().0;
     let local = bad
-        .and_then(|i| part.owned_gids().get(i))
+        .and_then(|i| (0..part.num_owned()).find(|&l| part.petsc[l] as usize == lo + i))
+        .and_then(|l| part.owned_gids().get(l))
         .map_or(u64::MAX, |&n| n as u64);
     let mut node = u64::MAX;
     comm.all_reduce_into(&local, &mut node, SystemOperation::min());

@@ -43,6 +43,9 @@ pub(super) struct Output {
     /// Whether element owners change during the run (repartitions): then
     /// each output has an `owner_rank` cell field beside the static `rank`.
     owners_move: bool,
+    /// Jointed bodies: (time, crack area, fracture energy) at each output,
+    /// for the crack plot.
+    cracks: Vec<(f64, f64, f64)>,
 }
 
 impl Output {
@@ -170,6 +173,7 @@ impl Output {
                     .mechanics
                     .as_ref()
                     .is_some_and(|m| m.rebalance.every > 0),
+            cracks: Vec::new(),
         })
     }
 
@@ -281,6 +285,7 @@ impl Output {
                 st.candidate_pairs as f64,
             ]);
             if model.has_joints() {
+                self.cracks.push((time, st.crack_area, st.fracture));
                 row.extend_from_slice(&[
                     st.joint,
                     st.fracture,
@@ -338,6 +343,16 @@ impl Output {
             };
             particle_files = agree(comm, written)?;
         }
+        if model.has_joints() && !self.cracks.is_empty() {
+            let path = dir.join(format!("{stem}_cracks.png"));
+            let written = if comm.rank() == 0 {
+                crack_plot(&self.cracks, &path)
+            } else {
+                Ok(())
+            };
+            agree(comm, written)?;
+            particle_files.push(path);
+        }
         if model.thermal_active && model.contact.is_some() {
             let path = dir.join(format!("{stem}_body_contacts.csv"));
             let per = body_contacts(comm, contacts);
@@ -357,6 +372,33 @@ impl Output {
         self.writer.close()?;
         Ok(())
     }
+}
+
+/// The crack area (cm², one face per broken joint) and the fracture energy
+/// dissipated (mJ) against time, from the outputs of a run with joints.
+fn crack_plot(cracks: &[(f64, f64, f64)], path: &std::path::Path) -> Result<()> {
+    use crate::io::plot::{write_png, LinePlot, Series};
+    let area: Vec<(f64, f64)> = cracks.iter().map(|&(t, a, _)| (t, a * 1e4)).collect();
+    let energy: Vec<(f64, f64)> = cracks.iter().map(|&(t, _, e)| (t, e * 1e3)).collect();
+    let plot = LinePlot {
+        title: "Cracks",
+        x_label: "time [s]",
+        y_label: "crack area [cm^2], fracture energy [mJ]",
+        series: vec![
+            Series {
+                label: "crack area [cm^2]",
+                points: &area,
+                dashed: false,
+            },
+            Series {
+                label: "fracture energy [mJ]",
+                points: &energy,
+                dashed: true,
+            },
+        ],
+    };
+    write_png(&plot, path, (1000, 700))
+        .map_err(|e| Error::Io(crate::io::IoError::invalid(path, e.to_string())))
 }
 
 /// The progress bar (rank 0, when asked for).

@@ -407,6 +407,27 @@ impl ExplicitDomain {
         self.elem_dt = new;
     }
 
+    /// Joints broken on this rank since the thermal rows were last numbered.
+    pub fn joints_broken_since_rows(&self) -> usize {
+        self.joints.broken_since_rows()
+    }
+
+    /// The broken joints' tets (global ids), marking the rows as numbered
+    /// with them.
+    pub fn take_broken_joints(&mut self) -> std::collections::HashSet<[u32; 2]> {
+        self.joints.broken_tets()
+    }
+
+    /// After `part`'s rows were numbered again: the part's nodes take
+    /// their new rows, and the next contact detection (collective) fetches
+    /// the ghosts' afresh.
+    pub fn renumber_rows(&mut self, part: &Part) {
+        let np = self.n_part_nodes;
+        self.node_petsc[..np].copy_from_slice(&part.petsc);
+        self.part_tets.node_petsc.copy_from_slice(&part.petsc);
+        self.redetect = true;
+    }
+
     /// Number of elements this rank integrates.
     pub fn num_elements(&self) -> usize {
         self.elements.len()

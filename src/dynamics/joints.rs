@@ -20,9 +20,8 @@ pub(super) struct DomainJoints {
     out: Vec<Vec<[Vector3<f64>; 6]>>,
     /// Totals of the last substep, over this rank's sets.
     pub(super) totals: JointTotals,
-    /// A thermal problem runs: its rows tie the nodes of intact joints, and
-    /// are not yet rebuilt when joints break, so a break is an error.
-    thermal: bool,
+    /// Broken joints when the thermal rows were last numbered.
+    rows_broken: usize,
 }
 
 impl DomainJoints {
@@ -41,10 +40,7 @@ impl DomainJoints {
             }
             by_material.entry(j.material).or_default().push(j.faces);
         }
-        let mut d = DomainJoints {
-            thermal: model.thermal_active,
-            ..DomainJoints::default()
-        };
+        let mut d = DomainJoints::default();
         for (m, faces) in by_material {
             let mat = &model.materials[m as usize];
             let fm = mat.fracture.ok_or_else(|| {
@@ -65,14 +61,8 @@ impl DomainJoints {
     }
 
     /// Advance every joint to the positions `x` at time `t` and add its
-    /// forces to the owned nodes' forces `f`, joint by joint. Errors when a
-    /// joint breaks in a run with a thermal problem.
-    pub(super) fn add_forces(
-        &mut self,
-        x: &[Vector3<f64>],
-        t: f64,
-        f: &mut [Vector3<f64>],
-    ) -> Result<()> {
+    /// forces to the owned nodes' forces `f`, joint by joint.
+    pub(super) fn add_forces(&mut self, x: &[Vector3<f64>], t: f64, f: &mut [Vector3<f64>]) {
         let mut tot = JointTotals::default();
         for (set, out) in self.sets.iter_mut().zip(&mut self.out) {
             let s = set.forces(x, t, out);
@@ -87,14 +77,26 @@ impl DomainJoints {
             tot.crack_area += s.crack_area;
         }
         self.totals = tot;
-        if self.thermal && tot.broken > 0 {
-            return Err(Error::Mechanics(format!(
-                "{} joint(s) broke by t = {t:e} s in a run with a thermal problem: heat across \
-                 broken joints is not modelled yet (the thermal rows still tie their nodes); \
-                 run the mechanics with a prescribed `heating` instead",
-                tot.broken
-            )));
-        }
-        Ok(())
+    }
+
+    /// Joints broken here since the thermal rows were last numbered.
+    pub(super) fn broken_since_rows(&self) -> usize {
+        self.totals.broken - self.rows_broken
+    }
+
+    /// The tets (global ids) of every broken joint here; the rows are
+    /// numbered again with them.
+    pub(super) fn broken_tets(&mut self) -> std::collections::HashSet<[u32; 2]> {
+        self.rows_broken = self.totals.broken;
+        self.sets
+            .iter()
+            .flat_map(|s| {
+                s.faces
+                    .iter()
+                    .zip(&s.states)
+                    .filter(|(_, st)| st.broken.is_some())
+                    .map(|(f, _)| f.tets)
+            })
+            .collect()
     }
 }

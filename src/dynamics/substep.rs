@@ -257,9 +257,7 @@ impl ExplicitDomain {
         if !self.joints.is_empty() {
             // Positions at t_n = substeps × Δt.
             let t = self.counters.substeps as f64 * self.dt;
-            if let Err(e) = self.joints.add_forces(&self.x, t, &mut self.f) {
-                error.get_or_insert(e);
-            }
+            self.joints.add_forces(&self.x, t, &mut self.f);
         }
         let no = self.n_owned;
         let p = NodeUpdate {

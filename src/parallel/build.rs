@@ -547,3 +547,77 @@ fn number(comm: &SimpleCommunicator, m: Made) -> Part {
             .collect(),
     }
 }
+
+impl Part {
+    /// Collective. Number the PETSc rows again after joints broke: the
+    /// copies of a node stay on one row only while intact joints (those
+    /// whose two tets, by global id, are not in `broken`) still tie them.
+    /// Every rank's start moves, so the ghosts of split bodies ask their
+    /// owners for their new rows.
+    pub fn renumber_rows(
+        &mut self,
+        comm: &SimpleCommunicator,
+        broken: &std::collections::HashSet<[u32; 2]>,
+    ) {
+        let size = comm.size() as usize;
+        let rank = comm.rank() as usize;
+        let gid = |l: u32| self.node_gid[l as usize];
+        let intact: Vec<super::PartJoint> = self
+            .joints
+            .iter()
+            .filter(|j| !broken.contains(&j.faces.tets))
+            .map(|j| super::PartJoint {
+                faces: crate::fracture::insert::JointFaces {
+                    a: j.faces.a.map(gid),
+                    b: j.faces.b.map(gid),
+                    ..j.faces
+                },
+                material: j.material,
+            })
+            .collect();
+        let tied = joint_classes(&intact);
+        let no = self.n_owned;
+        let n_rows = self.node_gid[..no]
+            .iter()
+            .filter(|g| tied.get(g).is_none_or(|r| r == *g))
+            .count();
+        let counts: Vec<u64> = all_gather(comm, &[n_rows as u64]);
+        let mut starts = vec![0usize; size + 1];
+        for r in 0..size {
+            starts[r + 1] = starts[r] + counts[r] as usize;
+        }
+        // Owned nodes are in ascending id: a class's lowest comes first.
+        let mut row_of: HashMap<u32, u32> = HashMap::new();
+        let mut next = starts[rank] as u32;
+        for l in 0..no {
+            let g = self.node_gid[l];
+            let row = match tied.get(&g) {
+                Some(&r) if r != g => row_of[&r],
+                _ => {
+                    next += 1;
+                    next - 1
+                }
+            };
+            row_of.insert(g, row);
+            self.petsc[l] = row;
+        }
+        // Ghosts: ask each owner.
+        let mut ask: Vec<Vec<u32>> = vec![Vec::new(); size];
+        for l in no..self.node_gid.len() {
+            ask[self.node_owner[l] as usize].push(self.node_gid[l]);
+        }
+        let asked = all_to_all(comm, ask);
+        let reply: Vec<Vec<u32>> = asked
+            .iter()
+            .map(|gids| gids.iter().map(|g| row_of[g]).collect())
+            .collect();
+        let answered = all_to_all(comm, reply);
+        let mut at = vec![0usize; size];
+        for l in no..self.node_gid.len() {
+            let o = self.node_owner[l] as usize;
+            self.petsc[l] = answered[o][at[o]];
+            at[o] += 1;
+        }
+        self.starts = starts;
+    }
+}

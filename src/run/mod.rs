@@ -380,8 +380,9 @@ impl Stages<'_, '_> {
     /// Take the steps from `step` to `target`: each a thermal step, then
     /// the mechanics substeps at the step's temperatures.
     fn advance(&mut self, mut step: u64, target: u64) -> Result<()> {
-        let (comm, model, part) = (self.comm, self.model, &self.part);
+        let (comm, model) = (self.comm, self.model);
         while step < target {
+            let part = &self.part;
             // Seed 000 sec 3.4: contact detection → thermal step → mechanics substeps.
             let clock = Instant::now();
             if let Some(s) = self.sys.as_mut() {
@@ -413,7 +414,50 @@ impl Stages<'_, '_> {
                 self.times.mechanics += clock.elapsed().as_secs_f64();
             }
             step += 1;
+            if self.sys.is_some() && model.has_joints() {
+                self.split_rows()?;
+            }
         }
+        Ok(())
+    }
+
+    /// Collective. When joints broke in a run with a thermal problem: the
+    /// copies of a node no longer tied by intact joints get rows of their
+    /// own, the contacts are found again on the new rows, and the thermal
+    /// system is rebuilt, the nodes keeping their temperatures (issue 19:
+    /// heat crosses a broken joint only through the contact model).
+    fn split_rows(&mut self) -> Result<()> {
+        let comm = self.comm;
+        let Some(Mechanics { domain: m, .. }) = self.mech.as_mut() else {
+            return Ok(());
+        };
+        let mine = m.joints_broken_since_rows() as u64;
+        let mut any = 0u64;
+        comm.all_reduce_into(&mine, &mut any, SystemOperation::sum());
+        if any == 0 {
+            return Ok(());
+        }
+        let clock = Instant::now();
+        let Some(sys) = self.sys.as_mut() else {
+            return Ok(());
+        };
+        let t_nodes = sys.node_temperatures(&self.part)?;
+        let broken = m.take_broken_joints();
+        self.part.renumber_rows(comm, &broken);
+        m.renumber_rows(&self.part);
+        self.contacts.refind(comm, self.model, self.mech.as_mut())?;
+        if let Some(s) = self.sys.as_mut() {
+            s.rebuild_rows(
+                self.petsc,
+                comm,
+                self.model,
+                &self.part,
+                &self.model.solver,
+                &self.contacts.set,
+                &t_nodes,
+            )?;
+        }
+        self.times.assembly += clock.elapsed().as_secs_f64();
         Ok(())
     }
 

@@ -226,6 +226,22 @@ impl Contacts {
         Ok((changed != 0).then_some(found))
     }
 
+    /// Collective. Detect again now, changed or not (the thermal rows were
+    /// numbered again, so every pair's rows must be fetched afresh).
+    pub fn refind(
+        &mut self,
+        comm: &SimpleCommunicator,
+        model: &Model,
+        mech: Option<&mut Mechanics>,
+    ) -> Result<()> {
+        if matches!(self.source, Source::None) {
+            return Ok(());
+        }
+        self.set = self.find(comm, model, mech)?;
+        self.detections += 1;
+        Ok(())
+    }
+
     /// Collective. This rank's pairs at the current positions, with what
     /// the assembly needs of them, and the totals over the ranks.
     fn find(

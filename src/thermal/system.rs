@@ -442,6 +442,34 @@ impl<'p> ThermalSystem<'p> {
         Ok(())
     }
 
+    /// Collective. Re-assemble on `part`'s rows numbered again (joints
+    /// broke: issue 19), with a new contact set, the owned nodes keeping
+    /// their temperatures `t_nodes` (part order) and the heat balance
+    /// continuing: the rows a broken joint splits start at their common
+    /// value, so the stored heat is unchanged.
+    #[allow(clippy::too_many_arguments)]
+    pub fn rebuild_rows(
+        &mut self,
+        petsc: &'p Petsc,
+        comm: &SimpleCommunicator,
+        model: &Model,
+        part: &Part,
+        solver: &SolverSpec,
+        contacts: &ContactSet,
+        t_nodes: &[f64],
+    ) -> crate::error::Result<()> {
+        let account = self.energy()?;
+        let mut next = ThermalSystem::new(petsc, comm, model, part, solver, contacts)?;
+        next.t.copy_from_slice(&part.nodes_to_rows(t_nodes))?;
+        next.t0.copy_from(&next.t)?;
+        next.base = account;
+        next.iterations = self.iterations;
+        next.assemblies = self.assemblies + 1;
+        next.steps_total = self.steps_total;
+        *self = next;
+        Ok(())
+    }
+
     /// Continue from a saved state: owned temperatures (PETSc order), the
     /// heat balance so far and the steps done.
     pub fn restore(&mut self, owned: &[f64], account: EnergyAccount, steps: u64) -> Result<()> {

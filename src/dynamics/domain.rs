@@ -407,6 +407,11 @@ impl ExplicitDomain {
         self.elem_dt = new;
     }
 
+    /// Cohesive joints this rank advances.
+    pub fn num_joints(&self) -> usize {
+        self.joints.sets.iter().map(|s| s.faces.len()).sum()
+    }
+
     /// Joints broken on this rank since the thermal rows were last numbered.
     pub fn joints_broken_since_rows(&self) -> usize {
         self.joints.broken_since_rows()

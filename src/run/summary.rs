@@ -73,6 +73,9 @@ pub struct MechanicsSummary {
     /// Bytes sent to other ranks per substep: the largest over the ranks,
     /// and the mean.
     pub bytes_per_substep: (f64, f64),
+    /// Cohesive joints (issue 19): how many, broken, crack area (m²) and
+    /// energy dissipated by their damage (J); zero joints without fracture.
+    pub joints: (u64, u64, f64, f64),
 }
 
 /// The repartitions of a run on several ranks with moving bodies.
@@ -212,6 +215,13 @@ impl std::fmt::Display for RunSummary {
                 "  traffic     {:.0} B sent per substep per rank (max over ranks), {:.0} B mean (halo, ghost refresh, pair balancing)",
                 m.bytes_per_substep.0, m.bytes_per_substep.1
             )?;
+            let (n, broken, area, energy) = m.joints;
+            if n > 0 {
+                writeln!(
+                    f,
+                    "  fracture    {n} joints, {broken} broken, crack area {area:.4e} m^2, {energy:.4e} J dissipated"
+                )?;
+            }
         }
         if let Some(b) = &self.balance {
             writeln!(
@@ -416,8 +426,9 @@ impl MechanicsSummary {
             m.counters.element_updates as f64,
             m.counters.pair_updates as f64,
             m.counters.exact_overlaps as f64,
+            m.num_joints() as f64,
         ];
-        let mut counts = [0.0; 3];
+        let mut counts = [0.0; 4];
         comm.all_reduce_into(&mine[..], &mut counts[..], SystemOperation::sum());
         let sent = m.counters.bytes_sent as f64 / m.counters.substeps_run.max(1) as f64;
         let (mut most, mut total) = (0.0, 0.0);
@@ -433,6 +444,17 @@ impl MechanicsSummary {
             exact_overlaps: counts[2] as u64,
             margin: m.min_margin(),
             bytes_per_substep: (most, total / comm.size() as f64),
+            joints: if counts[3] > 0.0 {
+                let st = m.state(comm);
+                (
+                    counts[3] as u64,
+                    st.broken_joints,
+                    st.crack_area,
+                    st.fracture,
+                )
+            } else {
+                (0, 0, 0.0, 0.0)
+            },
         }
     }
 }

@@ -166,53 +166,20 @@ fn jointed_bar_breaks_at_the_tensile_strength_by_one_crack() {
 
 /// The traction bar of tests/mechanics.rs (a bar on rollers, 1 m, pulled
 /// by t = 1 MPa on its end), fully jointed with joints far too strong to
-/// break and a penalty p_f = 1000 E.
-fn jointed_traction_bar(young: f64, penalty: f64) -> String {
-    format!(
-        r#"
-[time]
-dt = 0.02
-steps = 5
-
-[[materials]]
-name = "m"
-density = 1000.0
-young = {young}
-poisson = 0.25
-tensile_strength = 1e8
-cohesion = 2e8
-friction_angle = 30.0
-g_i = 1e4
-g_ii = 1e5
-fracture_penalty = {penalty}
-
-[[bodies]]
-name = "bar"
-material = "m"
-mesh = {{ kind = "box", size = [1.0, 0.2, 0.2], element_size = 0.1 }}
-fracture = {{ set = "all" }}
-
-[mechanics]
-damping = 600.0
-
-[[mechanics.bc]]
-kind = "fixed"
-set = "xmin"
-components = ["x"]
-[[mechanics.bc]]
-kind = "fixed"
-set = "ymin"
-components = ["y"]
-[[mechanics.bc]]
-kind = "fixed"
-set = "zmin"
-components = ["z"]
-[[mechanics.bc]]
-kind = "traction"
-set = "xmax"
-value = [1e6, 0.0, 0.0]
-"#
-    )
+/// break and a penalty `penalty`.
+fn jointed_traction_bar(t: f64, young: f64, len: f64, penalty: f64) -> String {
+    traction_bar(0, t, young, len)
+        .replace(
+            "poisson = 0.25\n",
+            &format!(
+                "poisson = 0.25\ntensile_strength = 1e8\ncohesion = 2e8\nfriction_angle = 30.0\n\
+                 g_i = 1e4\ng_ii = 1e5\nfracture_penalty = {penalty}\n"
+            ),
+        )
+        .replace(
+            "element_size = 0.1 }\n",
+            "element_size = 0.1 }\nfracture = { set = \"all\" }\n",
+        )
 }
 
 /// Intact joints hold the body together: the jointed bar settles to the
@@ -223,7 +190,7 @@ value = [1e6, 0.0, 0.0]
 fn intact_joints_give_the_continuum_uniaxial_state() {
     let (t, young, len) = (1e6, 1e9, 1.0);
     let penalty = 1000.0 * young;
-    let text = jointed_traction_bar(young, penalty);
+    let text = jointed_traction_bar(t, young, len, penalty);
     let mut finals = Vec::new();
     for ranks in [1, 2] {
         let out = out_dir(&format!("fracture-traction-{ranks}"));

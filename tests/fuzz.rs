@@ -1171,6 +1171,18 @@ fn mutated_meshes_end_in_an_error_or_a_model() {
             vec![],
         ),
         ("box-binary.msh".into(), binary, true, vec!["xmax", "zmin"]),
+        (
+            "bar-irregular-10.msh".into(),
+            std::fs::read(root().join("scenarios/meshes/bar-irregular-10.msh")).unwrap(),
+            false,
+            vec!["xmin", "xmax"],
+        ),
+        (
+            "bar-irregular-5.msh".into(),
+            std::fs::read(root().join("scenarios/meshes/bar-irregular-5.msh")).unwrap(),
+            false,
+            vec!["ymin"],
+        ),
     ];
     // Every shipped mesh is among the bases.
     for e in std::fs::read_dir(root().join("scenarios/meshes")).unwrap() {

@@ -687,7 +687,7 @@ impl Model {
         if let Some(every) = s.output.every.filter(|&e| e > 0) {
             // Counted before they are listed: a tiny dt or a long run must
             // not make the list itself unbounded.
-            let count = steps / every + 1;
+            let count = (steps / every).saturating_add(1);
             if count > MAX_OUTPUT_STEPS {
                 return Err(model_err(format!(
                     "output.every = {every} writes {count} field steps over the run's {steps} \

@@ -383,6 +383,42 @@ fn joint_classes(joints: &[super::PartJoint]) -> HashMap<u32, u32> {
         .collect()
 }
 
+/// Collective. The PETSc rows of this rank's owned nodes `owned` (global
+/// ids, ascending): each its own row in order from this rank's start,
+/// except that a node `tied` to a lower one takes that one's row (the
+/// lowest of a class comes first). Returns every rank's start (and the
+/// total) and the row of each owned node.
+fn number_rows(
+    comm: &SimpleCommunicator,
+    owned: impl Iterator<Item = u32> + Clone,
+    tied: &HashMap<u32, u32>,
+) -> (Vec<usize>, HashMap<u32, u32>) {
+    let size = comm.size() as usize;
+    let rank = comm.rank() as usize;
+    let n_rows = owned
+        .clone()
+        .filter(|g| tied.get(g).is_none_or(|r| r == g))
+        .count();
+    let counts: Vec<u64> = all_gather(comm, &[n_rows as u64]);
+    let mut starts = vec![0usize; size + 1];
+    for r in 0..size {
+        starts[r + 1] = starts[r] + counts[r] as usize;
+    }
+    let mut row_of: HashMap<u32, u32> = HashMap::new();
+    let mut next = starts[rank] as u32;
+    for g in owned {
+        let row = match tied.get(&g) {
+            Some(&r) if r != g => row_of[&r],
+            _ => {
+                next += 1;
+                next - 1
+            }
+        };
+        row_of.insert(g, row);
+    }
+    (starts, row_of)
+}
+
 /// Collective. Owners and PETSc numbers of the made nodes, and the part.
 fn number(comm: &SimpleCommunicator, m: Made) -> Part {
     let size = comm.size() as usize;
@@ -427,34 +463,13 @@ fn number(comm: &SimpleCommunicator, m: Made) -> Part {
     // tie (a jointed body, held whole here) sharing the row of the lowest.
     let n_owned = owner.iter().filter(|&&o| o as usize == rank).count();
     let tied = joint_classes(&m.joints);
-    let n_rows = m
+    let owned_gids = m
         .node_gid
         .iter()
         .zip(&owner)
-        .filter(|(g, &o)| o as usize == rank && tied.get(g).is_none_or(|r| r == *g))
-        .count();
-    let counts: Vec<u64> = all_gather(comm, &[n_rows as u64]);
-    let mut starts = vec![0usize; size + 1];
-    for r in 0..size {
-        starts[r + 1] = starts[r] + counts[r] as usize;
-    }
-    let mut petsc_of: HashMap<u32, u32> = HashMap::new();
-    let mut next = starts[rank] as u32;
-    for (i, &g) in m.node_gid.iter().enumerate() {
-        if owner[i] as usize == rank {
-            match tied.get(&g) {
-                // The lowest of its class comes first (ascending ids).
-                Some(&r) if r != g => {
-                    let row = petsc_of[&r];
-                    petsc_of.insert(g, row);
-                }
-                _ => {
-                    petsc_of.insert(g, next);
-                    next += 1;
-                }
-            }
-        }
-    }
+        .filter(|(_, &o)| o as usize == rank)
+        .map(|(&g, _)| g);
+    let (starts, mut petsc_of) = number_rows(comm, owned_gids, &tied);
     // Ghosts' numbers: owners tell the rendezvous rank, which tells the holders.
     let mut tell: Vec<Vec<u32>> = vec![Vec::new(); size];
     for (i, &g) in m.node_gid.iter().enumerate() {
@@ -560,7 +575,6 @@ impl Part {
         broken: &std::collections::HashSet<[u32; 2]>,
     ) {
         let size = comm.size() as usize;
-        let rank = comm.rank() as usize;
         let gid = |l: u32| self.node_gid[l as usize];
         let intact: Vec<super::PartJoint> = self
             .joints
@@ -577,29 +591,9 @@ impl Part {
             .collect();
         let tied = joint_classes(&intact);
         let no = self.n_owned;
-        let n_rows = self.node_gid[..no]
-            .iter()
-            .filter(|g| tied.get(g).is_none_or(|r| r == *g))
-            .count();
-        let counts: Vec<u64> = all_gather(comm, &[n_rows as u64]);
-        let mut starts = vec![0usize; size + 1];
-        for r in 0..size {
-            starts[r + 1] = starts[r] + counts[r] as usize;
-        }
-        // Owned nodes are in ascending id: a class's lowest comes first.
-        let mut row_of: HashMap<u32, u32> = HashMap::new();
-        let mut next = starts[rank] as u32;
+        let (starts, row_of) = number_rows(comm, self.node_gid[..no].iter().copied(), &tied);
         for l in 0..no {
-            let g = self.node_gid[l];
-            let row = match tied.get(&g) {
-                Some(&r) if r != g => row_of[&r],
-                _ => {
-                    next += 1;
-                    next - 1
-                }
-            };
-            row_of.insert(g, row);
-            self.petsc[l] = row;
+            self.petsc[l] = row_of[&self.node_gid[l]];
         }
         // Ghosts: ask each owner.
         let mut ask: Vec<Vec<u32>> = vec![Vec::new(); size];

@@ -430,10 +430,19 @@ impl<'p> ThermalSystem<'p> {
         solver: &SolverSpec,
         contacts: &ContactSet,
     ) -> crate::error::Result<()> {
+        let t = self.t.to_local_vec()?;
+        self.replace(
+            ThermalSystem::new(petsc, comm, model, part, solver, contacts)?,
+            &t,
+        )
+    }
+
+    /// Continue as `next` (a new assembly) from the owned rows' temperatures
+    /// `t`, with this system's heat balance, iterations and steps.
+    fn replace(&mut self, mut next: ThermalSystem<'p>, t: &[f64]) -> crate::error::Result<()> {
         let account = self.energy()?;
-        let mut next = ThermalSystem::new(petsc, comm, model, part, solver, contacts)?;
-        next.t.copy_from(&self.t)?;
-        next.t0.copy_from(&self.t)?;
+        next.t.copy_from_slice(t)?;
+        next.t0.copy_from(&next.t)?;
         next.base = account;
         next.iterations = self.iterations;
         next.assemblies = self.assemblies + 1;
@@ -458,16 +467,8 @@ impl<'p> ThermalSystem<'p> {
         contacts: &ContactSet,
         t_nodes: &[f64],
     ) -> crate::error::Result<()> {
-        let account = self.energy()?;
-        let mut next = ThermalSystem::new(petsc, comm, model, part, solver, contacts)?;
-        next.t.copy_from_slice(&part.nodes_to_rows(t_nodes))?;
-        next.t0.copy_from(&next.t)?;
-        next.base = account;
-        next.iterations = self.iterations;
-        next.assemblies = self.assemblies + 1;
-        next.steps_total = self.steps_total;
-        *self = next;
-        Ok(())
+        let next = ThermalSystem::new(petsc, comm, model, part, solver, contacts)?;
+        self.replace(next, &part.nodes_to_rows(t_nodes))
     }
 
     /// Continue from a saved state: owned temperatures (PETSc order), the

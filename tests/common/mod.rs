@@ -299,3 +299,52 @@ pub fn binned(p: &[(f64, f64, f64)], r0: f64, r1: f64, bins: usize) -> Vec<(f64,
         })
         .collect()
 }
+
+/// A bar of length `len` along `axis` (0 = x, 1 = y, 2 = z), 0.2 m square
+/// across, on rollers at its three `min` faces and pulled by a traction `t`
+/// on its far end along the axis.
+pub fn traction_bar(axis: usize, t: f64, young: f64, len: f64) -> String {
+    let mut size = [0.2; 3];
+    size[axis] = len;
+    let mut value = [0.0; 3];
+    value[axis] = t;
+    let end = ["xmax", "ymax", "zmax"][axis];
+    format!(
+        r#"
+[time]
+dt = 0.02
+steps = 5
+
+[[materials]]
+name = "m"
+density = 1000.0
+young = {young}
+poisson = 0.25
+
+[[bodies]]
+name = "bar"
+material = "m"
+mesh = {{ kind = "box", size = {size:?}, element_size = 0.1 }}
+
+[mechanics]
+damping = 600.0
+
+[[mechanics.bc]]
+kind = "fixed"
+set = "xmin"
+components = ["x"]
+[[mechanics.bc]]
+kind = "fixed"
+set = "ymin"
+components = ["y"]
+[[mechanics.bc]]
+kind = "fixed"
+set = "zmin"
+components = ["z"]
+[[mechanics.bc]]
+kind = "traction"
+set = "{end}"
+value = {value:?}
+"#
+    )
+}

@@ -348,3 +348,29 @@ value = {value:?}
 "#
     )
 }
+
+/// The last output of a bar along x of length `len` under the end traction
+/// `t`: σ_xx = t and no lateral stress in every element (1 %), the end
+/// displacement `tip` (1 %).
+pub fn assert_uniaxial_bar(m: &Mech, t: f64, len: f64, tip: f64, what: &str) {
+    let k = m.times.len() - 1;
+    for s in &m.stress[k] {
+        assert!(
+            (s[0][0] / t - 1.0).abs() < 0.01
+                && s[1][1].abs() < 0.01 * t
+                && s[2][2].abs() < 0.01 * t,
+            "{what}: stress {s:?}, traction {t}"
+        );
+    }
+    let end = m
+        .coords
+        .iter()
+        .zip(&m.disp[k])
+        .filter(|(x, _)| (x[0] - len).abs() < 1e-12)
+        .map(|(_, u)| u[0])
+        .fold(0.0, f64::max);
+    assert!(
+        (end / tip - 1.0).abs() < 0.01,
+        "{what}: end displacement {end:e}, expected {tip:e}"
+    );
+}

@@ -74,6 +74,9 @@ impl DomainJoints {
             tot.stored += s.stored;
             tot.dissipated += s.dissipated;
             tot.broken += s.broken;
+            for (t, m) in tot.by_mode.iter_mut().zip(s.by_mode) {
+                *t += m;
+            }
             tot.crack_area += s.crack_area;
         }
         self.totals = tot;

@@ -49,6 +49,8 @@ pub struct MechanicsState {
     pub fracture: f64,
     /// Broken joints.
     pub broken_joints: u64,
+    /// Of those, broken in opening, sliding and mixed mode.
+    pub broken_by_mode: [u64; 3],
     /// Area of the broken joints, one face each (m²).
     pub crack_area: f64,
 }
@@ -108,8 +110,11 @@ impl ExplicitDomain {
             self.joints.totals.dissipated,
             self.joints.totals.broken as f64,
             self.joints.totals.crack_area,
+            self.joints.totals.by_mode[0] as f64,
+            self.joints.totals.by_mode[1] as f64,
+            self.joints.totals.by_mode[2] as f64,
         ];
-        let mut sum = [0.0; 13];
+        let mut sum = [0.0; 16];
         comm.all_reduce_into(&local[..], &mut sum[..], SystemOperation::sum());
         MechanicsState {
             kinetic: sum[0],
@@ -123,6 +128,7 @@ impl ExplicitDomain {
             fracture: sum[10],
             broken_joints: sum[11] as u64,
             crack_area: sum[12],
+            broken_by_mode: [sum[13] as u64, sum[14] as u64, sum[15] as u64],
         }
     }
 

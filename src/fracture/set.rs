@@ -31,6 +31,9 @@ pub struct JointTotals {
     pub dissipated: f64,
     /// Joints broken so far.
     pub broken: usize,
+    /// Of those, broken in opening (mixity at most 0.1), sliding (at
+    /// least 0.9, and every break under compression) and mixed mode.
+    pub by_mode: [usize; 3],
     /// Area of the broken joints' faces, one side (m²).
     pub crack_area: f64,
 }
@@ -91,8 +94,9 @@ impl JointSet {
                 self.broke_at[j] = t;
             }
             tot.dissipated += st.dissipated * f.area;
-            if st.broken.is_some() {
+            if let Some(mode) = st.broken {
                 tot.broken += 1;
+                tot.by_mode[usize::from(mode.code()) - 1] += 1;
                 tot.crack_area += f.area;
             }
         }

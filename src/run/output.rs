@@ -121,6 +121,9 @@ impl Output {
                     "fracture_energy",
                     "broken_joints",
                     "crack_area",
+                    "broken_opening",
+                    "broken_sliding",
+                    "broken_mixed",
                 ] {
                     header.push(h.into());
                 }
@@ -291,6 +294,9 @@ impl Output {
                     st.fracture,
                     st.broken_joints as f64,
                     st.crack_area,
+                    st.broken_by_mode[0] as f64,
+                    st.broken_by_mode[1] as f64,
+                    st.broken_by_mode[2] as f64,
                 ]);
             }
         }

@@ -18,7 +18,7 @@ use super::domain::PairTet;
 use super::{ExplicitDomain, NONE};
 use crate::contact::penalty::{pair_stiffness, LinearizedOverlap};
 use crate::contact::{
-    tet_pair_contact, ContactPair, OwnAndGhosts, PairDofs, SearchOptions, TetFaces,
+    tet_pair_contact, ContactPair, ContactSurface, OwnAndGhosts, PairDofs, SearchOptions, TetFaces,
 };
 use crate::error::{Error, Result};
 use crate::geometry::{face_planes, planes_within, TetPlanes};
@@ -709,8 +709,54 @@ impl ExplicitDomain {
                 )
             }))
             .collect();
+        pairs.extend(self.closed_crack_pairs());
         pairs.sort_by_key(|(p, _)| (p.target, p.contactor));
         Ok(pairs)
+    }
+
+    /// The thermal contact of each crack whose faces touched at the last
+    /// substep: S = the face's area, the corners a third each
+    /// ([`ContactSurface::coincident_faces`]). Its conductance is S / Rc of
+    /// the material with itself, like any contact pair.
+    fn closed_crack_pairs(&self) -> Vec<(ContactPair, PairDofs)> {
+        let own = &self.part_tets;
+        let petsc = &self.node_petsc;
+        self.joints
+            .closed_cracks()
+            .into_iter()
+            .map(|(tets, sides, area)| {
+                let side = |k: usize| {
+                    let e = own
+                        .gid
+                        .binary_search(&tets[k])
+                        .expect("a jointed body is held whole");
+                    let face = own.tets[e]
+                        .iter()
+                        .position(|n| !sides[k].contains(n))
+                        .expect("a face of its tet");
+                    (e, face)
+                };
+                let (mut t, mut c) = (side(0), side(1));
+                if tets[0] > tets[1] {
+                    std::mem::swap(&mut t, &mut c);
+                }
+                let mut d = PairDofs {
+                    materials: [own.material[t.0], own.material[c.0]],
+                    bodies: [own.body[t.0], own.body[c.0]],
+                    ..Default::default()
+                };
+                for j in 0..4 {
+                    d.petsc[j] = petsc[own.tets[t.0][j] as usize];
+                    d.petsc[4 + j] = petsc[own.tets[c.0][j] as usize];
+                }
+                let p = ContactPair {
+                    target: own.gid[t.0],
+                    contactor: own.gid[c.0],
+                    surface: ContactSurface::coincident_faces(area, t.1, c.1),
+                };
+                (p, d)
+            })
+            .collect()
     }
 
     /// Smallest search margin of the contact candidates (m), used at rest

@@ -351,6 +351,8 @@ impl ExplicitDomain {
             counters: MechanicsCounters::default(),
         };
         dom.pieces = Pieces::new(&dom.part_tets);
+        // Initial cracks are boundary faces from the start.
+        dom.mark_cracks();
         dom.detect(comm)?;
         dom.update_element_temperatures(None);
         Ok((dom, substeps))
@@ -415,6 +417,12 @@ impl ExplicitDomain {
     /// Joints broken on this rank since the thermal rows were last numbered.
     pub fn joints_broken_since_rows(&self) -> usize {
         self.joints.broken_since_rows()
+    }
+
+    /// Whether the cracks whose faces touch changed since the last call
+    /// (their contact conducts heat, so the thermal contacts must follow).
+    pub fn crack_contacts_changed(&mut self) -> bool {
+        self.joints.closed_changed()
     }
 
     /// The broken joints' tets (global ids), marking the rows as numbered

@@ -22,6 +22,9 @@ pub(super) struct DomainJoints {
     pub(super) totals: JointTotals,
     /// Broken joints when the thermal rows were last numbered.
     rows_broken: usize,
+    /// Which cracks were closed when the thermal contacts were last
+    /// found (count, and a sum over their joints of a mix of the index).
+    closed_seen: (usize, u64),
 }
 
 impl DomainJoints {
@@ -29,7 +32,8 @@ impl DomainJoints {
     /// does not move, so its joints are left out). Errors name the
     /// material and the joint whose size makes the law snap back.
     pub(super) fn new(model: &Model, part: &Part, body_held: &[bool]) -> Result<DomainJoints> {
-        let mut by_material: std::collections::BTreeMap<u32, Vec<_>> = Default::default();
+        let mut by_material: std::collections::BTreeMap<u32, (Vec<_>, Vec<bool>)> =
+            Default::default();
         for j in &part.joints {
             let e = part
                 .elem_gid
@@ -38,17 +42,23 @@ impl DomainJoints {
             if body_held[part.mesh.body[e] as usize] {
                 continue;
             }
-            by_material.entry(j.material).or_default().push(j.faces);
+            let e = by_material.entry(j.material).or_default();
+            e.0.push(j.faces);
+            e.1.push(j.broken);
         }
+        let x: Vec<Vector3<f64>> = part.mesh.nodes.iter().map(|p| Vector3::from(*p)).collect();
         let mut d = DomainJoints::default();
-        for (m, faces) in by_material {
+        for (m, (faces, broken)) in by_material {
             let mat = &model.materials[m as usize];
             let fm = mat.fracture.ok_or_else(|| {
                 Error::Mechanics(format!("material `{}` has no fracture keys", mat.name))
             })?;
             let n = faces.len();
-            let set = JointSet::new(faces, &fm)
+            let mut set = JointSet::new(faces, &fm)
                 .map_err(|e| Error::Mechanics(format!("material `{}`: {e}", mat.name)))?;
+            for (j, _) in broken.iter().enumerate().filter(|(_, &b)| b) {
+                set.start_broken(j, &x);
+            }
             d.sets.push(set);
             d.out.push(vec![[Vector3::zeros(); 6]; n]);
         }
@@ -71,15 +81,56 @@ impl DomainJoints {
                     f[l as usize] += forces[k];
                 }
             }
-            tot.stored += s.stored;
-            tot.dissipated += s.dissipated;
-            tot.broken += s.broken;
-            for (t, m) in tot.by_mode.iter_mut().zip(s.by_mode) {
-                *t += m;
-            }
-            tot.crack_area += s.crack_area;
+            tot.add(&s);
         }
         self.totals = tot;
+    }
+
+    /// The faces of the joints broken since the last call: per crack, its
+    /// two tets (global ids) and the corners of each side (local nodes).
+    pub(super) fn take_new_cracks(&mut self) -> Vec<([u32; 2], [[u32; 3]; 2])> {
+        let mut out = Vec::new();
+        for s in &mut self.sets {
+            for j in s.take_new_cracks() {
+                let f = &s.faces[j as usize];
+                out.push((f.tets, [f.a, f.b]));
+            }
+        }
+        out
+    }
+
+    /// Whether the set of closed cracks differs from the last call's.
+    pub(super) fn closed_changed(&mut self) -> bool {
+        let mut stamp = (0usize, 0u64);
+        for (k, s) in self.sets.iter().enumerate() {
+            for (j, c) in &s.cracks {
+                if c.closed {
+                    let key = (k as u64) << 32 | u64::from(*j);
+                    stamp.0 += 1;
+                    stamp.1 = stamp
+                        .1
+                        .wrapping_add(key.wrapping_mul(0x9E37_79B9_7F4A_7C15));
+                }
+            }
+        }
+        let changed = stamp != self.closed_seen;
+        self.closed_seen = stamp;
+        changed
+    }
+
+    /// The cracks whose faces touched at the last substep: per crack, its
+    /// two tets (global ids), the corners of each side (local nodes) and
+    /// the face's reference area (m²).
+    pub(super) fn closed_cracks(&self) -> Vec<([u32; 2], [[u32; 3]; 2], f64)> {
+        self.sets
+            .iter()
+            .flat_map(|s| {
+                s.cracks.iter().filter(|(_, c)| c.closed).map(|&(j, _)| {
+                    let f = &s.faces[j as usize];
+                    (f.tets, [f.a, f.b], f.area)
+                })
+            })
+            .collect()
     }
 
     /// Joints broken here since the thermal rows were last numbered.
@@ -101,5 +152,31 @@ impl DomainJoints {
                     .map(|(f, _)| f.tets)
             })
             .collect()
+    }
+}
+
+impl super::ExplicitDomain {
+    /// The faces of joints broken since the last call become boundary
+    /// faces of their tets (and their corners boundary nodes), so that the
+    /// contact search of other bodies sees them; each broken joint's own
+    /// two faces meet through its crack contact ([`crate::fracture::crack`]).
+    pub(super) fn mark_cracks(&mut self) {
+        let own = &mut self.part_tets;
+        for (tets, sides) in self.joints.take_new_cracks() {
+            for (gid, face) in tets.iter().zip(&sides) {
+                let e = own
+                    .gid
+                    .binary_search(gid)
+                    .expect("a jointed body is held whole");
+                let opposite = own.tets[e]
+                    .iter()
+                    .position(|n| !face.contains(n))
+                    .expect("a face of its tet");
+                own.mask[e] |= 1 << opposite;
+                for &n in face {
+                    own.node_boundary[n as usize] = true;
+                }
+            }
+        }
     }
 }

@@ -53,6 +53,10 @@ pub struct MechanicsState {
     pub broken_by_mode: [u64; 3],
     /// Area of the broken joints, one face each (m²).
     pub crack_area: f64,
+    /// Cracks (broken joints, initial cracks included) whose faces touch.
+    pub closed_cracks: u64,
+    /// Energy dissipated by friction on crack faces so far (J).
+    pub crack_friction: f64,
 }
 
 /// Counters for the run summary.
@@ -113,8 +117,10 @@ impl ExplicitDomain {
             self.joints.totals.by_mode[0] as f64,
             self.joints.totals.by_mode[1] as f64,
             self.joints.totals.by_mode[2] as f64,
+            self.joints.totals.closed as f64,
+            self.joints.totals.friction,
         ];
-        let mut sum = [0.0; 16];
+        let mut sum = [0.0; 18];
         comm.all_reduce_into(&local[..], &mut sum[..], SystemOperation::sum());
         MechanicsState {
             kinetic: sum[0],
@@ -129,6 +135,8 @@ impl ExplicitDomain {
             broken_joints: sum[11] as u64,
             crack_area: sum[12],
             broken_by_mode: [sum[13] as u64, sum[14] as u64, sum[15] as u64],
+            closed_cracks: sum[16] as u64,
+            crack_friction: sum[17],
         }
     }
 

@@ -258,6 +258,7 @@ impl ExplicitDomain {
             // Positions at t_n = substeps × Δt.
             let t = self.counters.substeps as f64 * self.dt;
             self.joints.add_forces(&self.x, t, &mut self.f);
+            self.mark_cracks();
         }
         let no = self.n_owned;
         let p = NodeUpdate {

@@ -126,16 +126,19 @@ pub enum Mode {
     Sliding,
     /// In between.
     Mixed,
+    /// Broken from the start: an initial crack of the scenario.
+    Initial,
 }
 
 impl Mode {
-    /// The code written to the joint output: 1 opening, 2 sliding, 3 mixed
-    /// (0 is intact).
+    /// The code written to the joint output: 1 opening, 2 sliding, 3 mixed,
+    /// 4 initial crack (0 is intact).
     pub fn code(self) -> u8 {
         match self {
             Mode::Opening => 1,
             Mode::Sliding => 2,
             Mode::Mixed => 3,
+            Mode::Initial => 4,
         }
     }
 
@@ -170,6 +173,11 @@ struct Envelope {
 }
 
 impl CohesiveLaw {
+    /// Coulomb friction coefficient tan φ of the faces once broken.
+    pub fn friction(&self) -> f64 {
+        self.tan_phi
+    }
+
     /// The same law for a joint of another size: stiffness `k` (Pa/m).
     /// A [`super::set::JointSet`] keeps one law per material and one
     /// stiffness per joint.

@@ -1,14 +1,17 @@
 //! Cohesive-zone fracture (seed 004 sec 2.7): joints inserted between the
 //! tets of a body ([`insert`]), the cohesive law with damage ([`law`]) and
-//! the 6-node joint element's forces ([`joint`]), a rank's joints advanced
+//! the 6-node joint element's forces ([`joint`]), the contact of a broken
+//! joint's faces ([`crack`]), a rank's joints advanced
 //! together with their totals ([`set`]). Physics kernels only: no MPI, no
 //! PETSc.
 
+pub mod crack;
 pub mod insert;
 pub mod joint;
 pub mod law;
 pub mod set;
 
+pub use crack::{crack_forces, CrackResult, CrackState};
 pub use insert::{joint_size, make_discontinuous, JointFaces, Jointed};
 pub use joint::{joint_energy, joint_forces};
 pub use law::{CohesiveLaw, FractureMaterial, JointState, Mode};

@@ -3,9 +3,10 @@
 //! area, energy dissipated). Free of MPI and PETSc: the caller owns the
 //! node positions and places the six forces of each joint in its force sum.
 
+use super::crack::{crack_forces, CrackState};
 use super::insert::{joint_size, JointFaces};
 use super::joint::joint_forces;
-use super::law::{CohesiveLaw, FractureMaterial, JointState};
+use super::law::{CohesiveLaw, FractureMaterial, JointState, Mode};
 use nalgebra::Vector3;
 
 /// Joints with their laws and histories.
@@ -20,6 +21,13 @@ pub struct JointSet {
     pub states: Vec<JointState>,
     /// Time at which each joint broke (s; NaN while intact).
     pub broke_at: Vec<f64>,
+    /// The broken joints (index into `faces`), in the order they broke,
+    /// each with the history of its faces' contact ([`super::crack`]).
+    pub cracks: Vec<(u32, CrackState)>,
+    /// Joints broken since the caller last took them ([`Self::take_new_cracks`]).
+    new_cracks: Vec<u32>,
+    /// Energy dissipated by friction on the crack faces so far (J).
+    friction_lost: f64,
 }
 
 /// What a step of the joints gives back besides the forces.
@@ -36,6 +44,25 @@ pub struct JointTotals {
     pub by_mode: [usize; 3],
     /// Area of the broken joints' faces, one side (m²).
     pub crack_area: f64,
+    /// Energy dissipated by friction on crack faces since the start (J).
+    pub friction: f64,
+    /// Cracks whose faces touch (initial cracks included).
+    pub closed: usize,
+}
+
+impl JointTotals {
+    /// Add `o`'s counts and energies to these.
+    pub fn add(&mut self, o: &JointTotals) {
+        self.stored += o.stored;
+        self.dissipated += o.dissipated;
+        self.broken += o.broken;
+        for (t, m) in self.by_mode.iter_mut().zip(o.by_mode) {
+            *t += m;
+        }
+        self.crack_area += o.crack_area;
+        self.friction += o.friction;
+        self.closed += o.closed;
+    }
 }
 
 impl JointSet {
@@ -64,12 +91,40 @@ impl JointSet {
             stiffness,
             states: vec![JointState::default(); n],
             broke_at: vec![f64::NAN; n],
+            cracks: Vec::new(),
+            new_cracks: Vec::new(),
+            friction_lost: 0.0,
         })
+    }
+
+    /// Break joint `j` before the run (an initial crack of the scenario):
+    /// its faces are a crack from the start, not counted as broken.
+    pub fn start_broken(&mut self, j: usize, x: &[Vector3<f64>]) {
+        if self.states[j].broken.is_some() {
+            return;
+        }
+        self.states[j].broken = Some(Mode::Initial);
+        self.broke_at[j] = 0.0;
+        self.add_crack(j, x);
+    }
+
+    fn add_crack(&mut self, j: usize, x: &[Vector3<f64>]) {
+        let f = &self.faces[j];
+        let p = |n: u32| x[n as usize];
+        let (xa, xb) = (f.a.map(p), f.b.map(p));
+        self.cracks.push((j as u32, CrackState::new(&xa, &xb)));
+        self.new_cracks.push(j as u32);
+    }
+
+    /// The joints broken since the last call (indices into `faces`).
+    pub fn take_new_cracks(&mut self) -> Vec<u32> {
+        std::mem::take(&mut self.new_cracks)
     }
 
     /// Advance every joint to the positions `x` (indexed by the faces'
     /// node numbers) at time `t` and write its six forces (a's corners,
-    /// then b's) to `out` (one entry per joint). Returns the totals.
+    /// then b's) to `out` (one entry per joint): an intact joint's
+    /// tractions, a broken one's crack contact. Returns the totals.
     pub fn forces(
         &mut self,
         x: &[Vector3<f64>],
@@ -77,6 +132,7 @@ impl JointSet {
         out: &mut [[Vector3<f64>; 6]],
     ) -> JointTotals {
         let mut tot = JointTotals::default();
+        let fresh = self.new_cracks.len();
         for (j, f) in self.faces.iter().enumerate() {
             // Gathered element by element (an array `map` here went through
             // the stack and stalled on store forwarding).
@@ -92,14 +148,42 @@ impl JointSet {
             tot.stored += joint_forces(&law, f.area, &xa, &xb, st, fa, fb);
             if st.broken.is_some() && !was_broken {
                 self.broke_at[j] = t;
+                self.new_cracks.push(j as u32);
             }
             tot.dissipated += st.dissipated * f.area;
-            if let Some(mode) = st.broken {
-                tot.broken += 1;
-                tot.by_mode[usize::from(mode.code()) - 1] += 1;
-                tot.crack_area += f.area;
+            match st.broken {
+                Some(Mode::Initial) | None => {}
+                Some(mode) => {
+                    tot.broken += 1;
+                    tot.by_mode[usize::from(mode.code()) - 1] += 1;
+                    tot.crack_area += f.area;
+                }
             }
         }
+        // The joints that broke in this call start their crack contact
+        // relaxed (the slip is their present sliding).
+        for k in fresh..self.new_cracks.len() {
+            let j = self.new_cracks[k] as usize;
+            let f = &self.faces[j];
+            let p = |n: u32| x[n as usize];
+            let (xa, xb) = (f.a.map(p), f.b.map(p));
+            self.cracks.push((j as u32, CrackState::new(&xa, &xb)));
+        }
+        let mu = self.law.friction();
+        for (j, cs) in &mut self.cracks {
+            let j = *j as usize;
+            let f = &self.faces[j];
+            let p = |n: u32| x[n as usize];
+            let (xa, xb) = (f.a.map(p), f.b.map(p));
+            let (fa, fb) = out[j].split_at_mut(3);
+            let fa: &mut [Vector3<f64>; 3] = fa.try_into().expect("three corners");
+            let fb: &mut [Vector3<f64>; 3] = fb.try_into().expect("three corners");
+            let r = crack_forces(self.stiffness[j], mu, f.area, &xa, &xb, cs, fa, fb);
+            tot.stored += r.stored;
+            self.friction_lost += r.dissipated;
+            tot.closed += usize::from(cs.closed);
+        }
+        tot.friction = self.friction_lost;
         tot
     }
 }

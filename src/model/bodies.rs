@@ -32,6 +32,8 @@ pub struct SourceMesh {
 pub struct SourceJoints {
     pub faces: Vec<crate::fracture::insert::JointFaces>,
     pub material: u32,
+    /// Per joint: broken from the start (an initial crack).
+    pub broken: Vec<bool>,
 }
 
 impl SourceMesh {
@@ -70,10 +72,36 @@ impl SourceMesh {
             material,
             mesh: split,
             joints: Some(SourceJoints {
+                broken: vec![false; j.joints.len()],
                 faces: j.joints,
                 material: fracture,
             }),
         }
+    }
+}
+
+impl SourceMesh {
+    /// Mark broken the joints whose faces lie in the plane through `point`
+    /// with normal `normal` (every corner within 1e-6 of the face's size
+    /// of it): an initial crack. Returns how many.
+    pub fn break_on_plane(&mut self, point: [f64; 3], normal: [f64; 3]) -> usize {
+        let Some(j) = &mut self.joints else { return 0 };
+        let len = normal.iter().map(|c| c * c).sum::<f64>().sqrt();
+        let n = normal.map(|c| c / len);
+        let nodes = &self.mesh.nodes;
+        let mut count = 0;
+        for (f, broken) in j.faces.iter().zip(&mut j.broken) {
+            let tol = 1e-6 * f.area.sqrt();
+            let off = |v: u32| {
+                let x = nodes[v as usize];
+                (0..3).map(|d| (x[d] - point[d]) * n[d]).sum::<f64>().abs()
+            };
+            if f.a.iter().all(|&v| off(v) <= tol) {
+                *broken = true;
+                count += 1;
+            }
+        }
+        count
     }
 }
 

@@ -496,7 +496,16 @@ impl Model {
                         }
                     };
                     let fm = material_index(f.material.as_deref().unwrap_or(&b.material));
-                    let src = SourceMesh::jointed(m, material_vec, &in_set, fm);
+                    let mut src = SourceMesh::jointed(m, material_vec, &in_set, fm);
+                    if let Some(plane) = &f.initial_crack {
+                        let n = src.break_on_plane(plane.point, plane.normal);
+                        if n == 0 {
+                            return Err(model_err(format!(
+                                "body `{}`: fracture.initial_crack: no joint face lies in the plane through {:?} with normal {:?}",
+                                b.name, plane.point, plane.normal
+                            )));
+                        }
+                    }
                     // Snap-back is worst at the largest joint (f_t² h / (2 p_f) grows with h).
                     let largest = src
                         .joints

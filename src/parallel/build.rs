@@ -309,15 +309,21 @@ fn make_bodies(
         }
         if let Some(j) = mesh.joints {
             debug_assert!(whole, "a jointed body is held whole");
-            m.joints.extend(j.faces.iter().map(|f| super::PartJoint {
-                faces: crate::fracture::insert::JointFaces {
-                    a: f.a.map(|n| n0 + n),
-                    b: f.b.map(|n| n0 + n),
-                    tets: f.tets.map(|e| e0 + e),
-                    area: f.area,
-                },
-                material: j.material,
-            }));
+            m.joints.extend(
+                j.faces
+                    .iter()
+                    .zip(&j.broken)
+                    .map(|(f, &broken)| super::PartJoint {
+                        faces: crate::fracture::insert::JointFaces {
+                            a: f.a.map(|n| n0 + n),
+                            b: f.b.map(|n| n0 + n),
+                            tets: f.tets.map(|e| e0 + e),
+                            area: f.area,
+                        },
+                        material: j.material,
+                        broken,
+                    }),
+            );
         }
         let here = |f: &[u32; 3]| {
             whole || {
@@ -364,7 +370,7 @@ fn joint_classes(joints: &[super::PartJoint]) -> HashMap<u32, u32> {
         }
         r
     }
-    for j in joints {
+    for j in joints.iter().filter(|j| !j.broken) {
         for (&a, &b) in j.faces.a.iter().zip(&j.faces.b) {
             parent.entry(a).or_insert(a);
             parent.entry(b).or_insert(b);
@@ -558,6 +564,7 @@ fn number(comm: &SimpleCommunicator, m: Made) -> Part {
                     ..j.faces
                 },
                 material: j.material,
+                broken: j.broken,
             })
             .collect(),
     }
@@ -587,6 +594,7 @@ impl Part {
                     ..j.faces
                 },
                 material: j.material,
+                broken: j.broken,
             })
             .collect();
         let tied = joint_classes(&intact);

@@ -84,6 +84,8 @@ pub struct PartJoint {
     pub faces: crate::fracture::insert::JointFaces,
     /// Fracture material (index into the model's materials).
     pub material: u32,
+    /// Broken from the start (an initial crack of the scenario).
+    pub broken: bool,
 }
 
 /// Per element and node of the whole mesh: its rank and PETSc number.

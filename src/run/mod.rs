@@ -415,7 +415,7 @@ impl Stages<'_, '_> {
             }
             step += 1;
             if self.sys.is_some() && model.has_joints() {
-                self.split_rows()?;
+                self.follow_cracks(step)?;
             }
         }
         Ok(())
@@ -425,16 +425,24 @@ impl Stages<'_, '_> {
     /// copies of a node no longer tied by intact joints get rows of their
     /// own, the contacts are found again on the new rows, and the thermal
     /// system is rebuilt, the nodes keeping their temperatures (issue 19:
-    /// heat crosses a broken joint only through the contact model).
-    fn split_rows(&mut self) -> Result<()> {
+    /// heat crosses a broken joint only through the contact model). When
+    /// none broke but cracks closed or opened, the contacts are found
+    /// again (a crack conducts while its faces touch).
+    fn follow_cracks(&mut self, step: u64) -> Result<()> {
         let comm = self.comm;
         let Some(Mechanics { domain: m, .. }) = self.mech.as_mut() else {
             return Ok(());
         };
-        let mine = m.joints_broken_since_rows() as u64;
-        let mut any = 0u64;
-        comm.all_reduce_into(&mine, &mut any, SystemOperation::sum());
-        if any == 0 {
+        let mine = [
+            m.joints_broken_since_rows() as u64,
+            u64::from(m.crack_contacts_changed() && self.model.contact.is_some()),
+        ];
+        let mut any = [0u64; 2];
+        comm.all_reduce_into(&mine[..], &mut any[..], SystemOperation::sum());
+        if any[0] == 0 {
+            if any[1] > 0 {
+                self.redetect(step)?;
+            }
             return Ok(());
         }
         let clock = Instant::now();

@@ -124,6 +124,8 @@ impl Output {
                     "broken_opening",
                     "broken_sliding",
                     "broken_mixed",
+                    "closed_cracks",
+                    "crack_friction",
                 ] {
                     header.push(h.into());
                 }
@@ -297,6 +299,8 @@ impl Output {
                     st.broken_by_mode[0] as f64,
                     st.broken_by_mode[1] as f64,
                     st.broken_by_mode[2] as f64,
+                    st.closed_cracks as f64,
+                    st.crack_friction,
                 ]);
             }
         }

@@ -173,6 +173,19 @@ pub struct FractureSpec {
     /// Material with the fracture keys (default: the body's material).
     #[serde(default)]
     pub material: Option<String>,
+    /// Joints whose faces lie in this plane start broken: an initial crack.
+    #[serde(default)]
+    pub initial_crack: Option<CrackPlane>,
+}
+
+/// A plane of joint faces broken from the start.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CrackPlane {
+    /// A point of the plane (m, scenario coordinates).
+    pub point: [f64; 3],
+    /// Its normal (any length but zero).
+    pub normal: [f64; 3],
 }
 
 /// One body.

@@ -390,6 +390,21 @@ impl Scenario {
             if matches!(b.mesh, MeshSpec::Checkpoint { .. }) {
                 return Err((key(""), "bodies from a checkpoint cannot be jointed".into()));
             }
+            if let Some(c) = &f.initial_crack {
+                if !c.point.iter().all(|x| x.is_finite()) {
+                    return Err((
+                        key(".initial_crack.point"),
+                        format!("must be finite, got {:?}", c.point),
+                    ));
+                }
+                let len2: f64 = c.normal.iter().map(|x| x * x).sum();
+                if !(len2.is_finite() && len2 > 0.0) {
+                    return Err((
+                        key(".initial_crack.normal"),
+                        format!("must be finite and non-zero, got {:?}", c.normal),
+                    ));
+                }
+            }
             let name = f.material.as_deref().unwrap_or(&b.material);
             let Some(m) = self.materials.iter().position(|m| m.name == name) else {
                 return Err((key(".material"), format!("no material named `{name}`")));

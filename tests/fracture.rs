@@ -27,6 +27,48 @@ struct BarRun {
     other_jump: f64,
     lateral_jump: f64,
     disp: Vec<[f64; 3]>,
+    /// The joint grid's last damage, per joint.
+    joint_damage: Vec<f64>,
+}
+
+/// The joint output grid of `out` at its last step (issue 19, output):
+/// as many joints in a breaking mode (1–3) as the history's broken joints,
+/// each broken joint's breaking time positive and its faces open, its face
+/// within one element of x = `crack_x`; intact joints at `broke_at` = −1.
+/// Returns the damage per joint.
+fn check_joint_grid(out: &std::path::Path, stem: &str, broken: f64, crack_x: f64) -> Vec<f64> {
+    let h5 = out.join(format!("{stem}_joints.h5"));
+    assert!(out.join(format!("{stem}_joints.xdmf")).is_file());
+    let k = fdem::io::read_times(&h5).unwrap().len() - 1;
+    let field = |f: &str| fdem::io::read_cell_field_step(&h5, f, k).unwrap();
+    let (mode, at, opening, damage) = (
+        field("mode"),
+        field("broke_at"),
+        field("opening"),
+        field("damage"),
+    );
+    let (coords, tris) = fdem::io::read_triangles(&h5).unwrap();
+    assert_eq!(tris.len(), mode.len());
+    let mut n = 0.0;
+    for (j, tri) in tris.iter().enumerate() {
+        if (1.0..=3.0).contains(&mode[j]) {
+            n += 1.0;
+            assert!(
+                damage[j] == 1.0 && at[j] > 0.0 && opening[j] > 0.0,
+                "joint {j}"
+            );
+            let x = tri.iter().map(|&p| coords[p as usize][0]).sum::<f64>() / 3.0;
+            assert!(
+                (x - crack_x).abs() < 0.011,
+                "broken joint {j} at x = {x}, crack at {crack_x}"
+            );
+        } else {
+            assert_eq!(mode[j], 0.0);
+            assert!(damage[j] < 1.0 && at[j] == -1.0, "joint {j}");
+        }
+    }
+    assert_eq!(n, broken, "joint grid against the history");
+    damage
 }
 
 fn bar(ranks: usize, tag: &str, mesh: &str) -> BarRun {
@@ -98,6 +140,7 @@ fn bar(ranks: usize, tag: &str, mesh: &str) -> BarRun {
         other_jump,
         lateral_jump,
         disp: m.disp[k].clone(),
+        joint_damage: check_joint_grid(&out, "fracture-bar", nb, crack_x),
     }
 }
 
@@ -171,6 +214,10 @@ fn jointed_bar_breaks_at_the_tensile_strength_by_one_crack() {
         "1 and 2 ranks: final displacements differ"
     );
     assert_eq!(two.broken, runs[0].broken);
+    assert_eq!(
+        two.joint_damage, runs[0].joint_damage,
+        "1 and 2 ranks: joint grids differ"
+    );
 }
 
 /// The traction bar of tests/mechanics.rs (a bar on rollers, 1 m, pulled

@@ -419,6 +419,11 @@ impl ExplicitDomain {
         self.joints.broken_since_rows()
     }
 
+    /// This rank's joints for the joint output grid.
+    pub fn joint_rows(&self) -> super::JointRows {
+        self.joints.output_rows(&self.x, &self.x0)
+    }
+
     /// Whether the cracks whose faces touch changed since the last call
     /// (their contact conducts heat, so the thermal contacts must follow).
     pub fn crack_contacts_changed(&mut self) -> bool {

@@ -25,6 +25,37 @@ pub(super) struct DomainJoints {
     /// Which cracks were closed when the thermal contacts were last
     /// found (count, and a sum over their joints of a mix of the index).
     closed_seen: (usize, u64),
+    /// Every joint of the part, in the part's order, for the output.
+    rows: Vec<JointRow>,
+}
+
+/// A joint of the part as the output sees it.
+#[derive(Debug, Clone, Copy)]
+struct JointRow {
+    /// Global joint number ([`Model::joint_offsets`]).
+    gid: u64,
+    /// Its set and place there (`u32::MAX`: a held body's, never advanced).
+    set: u32,
+    index: u32,
+    faces: crate::fracture::insert::JointFaces,
+}
+
+/// This rank's joints for the output, in its order: global numbers, and
+/// per joint its a face's reference corners (three points), their
+/// displacements, and the cell values.
+#[derive(Debug, Clone, Default)]
+pub struct JointRows {
+    pub gid: Vec<u64>,
+    pub corners: Vec<[f64; 3]>,
+    pub displacement: Vec<f64>,
+    /// Damage D in [0, 1].
+    pub damage: Vec<f64>,
+    /// 0 intact, 1 opening, 2 sliding, 3 mixed, 4 initial crack.
+    pub mode: Vec<f64>,
+    /// Time of breaking (s), −1 while intact.
+    pub broke_at: Vec<f64>,
+    /// Mean normal opening of the faces (m; negative when pressed).
+    pub opening: Vec<f64>,
 }
 
 impl DomainJoints {
@@ -32,23 +63,40 @@ impl DomainJoints {
     /// does not move, so its joints are left out). Errors name the
     /// material and the joint whose size makes the law snap back.
     pub(super) fn new(model: &Model, part: &Part, body_held: &[bool]) -> Result<DomainJoints> {
-        let mut by_material: std::collections::BTreeMap<u32, (Vec<_>, Vec<bool>)> =
+        let mut by_material: std::collections::BTreeMap<u32, (Vec<_>, Vec<bool>, Vec<usize>)> =
             Default::default();
-        for j in &part.joints {
+        let (offsets, _) = model.joint_offsets();
+        let mut in_body: std::collections::HashMap<u32, u64> = Default::default();
+        let mut rows = Vec::with_capacity(part.joints.len());
+        for (k, j) in part.joints.iter().enumerate() {
             let e = part
                 .elem_gid
                 .binary_search(&j.faces.tets[0])
                 .expect("a joint's tet is held");
-            if body_held[part.mesh.body[e] as usize] {
+            let body = part.mesh.body[e];
+            let at = in_body.entry(body).or_insert(0);
+            rows.push(JointRow {
+                gid: offsets[body as usize] + *at,
+                set: u32::MAX,
+                index: 0,
+                faces: j.faces,
+            });
+            *at += 1;
+            if body_held[body as usize] {
                 continue;
             }
             let e = by_material.entry(j.material).or_default();
             e.0.push(j.faces);
             e.1.push(j.broken);
+            e.2.push(k);
         }
         let x: Vec<Vector3<f64>> = part.mesh.nodes.iter().map(|p| Vector3::from(*p)).collect();
         let mut d = DomainJoints::default();
-        for (m, (faces, broken)) in by_material {
+        for (m, (faces, broken, at)) in by_material {
+            for (i, &k) in at.iter().enumerate() {
+                rows[k].set = d.sets.len() as u32;
+                rows[k].index = i as u32;
+            }
             let mat = &model.materials[m as usize];
             let fm = mat.fracture.ok_or_else(|| {
                 Error::Mechanics(format!("material `{}` has no fracture keys", mat.name))
@@ -62,7 +110,37 @@ impl DomainJoints {
             d.sets.push(set);
             d.out.push(vec![[Vector3::zeros(); 6]; n]);
         }
+        d.rows = rows;
         Ok(d)
+    }
+
+    /// This rank's joints for the output at positions `x` (reference
+    /// positions `x0`).
+    pub(super) fn output_rows(&self, x: &[Vector3<f64>], x0: &[Vector3<f64>]) -> JointRows {
+        let mut r = JointRows::default();
+        for row in &self.rows {
+            let f = &row.faces;
+            r.gid.push(row.gid);
+            for &n in &f.a {
+                let (p, p0) = (x[n as usize], x0[n as usize]);
+                r.corners.push([p0.x, p0.y, p0.z]);
+                r.displacement
+                    .extend_from_slice(&[p.x - p0.x, p.y - p0.y, p.z - p0.z]);
+            }
+            let p = |n: u32| x[n as usize];
+            r.opening
+                .push(crate::fracture::crack::opening(&f.a.map(p), &f.b.map(p)));
+            let (state, t) = match self.sets.get(row.set as usize) {
+                Some(s) => (s.states[row.index as usize], s.broke_at[row.index as usize]),
+                None => (Default::default(), f64::NAN),
+            };
+            let state: crate::fracture::JointState = state;
+            r.damage.push(state.damage);
+            r.mode
+                .push(state.broken.map_or(0.0, |m| f64::from(m.code())));
+            r.broke_at.push(if t.is_nan() { -1.0 } else { t });
+        }
+        r
     }
 
     /// Whether there are joints here.

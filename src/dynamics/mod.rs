@@ -42,7 +42,8 @@
 //!   trajectories bitwise the same on any number of ranks;
 //! - `state`: energies, output fields, checkpoint save and restore;
 //! - `joints`: the cohesive joints of the jointed bodies (issue 19),
-//!   whose forces are added to the owned nodes after the force sum.
+//!   whose forces are added to the owned nodes after the force sum, the
+//!   crack faces they leave, and their rows of the joint output.
 
 mod balance;
 mod candidates;
@@ -58,6 +59,7 @@ mod tests;
 
 pub use balance::BodyLoad;
 pub use domain::ExplicitDomain;
+pub use joints::JointRows;
 pub use state::{MechanicsCounters, MechanicsState, SavedMotion};
 
 /// Marks an absent local index or slot.

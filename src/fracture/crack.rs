@@ -58,6 +58,14 @@ fn normal_and_mean(xa: &[Vector3<f64>; 3], xb: &[Vector3<f64>; 3]) -> (Vector3<f
     (n, mean)
 }
 
+/// Normal opening of a joint's or crack's faces at `xa`, `xb`: the mean
+/// relative displacement of b's corners from a's along the mid-surface
+/// normal (m; negative when pressed into each other).
+pub fn opening(xa: &[Vector3<f64>; 3], xb: &[Vector3<f64>; 3]) -> f64 {
+    let (n, mean) = normal_and_mean(xa, xb);
+    mean.dot(&n)
+}
+
 /// Forces `fa`, `fb` (N) on the corners of a crack's faces at `xa`, `xb`
 /// (paired corners, coincident when the joint was made), for a penalty `k`
 /// (Pa/m), friction coefficient `mu` and reference face area `area` (m²);

@@ -36,8 +36,18 @@ pub struct MeshPart<'a> {
     pub global_cells: u64,
     /// This rank's cells are rows `cell_offset .. cell_offset + cells.len()`.
     pub cell_offset: u64,
-    /// Tet4 connectivity in GLOBAL node numbering (rows of `/mesh/coordinates`).
-    pub cells: &'a [[u32; 4]],
+    /// Connectivity in GLOBAL node numbering (rows of `/mesh/coordinates`),
+    /// `nodes_per_cell` entries per cell, flat.
+    pub cells: &'a [u32],
+    /// 4 (Tet4) or 3 (triangles).
+    pub nodes_per_cell: usize,
+}
+
+impl MeshPart<'_> {
+    /// This rank's number of cells.
+    fn num_cells(&self) -> usize {
+        self.cells.len() / self.nodes_per_cell.max(1)
+    }
 }
 
 /// One field of one step: `(name, components, this rank's values)`.
@@ -122,7 +132,7 @@ impl TimeSeriesWriter {
             mesh.coords.len() as u64,
             mesh.global_cells,
             mesh.cell_offset,
-            mesh.cells.len() as u64,
+            mesh.num_cells() as u64,
         ];
         let mut all = vec![0_u64; mine.len() * comm.size() as usize];
         comm.all_gather_into(&mine[..], &mut all[..]);
@@ -179,7 +189,7 @@ impl TimeSeriesWriter {
         let cells = Rows {
             global: mesh.global_cells,
             offset: mesh.cell_offset,
-            count: mesh.cells.len() as u64,
+            count: mesh.num_cells() as u64,
         };
         let h5_name = format!("{stem}.h5");
         // The file is built under `<stem>.h5.part` and renamed once the mesh is on
@@ -219,6 +229,7 @@ impl TimeSeriesWriter {
                         h5_name,
                         nodes: nodes.global,
                         cells: cells.global,
+                        nodes_per_cell: mesh.nodes_per_cell,
                         ..XdmfModel::default()
                     },
                     usable: true,
@@ -263,7 +274,7 @@ impl TimeSeriesWriter {
         let cells = Rows {
             global: mesh.global_cells,
             offset: mesh.cell_offset,
-            count: mesh.cells.len() as u64,
+            count: mesh.num_cells() as u64,
         };
         let path = h5_path.clone();
         let h5err = |what: &str| {
@@ -285,7 +296,7 @@ impl TimeSeriesWriter {
                 .dataset("mesh/topology")
                 .map_err(h5err("opening /mesh/topology"))?;
             if coords.shape() != [nodes.global as usize, 3]
-                || topo.shape() != [cells.global as usize, 4]
+                || topo.shape() != [cells.global as usize, mesh.nodes_per_cell]
             {
                 return Ok(Some(format!(
                     "it holds a mesh of {:?} nodes and {:?} cells, this run {} and {}",
@@ -309,7 +320,7 @@ impl TimeSeriesWriter {
                     ..,
                 ))
                 .map_err(h5err("reading /mesh/topology"))?;
-            let same_cells = t.as_slice().is_some_and(|v| v == mesh.cells.as_flattened());
+            let same_cells = t.as_slice().is_some_and(|v| v == mesh.cells);
             if ids.as_slice() != Some(node_ids) || !same_cells {
                 return Ok(Some(
                     "its rows are in another order (another partition, or another number of ranks)"
@@ -392,6 +403,7 @@ impl TimeSeriesWriter {
                     h5_name: format!("{stem}.h5"),
                     nodes: nodes.global,
                     cells: cells.global,
+                    nodes_per_cell: mesh.nodes_per_cell,
                     statics,
                     fields: fields.as_ref().map_or(Vec::new(), |f: &Vec<FieldSlot>| {
                         f.iter().map(|s| s.desc.clone()).collect()
@@ -571,14 +583,15 @@ impl Inner {
             mesh.coords.as_flattened(),
         )
         .map_err(call("writing /mesh/coordinates"))?;
-        let topo = fixed_dataset::<u32>(&mesh_g, "topology", &[cells.global, 4])
+        let npc = mesh.nodes_per_cell as u64;
+        let topo = fixed_dataset::<u32>(&mesh_g, "topology", &[cells.global, npc])
             .map_err(h5err("creating /mesh/topology"))?;
         ffi::write_block(
             &topo,
             &xfer,
             &[cells.offset, 0],
-            &[cells.count, 4],
-            mesh.cells.as_flattened(),
+            &[cells.count, npc],
+            mesh.cells,
         )
         .map_err(call("writing /mesh/topology"))?;
         drop((coords, topo, mesh_g, static_g, fields_g));

@@ -84,7 +84,7 @@ pub use hdf5_out::{FieldData, MeshPart, TimeSeriesWriter};
 pub use history::HistoryWriter;
 pub use read::{
     read_cell_field_step, read_mesh, read_node_field_step, read_static_cell_field_i32,
-    read_static_node_field_i32, read_times, MeshData,
+    read_static_node_field_i32, read_times, read_triangles, MeshData,
 };
 
 /// The `(row, column)` of each of the six components of a symmetric tensor in

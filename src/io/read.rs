@@ -95,3 +95,17 @@ pub fn read_mesh(path: &Path) -> Result<MeshData, IoError> {
             .collect(),
     })
 }
+
+/// Points and triangles (three point rows each).
+pub type Triangles = (Vec<[f64; 3]>, Vec<[u32; 3]>);
+
+/// Reads a triangle mesh (the joint grid): `/mesh/coordinates` and the
+/// three corners of each cell in `/mesh/topology`. Serial, rank-local.
+pub fn read_triangles(path: &Path) -> Result<Triangles, IoError> {
+    let coords = read_all::<f64>(path, "/mesh/coordinates")?;
+    let topo = read_all::<u32>(path, "/mesh/topology")?;
+    Ok((
+        coords.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
+        topo.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
+    ))
+}

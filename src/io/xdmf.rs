@@ -56,6 +56,8 @@ pub(crate) struct XdmfModel {
     pub h5_name: String,
     pub nodes: u64,
     pub cells: u64,
+    /// 4 (Tet4) or 3 (triangles).
+    pub nodes_per_cell: usize,
     /// Static i32 fields: `(name, center)`.
     pub statics: Vec<(String, Center)>,
     /// Time-dependent fields, identical in every step.
@@ -83,12 +85,13 @@ impl XdmfModel {
     /// Topology, geometry and static attributes: identical for every step.
     fn mesh_block(&self, indent: &str) -> String {
         let h5 = escape(&self.h5_name);
-        let (n, e) = (self.nodes, self.cells);
+        let (n, e, npc) = (self.nodes, self.cells, self.nodes_per_cell);
+        let kind = if npc == 3 { "Triangle" } else { "Tetrahedron" };
         let mut s = String::new();
         let _ = writeln!(
             s,
-            "{indent}<Topology TopologyType=\"Tetrahedron\" NumberOfElements=\"{e}\" NodesPerElement=\"4\">\n\
-             {indent}  <DataItem Dimensions=\"{e} 4\" NumberType=\"UInt\" Precision=\"4\" Format=\"HDF\">{h5}:/mesh/topology</DataItem>\n\
+            "{indent}<Topology TopologyType=\"{kind}\" NumberOfElements=\"{e}\" NodesPerElement=\"{npc}\">\n\
+             {indent}  <DataItem Dimensions=\"{e} {npc}\" NumberType=\"UInt\" Precision=\"4\" Format=\"HDF\">{h5}:/mesh/topology</DataItem>\n\
              {indent}</Topology>\n\
              {indent}<Geometry GeometryType=\"XYZ\">\n\
              {indent}  <DataItem Dimensions=\"{n} 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">{h5}:/mesh/coordinates</DataItem>\n\
@@ -205,6 +208,7 @@ mod tests {
             h5_name: "out.h5".into(),
             nodes: 5,
             cells: 2,
+            nodes_per_cell: 4,
             statics: vec![("body".into(), Center::Node)],
             fields: vec![FieldDesc {
                 name: "u".into(),
@@ -219,5 +223,12 @@ mod tests {
         assert!(s.contains("Dimensions=\"5 3\""));
         assert!(s.contains("out.h5:/static/node/body"));
         assert!(s.contains("<Time Value=\"5e-1\"/>"));
+        assert!(s.contains("TopologyType=\"Tetrahedron\"") && s.contains("Dimensions=\"2 4\""));
+        let tri = XdmfModel {
+            nodes_per_cell: 3,
+            ..m
+        }
+        .render();
+        assert!(tri.contains("TopologyType=\"Triangle\"") && tri.contains("Dimensions=\"2 3\""));
     }
 }

@@ -11,6 +11,7 @@
 //! [`settle`], output, [`checkpoint`]), and `finish` with the [`summary`].
 
 mod checkpoint;
+mod joint_output;
 mod output;
 mod rebalance;
 mod schedule;
@@ -331,9 +332,14 @@ impl Stages<'_, '_> {
     /// Collective. Open the output files.
     fn open_output(&self, dir: Option<&Path>, restart: Option<&CheckpointHead>) -> Result<Output> {
         let (heat, mechanics) = (self.sys.is_some(), self.mech.is_some());
-        Output::open(
+        let mut out = Output::open(
             self.comm, self.model, &self.part, dir, heat, mechanics, restart,
-        )
+        )?;
+        if let Some(m) = self.mech.as_ref() {
+            out.joints =
+                joint_output::JointOutput::open(self.comm, self.model, &out.dir, &out.stem, m)?;
+        }
+        Ok(out)
     }
 
     /// Collective. Write the fields and the history row of `step`.

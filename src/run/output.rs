@@ -46,6 +46,8 @@ pub(super) struct Output {
     /// Jointed bodies: (time, crack area, fracture energy) at each output,
     /// for the crack plot.
     cracks: Vec<(f64, f64, f64)>,
+    /// The joint output grid, when the model has joints.
+    pub joints: Option<super::joint_output::JointOutput>,
 }
 
 impl Output {
@@ -179,6 +181,7 @@ impl Output {
                     .as_ref()
                     .is_some_and(|m| m.rebalance.every > 0),
             cracks: Vec::new(),
+            joints: None,
         })
     }
 
@@ -260,6 +263,9 @@ impl Output {
             .map(|(n, c, v)| (*n, *c, v.as_slice()))
             .collect();
         self.writer.write_step(time, &nf, &cf)?;
+        if let (Some(j), Some(m)) = (self.joints.as_mut(), mech) {
+            j.write(comm, time, m)?;
+        }
         let mut row = vec![step as f64, time];
         if let Some(s) = sys.as_mut() {
             let e = s.energy()?;
@@ -353,6 +359,9 @@ impl Output {
             };
             particle_files = agree(comm, written)?;
         }
+        if let Some(j) = &self.joints {
+            particle_files.push(j.xdmf.clone());
+        }
         if model.has_joints() && !self.cracks.is_empty() {
             let path = dir.join(format!("{stem}_cracks.png"));
             let written = if comm.rank() == 0 {
@@ -380,6 +389,9 @@ impl Output {
     /// Collective. Close the series.
     pub fn close(self) -> Result<()> {
         self.writer.close()?;
+        if let Some(j) = self.joints {
+            j.close()?;
+        }
         Ok(())
     }
 }
@@ -538,9 +550,9 @@ fn open_writer(
         .iter()
         .flat_map(|t| t.map(|l| f64::from(part.node_gid[l as usize])))
         .collect();
-    let topology: Vec<[u32; 4]> = cell_block(comm, model, part, &t, 4)
-        .chunks_exact(4)
-        .map(|c| [c[0] as u32, c[1] as u32, c[2] as u32, c[3] as u32])
+    let topology: Vec<u32> = cell_block(comm, model, part, &t, 4)
+        .iter()
+        .map(|&c| c as u32)
         .collect();
     let owner = vec![rank as f64; part.num_elements()];
     let rank_cell: Vec<i32> = cell_block(comm, model, part, &owner, 1)
@@ -556,6 +568,7 @@ fn open_writer(
         global_cells: cells,
         cell_offset: c0,
         cells: &topology,
+        nodes_per_cell: 4,
     };
     let node_id: Vec<i32> = (n0..n0 + coords.len() as u64).map(|g| g as i32).collect();
     if let Some(keep_until) = continue_after {
@@ -568,7 +581,7 @@ fn open_writer(
         .iter()
         .map(|&n| model.body_of_node(n as u32) as i32)
         .collect();
-    let body_cell: Vec<i32> = (c0..c0 + topology.len() as u64)
+    let body_cell: Vec<i32> = (c0..c0 + topology.len() as u64 / 4)
         .map(|e| model.body_of_elem(e as u32) as i32)
         .collect();
     w.write_static_node_field_i32("body", &body_node)?;

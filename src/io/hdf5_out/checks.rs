@@ -111,7 +111,14 @@ pub(super) fn check_tiling(
 /// Local checks of a mesh part (no communication).
 pub(super) fn check_mesh_local(mesh: &MeshPart) -> Result<(), String> {
     let n = mesh.coords.len() as u64;
-    let e = mesh.cells.len() as u64;
+    let npc = mesh.nodes_per_cell;
+    if !(npc == 3 || npc == 4) || !mesh.cells.len().is_multiple_of(npc) {
+        return Err(format!(
+            "cells of {npc} nodes ({} entries): only triangles (3) and Tet4 (4)",
+            mesh.cells.len()
+        ));
+    }
+    let e = (mesh.cells.len() / npc) as u64;
     if mesh
         .node_offset
         .checked_add(n)
@@ -132,7 +139,7 @@ pub(super) fn check_mesh_local(mesh: &MeshPart) -> Result<(), String> {
             mesh.cell_offset, mesh.cell_offset, mesh.global_cells
         ));
     }
-    for (i, cell) in mesh.cells.iter().enumerate() {
+    for (i, cell) in mesh.cells.chunks_exact(npc).enumerate() {
         if let Some(&bad) = cell.iter().find(|&&v| u64::from(v) >= mesh.global_nodes) {
             return Err(format!(
                 "cell {} refers to node {bad}, but global_nodes = {}",

@@ -129,6 +129,9 @@ fn a_pressed_crack_conducts_with_the_contact_resistance() {
         let last = rows.last().unwrap();
         assert_eq!(last[col(&h, "closed_cracks")], 8.0, "{ranks} rank(s)");
         assert_eq!(last[col(&h, "broken_joints")], 0.0);
+        // The load's work went into strain, joint and crack springs, the
+        // mass damping and the crack's friction (1 %).
+        assert_energy_balance(&h, &rows, 0.01, &format!("{ranks} rank(s)"));
         // The axial stress is the traction's (1 %); the friction on the
         // crack keeps a little shear from the load's transient (without
         // it the lateral stresses are 2e-4 of t, as in the uncracked bar).

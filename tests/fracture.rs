@@ -91,6 +91,9 @@ fn bar(ranks: usize, tag: &str, mesh: &str) -> BarRun {
         .fold(f64::NEG_INFINITY, f64::max);
     let (h, rows) = history(&out, "fracture-bar");
     let last = rows.last().expect("history rows");
+    // Issue 19: work of the pulled end = kinetic + strain + joint +
+    // fracture (+ the rest), 1 %, before, while and after the bar breaks.
+    assert_energy_balance(&h, &rows, 0.01, tag);
     // Copies of one mesh node share their reference position: group them
     // and look at the spread of their final displacements.
     let k = m.times.len() - 1;

@@ -151,7 +151,12 @@ pub struct ExplicitDomain {
     /// Cohesive joints of the jointed bodies held here.
     pub(super) joints: super::joints::DomainJoints,
     pub(super) contact_energy: f64,
+    /// Energy dissipated by contact damping and friction and by the mass
+    /// damping, this rank's share (J).
     pub(super) dissipated: f64,
+    /// Work of the loads (tractions, gravity, prescribed velocities) on
+    /// this rank's owned nodes since the run started (J).
+    pub(super) external_work: f64,
     pub(super) active_pairs: u64,
     pub(super) redetect: bool,
     /// Counters.
@@ -346,6 +351,7 @@ impl ExplicitDomain {
             joints,
             contact_energy: 0.0,
             dissipated: 0.0,
+            external_work: 0.0,
             active_pairs: 0,
             redetect: false,
             counters: MechanicsCounters::default(),

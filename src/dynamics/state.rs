@@ -35,7 +35,8 @@ pub struct MechanicsState {
     pub strain: f64,
     /// Penalty contact energy (J).
     pub contact: f64,
-    /// Energy dissipated by contact friction and damping so far (J).
+    /// Energy dissipated by contact damping and friction and by the mass
+    /// damping so far (J).
     pub dissipated: f64,
     /// Linear momentum (kg m/s).
     pub momentum: [f64; 3],
@@ -57,6 +58,9 @@ pub struct MechanicsState {
     pub closed_cracks: u64,
     /// Energy dissipated by friction on crack faces so far (J).
     pub crack_friction: f64,
+    /// Work of the loads (tractions, gravity, prescribed velocities) since
+    /// this run started (J).
+    pub external_work: f64,
 }
 
 /// Counters for the run summary.
@@ -119,8 +123,9 @@ impl ExplicitDomain {
             self.joints.totals.by_mode[2] as f64,
             self.joints.totals.closed as f64,
             self.joints.totals.friction,
+            self.external_work,
         ];
-        let mut sum = [0.0; 18];
+        let mut sum = [0.0; 19];
         comm.all_reduce_into(&local[..], &mut sum[..], SystemOperation::sum());
         MechanicsState {
             kinetic: sum[0],
@@ -137,6 +142,7 @@ impl ExplicitDomain {
             broken_by_mode: [sum[13] as u64, sum[14] as u64, sum[15] as u64],
             closed_cracks: sum[16] as u64,
             crack_friction: sum[17],
+            external_work: sum[18],
         }
     }
 

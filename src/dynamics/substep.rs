@@ -282,24 +282,31 @@ impl ExplicitDomain {
                 free
             }
         };
-        if let Err(e) = update_nodes_damped(
+        match update_nodes_damped(
             &p,
             node_damping,
             &self.mass[..no],
             &self.f[..no],
+            Some(&self.ext[..no]),
             &self.bc[..no],
             &mut self.x[..no],
             &mut self.v[..no],
         ) {
-            let msg = match e {
-                crate::mechanics::MechanicsError::NonFinite { node } => format!(
-                    "node {} became non-finite (NaN or infinite): the explicit step \
+            Ok(w) => {
+                self.external_work += w.external;
+                self.dissipated += w.damping;
+            }
+            Err(e) => {
+                let msg = match e {
+                    crate::mechanics::MechanicsError::NonFinite { node } => format!(
+                        "node {} became non-finite (NaN or infinite): the explicit step \
                      is unstable or a contact exploded; reduce mechanics.dt or mechanics.safety",
-                    self.node_gid[node]
-                ),
-                other => other.to_string(),
-            };
-            error.get_or_insert(Error::Mechanics(msg));
+                        self.node_gid[node]
+                    ),
+                    other => other.to_string(),
+                };
+                error.get_or_insert(Error::Mechanics(msg));
+            }
         }
         self.forward_state(comm);
         match error {

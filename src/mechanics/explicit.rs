@@ -387,31 +387,57 @@ pub fn update_nodes(
     x: &mut [Vector3<f64>],
     v: &mut [Vector3<f64>],
 ) -> Result<(), MechanicsError> {
-    update_nodes_damped(p, |_| p.mass_damping, mass, force, bc, x, v)
+    update_nodes_damped(p, |_| p.mass_damping, mass, force, None, bc, x, v).map(|_| ())
+}
+
+/// What the loads and the damping did to the nodes in one update (J).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct NodeWork {
+    /// Work of the external loads (the `ext` part of the force, gravity)
+    /// and of the prescribed velocities' reactions.
+    pub external: f64,
+    /// Energy taken by the mass damping.
+    pub damping: f64,
 }
 
 /// [`update_nodes`] with node `i` damped by `damping(i)` (1/s) instead of
 /// `p.mass_damping` (a packing stage damps the bodies in contact and
-/// lets the others fall freely).
+/// lets the others fall freely), and the work of the loads: `ext` is the
+/// external part of `force` (tractions; None: all of it is internal).
+///
+/// With v̄ = (v^{n−½} + v^{n+½})/2 the velocity at step n, the loads do
+/// (f_ext + m g)·v̄ Δt on a free component, and a prescribed component's
+/// reaction R = m (v^{n+½} − v^{n−½})/Δt − f^n − m g adds R·v̄ Δt; the
+/// damping takes c m |v̄|² Δt from the free components. Then the kinetic
+/// energy's change is the work of all forces minus the damping's, exactly
+/// for this update, which is what the energy balance checks.
+#[allow(clippy::too_many_arguments)]
 pub fn update_nodes_damped(
     p: &NodeUpdate,
     damping: impl Fn(usize) -> f64,
     mass: &[f64],
     force: &[Vector3<f64>],
+    ext: Option<&[Vector3<f64>]>,
     bc: &[VelocityBc],
     x: &mut [Vector3<f64>],
     v: &mut [Vector3<f64>],
-) -> Result<(), MechanicsError> {
+) -> Result<NodeWork, MechanicsError> {
     let n = x.len();
     check_len("velocities", v.len(), n)?;
     check_len("masses", mass.len(), n)?;
     check_len("forces", force.len(), n)?;
     check_len("velocity boundary conditions", bc.len(), n)?;
+    if let Some(e) = ext {
+        check_len("external forces", e.len(), n)?;
+    }
+    let mut work = NodeWork::default();
     for i in 0..n {
-        let mut vi = v[i];
+        let v_old = v[i];
+        let mut vi = v_old;
+        let c = damping(i);
         if mass[i] > 0.0 {
             let a = force[i] / mass[i] + p.gravity;
-            let half = 0.5 * damping(i) * p.dt;
+            let half = 0.5 * c * p.dt;
             let (keep, scale) = ((1.0 - half) / (1.0 + half), p.dt / (1.0 + half));
             // Not numbered in the seeds: central difference with mid-point damping, v^{n+½} = ((1 − cΔt/2) v^{n−½} + Δt a^n)/(1 + cΔt/2).
             vi = vi * keep + a * scale;
@@ -419,6 +445,21 @@ pub fn update_nodes_damped(
         for d in 0..3 {
             if let Some(u) = bc[i][d] {
                 vi[d] = u;
+            }
+        }
+        if mass[i] > 0.0 {
+            let load = ext.map_or(Vector3::zeros(), |e| e[i]) + p.gravity * mass[i];
+            for d in 0..3 {
+                let mean = 0.5 * (v_old[d] + vi[d]);
+                if bc[i][d].is_some() {
+                    // The reaction's work: m Δv − Δt (f + m g), on v̄.
+                    let r = mass[i] * (vi[d] - v_old[d])
+                        - p.dt * (force[i][d] + p.gravity[d] * mass[i]);
+                    work.external += (r + p.dt * load[d]) * mean;
+                } else {
+                    work.external += p.dt * load[d] * mean;
+                    work.damping += p.dt * c * mass[i] * mean * mean;
+                }
             }
         }
         // Not numbered in the seeds: x^{n+1} = x^n + Δt v^{n+½}.
@@ -429,7 +470,7 @@ pub fn update_nodes_damped(
         v[i] = vi;
         x[i] = xi;
     }
-    Ok(())
+    Ok(work)
 }
 
 /// Kinetic energy ½ Σ m |v|² (J).
@@ -609,7 +650,7 @@ mod tests {
         let n = 2000;
         for _ in 0..n {
             let damping = |i: usize| if i == 0 { 0.0 } else { c };
-            update_nodes_damped(&p, damping, &mass, &force, &bc, &mut x, &mut v).unwrap();
+            update_nodes_damped(&p, damping, &mass, &force, None, &bc, &mut x, &mut v).unwrap();
         }
         let t = n as f64 * dt;
         // Not numbered in the seeds: explicit free fall, v = g t, x = g Δt² n(n+1)/2.
@@ -622,7 +663,7 @@ mod tests {
         let (mut xa, mut va) = ([Vector3::zeros(); 2], [Vector3::new(1.0, 2.0, 3.0); 2]);
         let (mut xb, mut vb) = (xa, va);
         update_nodes(&p, &mass, &force, &bc, &mut xa, &mut va).unwrap();
-        update_nodes_damped(&p, |_| c, &mass, &force, &bc, &mut xb, &mut vb).unwrap();
+        update_nodes_damped(&p, |_| c, &mass, &force, None, &bc, &mut xb, &mut vb).unwrap();
         assert_eq!((xa, va), (xb, vb));
     }
 }

@@ -114,6 +114,7 @@ impl Output {
                 "momentum_z",
                 "mech_contacts",
                 "mech_candidates",
+                "external_work",
             ] {
                 header.push(h.into());
             }
@@ -294,6 +295,7 @@ impl Output {
                 st.momentum[2],
                 st.active_pairs as f64,
                 st.candidate_pairs as f64,
+                st.external_work,
             ]);
             if model.has_joints() {
                 self.cracks.push((time, st.crack_area, st.fracture));

@@ -374,3 +374,37 @@ pub fn assert_uniaxial_bar(m: &Mech, t: f64, len: f64, tip: f64, what: &str) {
         "{what}: end displacement {end:e}, expected {tip:e}"
     );
 }
+
+/// The energy balance of a mechanical run's history (issue 19): at every
+/// row, the work of the loads equals kinetic + strain + contact + joint +
+/// dissipated (damping, friction) + fracture + crack friction energy,
+/// within `rtol` of the largest work. Columns a run without joints lacks
+/// count as zero.
+pub fn assert_energy_balance(h: &[String], rows: &[Vec<f64>], rtol: f64, what: &str) {
+    let get = |r: &Vec<f64>, name: &str| h.iter().position(|c| c == name).map_or(0.0, |i| r[i]);
+    let w_max = rows
+        .iter()
+        .map(|r| get(r, "external_work").abs())
+        .fold(0.0, f64::max);
+    assert!(w_max > 0.0, "{what}: no work done");
+    for r in rows {
+        let w = get(r, "external_work");
+        let stored: f64 = [
+            "kinetic_energy",
+            "strain_energy",
+            "contact_energy",
+            "joint_energy",
+            "dissipated_energy",
+            "fracture_energy",
+            "crack_friction",
+        ]
+        .iter()
+        .map(|c| get(r, c))
+        .sum();
+        assert!(
+            (w - stored).abs() <= rtol * w_max,
+            "{what}: at t = {}: work {w:e} against the energies' sum {stored:e}",
+            get(r, "time")
+        );
+    }
+}

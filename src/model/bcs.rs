@@ -21,8 +21,9 @@ pub struct SetTarget {
 pub enum ThermalKind {
     /// Initial temperature of the set's nodes.
     Initial(f64),
-    /// Prescribed temperature (Dirichlet) of the set's nodes.
-    Temperature(f64),
+    /// Prescribed temperature (Dirichlet) of the set's nodes, reached
+    /// linearly from their initial temperature over the ramp (s; 0: at once).
+    Temperature(f64, f64),
     /// Inward heat flux (W/m²) on the set's faces.
     Flux(f64),
     /// Convection h (W/m²/K) to T_env on the set's faces.
@@ -47,6 +48,8 @@ pub struct BodyBcs {
     pub initial_t: Vec<f64>,
     /// Prescribed temperature per node (the last condition naming it).
     pub dirichlet: Vec<Option<f64>>,
+    /// Per node: the seconds its prescribed temperature ramps over (0: none).
+    pub dirichlet_ramp: Vec<f64>,
     /// Inward flux on faces (body nodes, W/m²).
     pub flux: Vec<([u32; 3], f64)>,
     /// Convection on faces (body nodes, h, T_env).
@@ -157,6 +160,7 @@ pub fn body_bcs(
     let mut bc = BodyBcs {
         initial_t: vec![initial_temperature; nn],
         dirichlet: vec![None; nn],
+        dirichlet_ramp: vec![0.0; nn],
         ..Default::default()
     };
     let empty = TetMesh::default();
@@ -168,9 +172,10 @@ pub fn body_bcs(
                     bc.initial_t[n as usize] = v;
                 }
             }
-            ThermalKind::Temperature(v) => {
+            ThermalKind::Temperature(v, ramp) => {
                 for n in set_nodes(mesh, &t.set) {
                     bc.dirichlet[n as usize] = Some(v);
+                    bc.dirichlet_ramp[n as usize] = ramp;
                 }
             }
             ThermalKind::Flux(q) => {
@@ -183,9 +188,12 @@ pub fn body_bcs(
             }
         }
     }
+    // A prescribed temperature is the node's initial one, unless it ramps
+    // there from the initial one.
     for (n, d) in bc.dirichlet.iter().enumerate() {
-        if let Some(v) = d {
-            bc.initial_t[n] = *v;
+        match d {
+            Some(v) if bc.dirichlet_ramp[n] == 0.0 => bc.initial_t[n] = *v,
+            _ => {}
         }
     }
     if let Some(mech) = mechanics {

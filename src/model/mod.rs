@@ -668,9 +668,11 @@ impl Model {
             let key = format!("thermal.bc[{i}]");
             let err = |m: String| model_err(format!("{key}: {m}"));
             match bc {
-                ThermalBcSpec::Temperature { set, value } => {
+                ThermalBcSpec::Temperature { set, value, ramp } => {
                     let t = nodes_target(set).map_err(err)?;
-                    thermal.bcs.push((t, ThermalKind::Temperature(*value)));
+                    thermal
+                        .bcs
+                        .push((t, ThermalKind::Temperature(*value, ramp.unwrap_or(0.0))));
                 }
                 ThermalBcSpec::Flux { set, value } => {
                     let t = faces_target(set).map_err(err)?;

@@ -240,6 +240,7 @@ struct Made {
     boundary: Vec<bool>,
     initial_t: Vec<f64>,
     dirichlet: Vec<Option<f64>>,
+    dirichlet_ramp: Vec<f64>,
     velocity: Vec<crate::mechanics::explicit::VelocityBc>,
     traction: Vec<[f64; 3]>,
     /// Faces with conditions (node ids).
@@ -301,6 +302,7 @@ fn make_bodies(
             m.boundary.push(mesh.boundary_node[n]);
             m.initial_t.push(bc.initial_t[n]);
             m.dirichlet.push(bc.dirichlet[n]);
+            m.dirichlet_ramp.push(bc.dirichlet_ramp[n]);
             if mech {
                 m.velocity.push(bc.velocity[n]);
                 m.traction.push(bc.traction[n]);
@@ -515,6 +517,12 @@ fn number(comm: &SimpleCommunicator, m: Made) -> Part {
             .take(n_owned)
             .enumerate()
             .filter_map(|(li, &i)| m.dirichlet[i].map(|v| (li as u32, v)))
+            .collect(),
+        dirichlet_ramp: order
+            .iter()
+            .take(n_owned)
+            .filter(|&&i| m.dirichlet[i].is_some())
+            .map(|&i| m.dirichlet_ramp[i])
             .collect(),
         flux: m.flux.iter().map(|(f, q)| (f.map(l), *q)).collect(),
         convection: m

@@ -22,6 +22,10 @@ pub struct LocalBcs {
     pub initial_t: Vec<f64>,
     /// Prescribed temperatures of owned nodes (local index, value).
     pub dirichlet: Vec<(u32, f64)>,
+    /// Per entry of `dirichlet`: the seconds over which its value is
+    /// reached from the node's initial temperature (0: at once). Empty when
+    /// nothing ramps (a part made from a whole mesh, in tests).
+    pub dirichlet_ramp: Vec<f64>,
     /// Prescribed inward flux on faces of owned elements (local nodes, W/m²).
     pub flux: Vec<([u32; 3], f64)>,
     /// Convection on faces of owned elements (local nodes, h, T_env).
@@ -308,6 +312,7 @@ impl Part {
         let bcs = GlobalBcs {
             initial_t: w.initial_t.clone(),
             dirichlet: w.dirichlet.clone(),
+            dirichlet_ramp: Vec::new(),
             flux: w.flux.clone(),
             convection: w.convection.clone(),
             velocity: w.velocity.clone(),
@@ -424,6 +429,7 @@ impl Part {
                 .filter(|(g, _)| owner[*g as usize] == rank32)
                 .map(|&(g, v)| (l(g), v))
                 .collect(),
+            dirichlet_ramp: Vec::new(),
             flux,
             convection,
             velocity: if bcs.velocity.is_empty() {

@@ -546,6 +546,10 @@ pub enum ThermalBcSpec {
         set: String,
         /// Temperature.
         value: f64,
+        /// Seconds over which the value is reached linearly from the
+        /// nodes' initial temperature (default: at once).
+        #[serde(default)]
+        ramp: Option<f64>,
     },
     /// Prescribed heat flux into the body (W/m²) on a face set (seed 000 eq 18).
     Flux {

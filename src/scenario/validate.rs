@@ -328,7 +328,17 @@ impl Scenario {
         for (i, bc) in thermal.bc.iter().enumerate() {
             let key = |f: &str| format!("thermal.bc[{i}].{f}");
             match bc {
-                ThermalBcSpec::Temperature { value, .. } | ThermalBcSpec::Flux { value, .. } => {
+                ThermalBcSpec::Temperature { value, ramp, .. } => {
+                    if !value.is_finite() {
+                        return bad(&key("value"), "must be finite".into());
+                    }
+                    if let Some(r) = ramp {
+                        if !(r.is_finite() && *r > 0.0) {
+                            return bad(&key("ramp"), format!("must be positive (s), got {r}"));
+                        }
+                    }
+                }
+                ThermalBcSpec::Flux { value, .. } => {
                     if !value.is_finite() {
                         return bad(&key("value"), "must be finite".into());
                     }

@@ -19,6 +19,12 @@
 //! 1ᵀ K S is the convection loss. [`ThermalSystem::energy`] evaluates the
 //! boundary heat from the Dirichlet rows of the unconstrained operators
 //! and the stored heat from M, so the two agree to solver tolerance.
+//!
+//! A prescribed temperature with a ramp goes linearly from the node's
+//! initial temperature to its value over the ramp's seconds: while any
+//! ramps, each step evaluates the prescribed values T_d(tⁿ⁺¹) and the
+//! lifting g again from the unconstrained A (one more `MatMult`); the
+//! explicit scheme sets its prescribed rows to them after the update.
 
 use crate::contact::{ContactSet, DeltaT};
 use crate::error::Error;
@@ -149,6 +155,23 @@ enum Scheme<'p> {
     },
 }
 
+/// Prescribed temperatures that ramp: per owned row, the start and end
+/// values and the ramp's duration (0: not ramped), and what the lifting
+/// needs to be evaluated again.
+struct Ramp<'p> {
+    start: Vec<f64>,
+    end: Vec<f64>,
+    time: Vec<f64>,
+    /// The longest ramp (s).
+    until: f64,
+    /// The unconstrained A (implicit scheme only), the load on free rows,
+    /// the free rows' mask, and room for the prescribed values.
+    a0: Option<Matrix<'p>>,
+    f_free: Vector<'p>,
+    free_mask: Vector<'p>,
+    xd: Vector<'p>,
+}
+
 /// The assembled thermal problem and its state.
 pub struct ThermalSystem<'p> {
     ops: Operators<'p>,
@@ -175,6 +198,8 @@ pub struct ThermalSystem<'p> {
     pub iterations: u64,
     /// The solver in use ("cg/gamg", "explicit", ...).
     pub solver_name: String,
+    /// Ramped prescribed temperatures, while any ramps.
+    ramp: Option<Ramp<'p>>,
 }
 
 impl<'p> ThermalSystem<'p> {
@@ -198,11 +223,24 @@ impl<'p> ThermalSystem<'p> {
         let (lo, _) = part.owned_range();
 
         let mut t = Vector::new(petsc, owned)?;
+        let ramp_of = |k: usize| part.bc.dirichlet_ramp.get(k).copied().unwrap_or(0.0);
+        // The prescribed values at the end of any ramp (the lifting's), and
+        // the ramped rows' start values, ends and durations.
+        let mut t_end = t.duplicate()?;
+        let mut ramped: Vec<(usize, f64, f64, f64)> = Vec::new();
         {
+            let start = part.nodes_to_rows(&part.bc.initial_t[..part.num_owned()]);
             let mut v = t.view_mut()?;
-            v.copy_from_slice(&part.nodes_to_rows(&part.bc.initial_t[..part.num_owned()]));
-            for &(l, value) in &part.bc.dirichlet {
-                v[part.petsc[l as usize] as usize - lo] = value;
+            v.copy_from_slice(&start);
+            let mut e = t_end.view_mut()?;
+            e.copy_from_slice(&start);
+            for (k, &(l, value)) in part.bc.dirichlet.iter().enumerate() {
+                let r = part.petsc[l as usize] as usize - lo;
+                e[r] = value;
+                match ramp_of(k) {
+                    0.0 => v[r] = value,
+                    secs => ramped.push((r, start[r], value, secs)),
+                }
             }
         }
         // One row per prescribed node (the copies of a jointed node share one).
@@ -225,9 +263,11 @@ impl<'p> ThermalSystem<'p> {
         let mut free_mask = t.duplicate()?;
         free_mask.set(1.0)?;
         free_mask.axpy(-1.0, &dmask)?;
-        // xd: the prescribed values on Dirichlet rows, zero elsewhere.
+        // xd: the prescribed values on Dirichlet rows (at the end of any
+        // ramp), zero elsewhere.
         let mut xd = t.duplicate()?;
-        xd.pointwise_mult(&t, &dmask)?;
+        xd.pointwise_mult(&t_end, &dmask)?;
+        let ramp_a0 = !ramped.is_empty();
         let mut f_free = t.duplicate()?;
         f_free.pointwise_mult(&ops.load, &free_mask)?;
 
@@ -235,7 +275,7 @@ impl<'p> ThermalSystem<'p> {
 
         let explicit = theta == 0.0 && model.thermal.capacity == CapacityKind::Lumped;
         let mut warm_start = false;
-        let (scheme, solver_name) = if explicit {
+        let (scheme, solver_name, a0) = if explicit {
             // Seed 000 eq 23: Tⁿ⁺¹ = Tⁿ + Δt M_L⁻¹ (f − K Tⁿ).
             let mut dt_minv = t.duplicate()?;
             {
@@ -255,6 +295,7 @@ impl<'p> ThermalSystem<'p> {
             (
                 Scheme::Explicit { e, g },
                 "explicit (lumped, no solve)".to_string(),
+                None,
             )
         } else {
             let mut a = ops.capacity.duplicate()?;
@@ -262,6 +303,8 @@ impl<'p> ThermalSystem<'p> {
             if theta != 0.0 {
                 a.axpy_same_pattern(theta, &ops.stiffness)?;
             }
+            // The unconstrained A, kept to evaluate the lifting while a ramp runs.
+            let a0 = if ramp_a0 { Some(a.duplicate()?) } else { None };
             let mut b = ops.capacity.duplicate()?;
             b.scale(1.0 / dt)?;
             if theta != 1.0 {
@@ -316,9 +359,38 @@ impl<'p> ThermalSystem<'p> {
                     ksp,
                 },
                 format!("{kt}/{pt}"),
+                a0,
             )
         };
 
+        let ramp = if ramped.is_empty() {
+            None
+        } else {
+            let n = t.view()?.len();
+            let (mut start, mut end, mut time) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+            {
+                let e = t_end.view()?;
+                end.copy_from_slice(&e);
+            }
+            for &(r, s0, _, secs) in &ramped {
+                start[r] = s0;
+                time[r] = secs;
+            }
+            let mut f = f_free.duplicate()?;
+            f.copy_from(&f_free)?;
+            let mut m = free_mask.duplicate()?;
+            m.copy_from(&free_mask)?;
+            Some(Ramp {
+                until: ramped.iter().map(|r| r.3).fold(0.0, f64::max),
+                start,
+                end,
+                time,
+                a0,
+                f_free: f,
+                free_mask: m,
+                xd: t.duplicate()?,
+            })
+        };
         let mut t0 = t.duplicate()?;
         t0.copy_from(&t)?;
         let mut t_sum = t.duplicate()?;
@@ -343,15 +415,51 @@ impl<'p> ThermalSystem<'p> {
             steps_total: 0,
             iterations: 0,
             solver_name,
+            ramp,
         })
     }
 
     /// Collective. Advance one time step.
     #[inline]
     pub fn step(&mut self) -> Result<StepStats> {
+        // Ramped prescribed values at the step's end, while they ramp.
+        let time = (self.steps_total + 1) as f64 * self.dt;
+        let ramping = match &mut self.ramp {
+            Some(r) if time - self.dt < r.until => {
+                {
+                    let mut v = r.xd.view_mut()?;
+                    for (i, x) in v.iter_mut().enumerate() {
+                        // Ramped rows: linear from the start to the end value.
+                        *x = if r.time[i] > 0.0 {
+                            let s = (time / r.time[i]).min(1.0);
+                            r.start[i] + (r.end[i] - r.start[i]) * s
+                        } else {
+                            r.end[i]
+                        };
+                    }
+                }
+                // Zero on free rows: keep the prescribed rows only.
+                r.xd.pointwise_mult(&r.xd.duplicate_from()?, &self.dmask)?;
+                if let (Some(a0), Scheme::Implicit { g, .. }) = (&r.a0, &mut self.scheme) {
+                    // g = f_free − free ∘ (A xd) + xd.
+                    a0.mult(&r.xd, g)?;
+                    g.scale(-1.0)?;
+                    g.pointwise_mult(&g.duplicate_from()?, &r.free_mask)?;
+                    g.axpy(1.0, &r.f_free)?;
+                    g.axpy(1.0, &r.xd)?;
+                }
+                true
+            }
+            _ => false,
+        };
         let stats = match &mut self.scheme {
             Scheme::Explicit { e, g } => {
                 e.mult_add(&self.t, g, &mut self.t_next)?;
+                if let (true, Some(r)) = (ramping, &self.ramp) {
+                    self.t_next
+                        .pointwise_mult(&self.t_next.duplicate_from()?, &r.free_mask)?;
+                    self.t_next.axpy(1.0, &r.xd)?;
+                }
                 StepStats { iterations: 0 }
             }
             Scheme::Implicit { b, g, rhs, ksp, .. } => {

@@ -805,3 +805,53 @@ fn an_open_crack_stops_conduction() {
     eprintln!("{cold} nodes at 0, {hot} at 100 after the crack");
     assert!(cold > 0 && hot > 0);
 }
+
+/// Issue 19: a run with joints checkpoints their histories and continues
+/// from them. The thermal bar pulled apart is stopped after 6 of its 8
+/// steps, once joints have broken, and continued from its checkpoint into
+/// a fresh directory on 1 and on 2 ranks: the final displacements,
+/// temperatures and joint damages are bitwise the uninterrupted run's;
+/// continued in place, the joint series keeps its steps and appends.
+#[test]
+fn a_jointed_run_restarts_from_its_checkpoint() {
+    let mesh = root().join("scenarios/meshes/bar-irregular-10.msh");
+    let text = CRACKED_BAR_HEAT
+        .replace("MESH", mesh.to_str().unwrap())
+        .replace(
+            "[output]\nevery = 1\n",
+            "[output]\nevery = 1\ncheckpoint = true\n",
+        );
+    let full = out_dir("fracture-restart-full");
+    let scen = full.join("bar.toml");
+    std::fs::write(&scen, &text).unwrap();
+    run_ok(1, &scen, &full, &[]);
+    let first = out_dir("fracture-restart-first");
+    run_ok(1, &scen, &first, &["--set", "time.steps=6"]);
+    let (h, rows) = history(&first, "bar");
+    let broken = rows.last().unwrap()[col(&h, "broken_joints")];
+    assert!(broken > 0.0, "no joint broke before the checkpoint");
+    let ck = first.join("bar_checkpoint.h5");
+    let last = |dir: &std::path::Path| {
+        let m = read_mech(dir, "bar");
+        let k = m.times.len() - 1;
+        let h5 = dir.join("bar_joints.h5");
+        let kj = fdem::io::read_times(&h5).unwrap().len() - 1;
+        let d = fdem::io::read_cell_field_step(&h5, "damage", kj).unwrap();
+        (m.times[k], m.disp[k].clone(), m.temperature[k].clone(), d)
+    };
+    let want = last(&full);
+    for ranks in [1, 2] {
+        let rest = out_dir(&format!("fracture-restart-rest-{ranks}"));
+        run_ok(ranks, &scen, &rest, &["--restart", ck.to_str().unwrap()]);
+        let got = last(&rest);
+        assert_eq!(got.0, want.0, "{ranks} rank(s): end time");
+        assert_eq!(got.1, want.1, "{ranks} rank(s): displacements");
+        assert_eq!(got.2, want.2, "{ranks} rank(s): temperatures");
+        assert_eq!(got.3, want.3, "{ranks} rank(s): joint damage");
+    }
+    // In place: both series (bodies and joints) continue after the checkpoint.
+    run_ok(1, &scen, &first, &["--restart", ck.to_str().unwrap()]);
+    let times = fdem::io::read_times(&first.join("bar_joints.h5")).unwrap();
+    assert_eq!(times.len(), 9, "joint series continued: {times:?}");
+    assert_eq!(last(&first).3, want.3, "in place: joint damage");
+}

@@ -425,6 +425,24 @@ impl ExplicitDomain {
         self.joints.broken_since_rows()
     }
 
+    /// This rank's joints' histories for a checkpoint: global joint
+    /// numbers and the values of each ([`crate::fracture::set::SAVED_JOINT`]).
+    pub fn saved_joints(&self) -> (Vec<u32>, Vec<f64>) {
+        self.joints.saved()
+    }
+
+    /// The global joint numbers of this rank's joints.
+    pub fn joint_gids(&self) -> Vec<u32> {
+        self.joints.gids()
+    }
+
+    /// Put back the saved histories of this rank's joints (in the order of
+    /// [`Self::joint_gids`]); the broken ones' faces become boundary faces.
+    pub fn restore_joints(&mut self, values: &[[f64; crate::fracture::set::SAVED_JOINT]]) {
+        self.joints.restore(values);
+        self.mark_cracks();
+    }
+
     /// This rank's joints for the joint output grid.
     pub fn joint_rows(&self) -> super::JointRows {
         self.joints.output_rows(&self.x, &self.x0)

@@ -7,7 +7,7 @@
 use nalgebra::Vector3;
 
 use crate::error::{Error, Result};
-use crate::fracture::set::{JointSet, JointTotals};
+use crate::fracture::set::{JointSet, JointTotals, SAVED_JOINT};
 use crate::model::Model;
 use crate::parallel::Part;
 
@@ -175,6 +175,53 @@ impl DomainJoints {
             }
         }
         out
+    }
+
+    /// Every joint's history for a checkpoint: global joint numbers and
+    /// [`SAVED_JOINT`] values per joint (a held body's joints are intact).
+    pub(super) fn saved(&self) -> (Vec<u32>, Vec<f64>) {
+        let crack_of: Vec<Vec<u32>> = self.sets.iter().map(|s| s.crack_index()).collect();
+        let mut gid = Vec::with_capacity(self.rows.len());
+        let mut v = Vec::with_capacity(self.rows.len() * SAVED_JOINT);
+        for row in &self.rows {
+            gid.push(row.gid as u32);
+            match self.sets.get(row.set as usize) {
+                Some(s) => {
+                    v.extend_from_slice(&s.save(row.index as usize, &crack_of[row.set as usize]))
+                }
+                None => {
+                    let mut z = [0.0; SAVED_JOINT];
+                    z[3] = f64::NAN;
+                    v.extend_from_slice(&z);
+                }
+            }
+        }
+        (gid, v)
+    }
+
+    /// The global joint numbers of this rank's joints, in its order.
+    pub(super) fn gids(&self) -> Vec<u32> {
+        self.rows.iter().map(|r| r.gid as u32).collect()
+    }
+
+    /// Put back the histories `values` of this rank's joints (in the order
+    /// of [`Self::gids`]), as if the run had reached them: cracks in
+    /// their order, totals, and the thermal rows' and closed cracks'
+    /// bookkeeping taken as current.
+    pub(super) fn restore(&mut self, values: &[[f64; SAVED_JOINT]]) {
+        for (row, v) in self.rows.iter().zip(values) {
+            if let Some(s) = self.sets.get_mut(row.set as usize) {
+                s.restore(row.index as usize, v);
+            }
+        }
+        let mut tot = JointTotals::default();
+        for s in &mut self.sets {
+            s.sort_cracks();
+            tot.add(&s.recount());
+        }
+        self.totals = tot;
+        self.rows_broken = tot.broken;
+        self.closed_changed();
     }
 
     /// Whether the set of closed cracks differs from the last call's.

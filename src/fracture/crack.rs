@@ -23,6 +23,8 @@ pub struct CrackState {
     pub slip: Vector3<f64>,
     /// Whether the faces touched at the last evaluation.
     pub closed: bool,
+    /// Energy this pair has dissipated by slip so far (J).
+    pub lost: f64,
 }
 
 /// What one evaluation of a crack face pair gives back.
@@ -44,6 +46,7 @@ impl CrackState {
         CrackState {
             slip: mean - n * mean.dot(&n),
             closed: false,
+            lost: 0.0,
         }
     }
 }
@@ -123,6 +126,7 @@ pub fn crack_forces(
         elastic *= keep;
     }
     st.slip = sliding - elastic;
+    st.lost += out.dissipated;
     // The tangential force resists b's sliding relative to a.
     let t = elastic * (k * w);
     for i in 0..3 {

@@ -26,9 +26,10 @@ pub struct JointSet {
     pub cracks: Vec<(u32, CrackState)>,
     /// Joints broken since the caller last took them ([`Self::take_new_cracks`]).
     new_cracks: Vec<u32>,
-    /// Energy dissipated by friction on the crack faces so far (J).
-    friction_lost: f64,
 }
+
+/// Values per joint in a checkpoint ([`JointSet::save`]).
+pub const SAVED_JOINT: usize = 9;
 
 /// What a step of the joints gives back besides the forces.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -93,7 +94,6 @@ impl JointSet {
             broke_at: vec![f64::NAN; n],
             cracks: Vec::new(),
             new_cracks: Vec::new(),
-            friction_lost: 0.0,
         })
     }
 
@@ -114,6 +114,100 @@ impl JointSet {
         let (xa, xb) = (f.a.map(p), f.b.map(p));
         self.cracks.push((j as u32, CrackState::new(&xa, &xb)));
         self.new_cracks.push(j as u32);
+    }
+
+    /// Joint `j`'s history for a checkpoint: damage, dissipated energy per
+    /// area, mode code (0 intact), time of breaking (NaN while intact), and
+    /// its crack's slip (3), closed flag and friction loss (zero while
+    /// intact).
+    pub fn save(&self, j: usize, crack_of: &[u32]) -> [f64; SAVED_JOINT] {
+        let st = &self.states[j];
+        let mut v = [0.0; SAVED_JOINT];
+        v[0] = st.damage;
+        v[1] = st.dissipated;
+        v[2] = st.broken.map_or(0.0, |m| f64::from(m.code()));
+        v[3] = self.broke_at[j];
+        if let Some(&(_, c)) = self.cracks.get(crack_of[j] as usize) {
+            v[4..7].copy_from_slice(c.slip.as_slice());
+            v[7] = f64::from(u8::from(c.closed));
+            v[8] = c.lost;
+        }
+        v
+    }
+
+    /// Per joint, its place in `cracks` (`u32::MAX` while intact).
+    pub fn crack_index(&self) -> Vec<u32> {
+        let mut at = vec![u32::MAX; self.faces.len()];
+        for (k, &(j, _)) in self.cracks.iter().enumerate() {
+            at[j as usize] = k as u32;
+        }
+        at
+    }
+
+    /// Put joint `j`'s saved history back ([`Self::save`]); a broken one's
+    /// crack joins the cracks (and the new ones, for its faces to become
+    /// boundary faces).
+    pub fn restore(&mut self, j: usize, v: &[f64; SAVED_JOINT]) {
+        let mode = match v[2] as u8 {
+            1 => Some(Mode::Opening),
+            2 => Some(Mode::Sliding),
+            3 => Some(Mode::Mixed),
+            4 => Some(Mode::Initial),
+            _ => None,
+        };
+        self.states[j] = JointState {
+            damage: v[0],
+            dissipated: v[1],
+            broken: mode,
+        };
+        self.broke_at[j] = v[3];
+        self.cracks.retain(|c| c.0 as usize != j);
+        self.new_cracks.retain(|&c| c as usize != j);
+        if mode.is_some() {
+            let slip = Vector3::new(v[4], v[5], v[6]);
+            self.cracks.push((
+                j as u32,
+                CrackState {
+                    slip,
+                    closed: v[7] != 0.0,
+                    lost: v[8],
+                },
+            ));
+            self.new_cracks.push(j as u32);
+        }
+    }
+
+    /// Order the cracks as a run that broke them makes them: by time of
+    /// breaking, then by joint (after [`Self::restore`]).
+    pub fn sort_cracks(&mut self) {
+        let at = &self.broke_at;
+        self.cracks.sort_by(|a, b| {
+            at[a.0 as usize]
+                .total_cmp(&at[b.0 as usize])
+                .then(a.0.cmp(&b.0))
+        });
+    }
+
+    /// The counts and energies of the joints as they are (the stored
+    /// energy, known only at a step, left at zero).
+    pub fn recount(&self) -> JointTotals {
+        let mut tot = JointTotals::default();
+        for (f, st) in self.faces.iter().zip(&self.states) {
+            tot.dissipated += st.dissipated * f.area;
+            match st.broken {
+                Some(Mode::Initial) | None => {}
+                Some(mode) => {
+                    tot.broken += 1;
+                    tot.by_mode[usize::from(mode.code()) - 1] += 1;
+                    tot.crack_area += f.area;
+                }
+            }
+        }
+        for (_, c) in &self.cracks {
+            tot.friction += c.lost;
+            tot.closed += usize::from(c.closed);
+        }
+        tot
     }
 
     /// The joints broken since the last call (indices into `faces`).
@@ -180,10 +274,9 @@ impl JointSet {
             let fb: &mut [Vector3<f64>; 3] = fb.try_into().expect("three corners");
             let r = crack_forces(self.stiffness[j], mu, f.area, &xa, &xb, cs, fa, fb);
             tot.stored += r.stored;
-            self.friction_lost += r.dissipated;
+            tot.friction += cs.lost;
             tot.closed += usize::from(cs.closed);
         }
-        tot.friction = self.friction_lost;
         tot
     }
 }

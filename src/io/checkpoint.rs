@@ -321,6 +321,8 @@ pub struct CheckpointHead {
     pub has_velocities_prev: bool,
     /// Temperatures.
     pub has_temperature: bool,
+    /// Whether it holds the cohesive joints' histories.
+    pub has_joints: bool,
     /// The number of ranks of the run that wrote the file, when it saved
     /// each element's rank (`partition/rank`): a restart on as many ranks
     /// continues on the same parts.
@@ -364,6 +366,9 @@ pub struct CheckpointRows<'a> {
     pub account_t0: Option<&'a [f64]>,
     /// Heat account: sum of the step temperatures since.
     pub account_t_sum: Option<&'a [f64]>,
+    /// Cohesive joints: global joint numbers, their saved values
+    /// ([`crate::fracture::set::SAVED_JOINT`] each) and the total.
+    pub joints: Option<(&'a [u32], &'a [f64], u64)>,
 }
 
 /// Collective. Write a checkpoint: every rank its rows (moved to
@@ -573,6 +578,20 @@ fn write_parallel_to(
     if let Some(t) = rows.temperature {
         nodes("state/temperature", t, 1)?;
     }
+    if let Some((ids, v, total)) = rows.joints {
+        let cols = crate::fracture::set::SAVED_JOINT;
+        let (lo, block) = crate::parallel::exchange::to_blocks(comm, ids, v, cols, total);
+        dataset_f64(
+            &file,
+            path,
+            "state/joints",
+            total as usize,
+            cols,
+            &xfer,
+            lo,
+            Some(&block),
+        )?;
+    }
     let mut sc = [0.0; SCALARS];
     sc[0] = head.step as f64;
     sc[1] = head.time;
@@ -705,6 +724,7 @@ impl CheckpointFile {
             has_velocities: file.link_exists("state/velocities"),
             has_velocities_prev: file.link_exists("state/velocities_prev"),
             has_temperature: file.link_exists("state/temperature"),
+            has_joints: file.link_exists("state/joints"),
             partition_ranks: if file.link_exists("partition/rank") {
                 first("partition/ranks")?
             } else {
@@ -797,6 +817,16 @@ impl CheckpointFile {
     /// `state/positions`, ...), for the nodes `ids`.
     pub fn node_rows3(&self, name: &str, ids: &[u32]) -> Result<Vec<[f64; 3]>, IoError> {
         self.rows_of::<f64, 3>(name, ids, self.head.nodes)
+    }
+
+    /// Rows `ids` (global joint numbers) of the joints' histories, of
+    /// `total` joints.
+    pub fn joint_rows(
+        &self,
+        ids: &[u32],
+        total: u64,
+    ) -> Result<Vec<[f64; crate::fracture::set::SAVED_JOINT]>, IoError> {
+        self.rows_of::<f64, { crate::fracture::set::SAVED_JOINT }>("state/joints", ids, total)
     }
 
     /// Node rows of a 1-column node dataset (`state/temperature`, ...).
@@ -951,6 +981,7 @@ mod tests {
             temperature: c.temperature.as_deref(),
             account_t0: c.account.as_ref().map(|a| &a.t0[..]),
             account_t_sum: c.account.as_ref().map(|a| &a.t_sum[..]),
+            joints: None,
         };
         crate::testutil::on_one_rank(|comm| write_parallel(comm, p, &head, &rows))
     }

@@ -267,6 +267,31 @@ pub(super) fn restore_mechanics(
     Ok(())
 }
 
+/// Collective. Put the saved histories of the joints into the domain (a
+/// checkpoint of a run with joints; the model must have the same joints).
+pub(super) fn restore_joints(
+    comm: &SimpleCommunicator,
+    model: &Model,
+    r: &Restart,
+    mech: &mut Mechanics,
+) -> Result<()> {
+    let total = model.joint_offsets().1;
+    if total == 0 {
+        return Ok(());
+    }
+    if !r.file.head.has_joints {
+        return Err(missing(
+            r.file.path(),
+            "the checkpoint has no joint histories, the scenario has joints",
+        ));
+    }
+    let ids = mech.domain.joint_gids();
+    let rows = r.file.joint_rows(&ids, total);
+    let rows = agree(comm, rows.map_err(|e| unreadable(r.file.path(), e)))?;
+    mech.domain.restore_joints(&rows);
+    Ok(())
+}
+
 /// Collective. Put the saved temperatures and heat account into the
 /// thermal system.
 pub(super) fn restore_thermal(
@@ -295,6 +320,9 @@ pub(super) fn restore_thermal(
         Ok((t, account))
     };
     let (t, account) = agree(comm, read().map_err(|e| unreadable(saved.origin(), e)))?;
+    // Per node in the file; the copies of a node tied by intact joints share a row.
+    let t = part.nodes_to_rows(&t);
+    let account = account.map(|(t0, ts)| (part.nodes_to_rows(&t0), part.nodes_to_rows(&ts)));
     let h = ck.heat;
     let heat = EnergyAccount {
         stored: h[0],
@@ -351,6 +379,11 @@ pub(super) fn save_checkpoint(
     settled: Option<f64>,
     path: &Path,
 ) -> Result<()> {
+    let joints = match (&mech, model.has_joints()) {
+        (Some(m), true) => Some(m.domain.saved_joints()),
+        _ => None,
+    };
+    let total_joints = model.joint_offsets().1;
     let mut c = capture(comm, model, part, sys, mech, step, contacts)?;
     c.head.peak_kinetic = peak_kinetic;
     c.head.settled = settled;
@@ -377,6 +410,9 @@ pub(super) fn save_checkpoint(
         temperature: c.temperature.as_deref(),
         account_t0: c.account_t0.as_deref(),
         account_t_sum: c.account_t_sum.as_deref(),
+        joints: joints
+            .as_ref()
+            .map(|(ids, v)| (&ids[..], &v[..], total_joints)),
     };
     crate::io::checkpoint::write_parallel(comm, path, &c.head, &rows).map_err(Error::from)
 }
@@ -434,7 +470,8 @@ pub(super) fn capture(
     }
     let (mut temperature, mut t0, mut t_sum) = (None, None, None);
     if let Some(s) = sys.as_mut() {
-        temperature = Some(s.t.to_local_vec()?);
+        // Saved per node: copies tied by intact joints share a row.
+        temperature = Some(part.rows_to_nodes(&s.t.to_local_vec()?));
         head.ksp_iterations = s.iterations;
         let a = s.account_state()?;
         head.account = Some((
@@ -447,8 +484,8 @@ pub(super) fn capture(
             ],
             a.steps,
         ));
-        t0 = Some(a.t0);
-        t_sum = Some(a.t_sum);
+        t0 = Some(part.rows_to_nodes(&a.t0));
+        t_sum = Some(part.rows_to_nodes(&a.t_sum));
         let e = s.energy()?;
         head.heat = [
             e.stored,

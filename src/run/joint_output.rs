@@ -42,13 +42,16 @@ fn ids(gid: &[u64]) -> (Vec<u32>, Vec<u32>) {
 
 impl JointOutput {
     /// Collective. Create `<dir>/<stem>_joints.h5` with the joints' faces
-    /// at their reference positions; None when the model has no joints.
+    /// at their reference positions, or with `continue_after = Some(t)`
+    /// reopen it to continue after the checkpoint at `t` (a restart in
+    /// place); None when the model has no joints.
     pub fn open(
         comm: &SimpleCommunicator,
         model: &Model,
         dir: &Path,
         stem: &str,
         mech: &Mechanics,
+        continue_after: Option<f64>,
     ) -> Result<Option<JointOutput>> {
         let (_, total) = model.joint_offsets();
         if total == 0 {
@@ -79,7 +82,16 @@ impl JointOutput {
             nodes_per_cell: 3,
         };
         let name = format!("{stem}_joints");
-        let writer = TimeSeriesWriter::create(comm, dir, &name, &mesh)?;
+        // Rows are global: a point's row is its id, on any number of ranks.
+        let point_row: Vec<i32> = (p0..p0 + coords.len() as u64).map(|g| g as i32).collect();
+        let writer = match continue_after {
+            Some(t) => TimeSeriesWriter::reopen(comm, dir, &name, &mesh, &point_row, t)?,
+            None => {
+                let mut w = TimeSeriesWriter::create(comm, dir, &name, &mesh)?;
+                w.write_static_node_field_i32("node_id", &point_row)?;
+                w
+            }
+        };
         let xdmf = writer.xdmf_path().to_path_buf();
         Ok(Some(JointOutput {
             writer,

@@ -197,16 +197,24 @@ impl<'a, 'p> Stages<'a, 'p> {
     ) -> Result<Self> {
         let rank = comm.rank();
         summary::trace_memory(rank, "model");
-        let part = setup::partition(comm, model, restart, &mut times)?;
+        let mut part = setup::partition(comm, model, restart, &mut times)?;
         summary::trace_memory(rank, "part");
         let ck = restart.map(|r| &r.file.head);
         let mut mech = setup::mechanics(comm, model, &part, restart, &mut times)?;
+        if let (Some(r), Some(m)) = (restart, mech.as_mut()) {
+            // The joints' histories; the thermal rows of the broken ones split.
+            checkpoint::restore_joints(comm, model, r, m)?;
+            if model.has_joints() {
+                let broken = m.domain.take_broken_joints();
+                part.renumber_rows(comm, &broken);
+                m.domain.renumber_rows(&part);
+            }
+        }
         summary::trace_memory(rank, "mechanics");
         trace_held(rank, mech.as_ref());
         let mut contacts = Contacts::new(comm, model, &part, restart, mech.as_mut())?;
         summary::trace_memory(rank, "contacts");
         let mut balance = Balance::new(model, comm.size() as usize);
-        let mut part = part;
         rebalance::set_up_thermal_balance(
             comm,
             model,
@@ -336,8 +344,15 @@ impl Stages<'_, '_> {
             self.comm, self.model, &self.part, dir, heat, mechanics, restart,
         )?;
         if let Some(m) = self.mech.as_ref() {
-            out.joints =
-                joint_output::JointOutput::open(self.comm, self.model, &out.dir, &out.stem, m)?;
+            let continue_after = restart.filter(|_| out.continues).map(|c| c.time);
+            out.joints = joint_output::JointOutput::open(
+                self.comm,
+                self.model,
+                &out.dir,
+                &out.stem,
+                m,
+                continue_after,
+            )?;
         }
         Ok(out)
     }

@@ -382,20 +382,12 @@ impl Scenario {
     }
 
     /// The bodies' `fracture` tables and their materials' fracture keys.
-    /// Joints so far run without checkpoints (joint damage is not saved
-    /// yet).
     fn validate_fracture(&self) -> Result<(), (String, String)> {
         for (i, b) in self.bodies.iter().enumerate() {
             let Some(f) = &b.fracture else { continue };
             let key = |k: &str| format!("bodies[{i}].fracture{k}");
             if self.mechanics.is_none() {
                 return Err((key(""), "joints need a [mechanics] table".into()));
-            }
-            if self.output.checkpoint {
-                return Err((
-                    key(""),
-                    "joints cannot be checkpointed yet: set output.checkpoint = false".into(),
-                ));
             }
             if matches!(b.mesh, MeshSpec::Checkpoint { .. }) {
                 return Err((key(""), "bodies from a checkpoint cannot be jointed".into()));

@@ -126,6 +126,7 @@ fn bar(ranks: usize, tag: &str, mesh: &str) -> BarRun {
     }
     // The crack opened: every joint broke in mode I.
     let nb = last[col(&h, "broken_joints")];
+    check_body_table(&out, "fracture-bar", &h, last);
     assert_eq!(
         last[col(&h, "broken_opening")],
         nb,
@@ -145,6 +146,24 @@ fn bar(ranks: usize, tag: &str, mesh: &str) -> BarRun {
         disp: m.disp[k].clone(),
         joint_damage: check_joint_grid(&out, "fracture-bar", nb, crack_x),
     }
+}
+
+/// The per-body crack table of a one-body run against its history's last
+/// row: the same broken joints, crack area and fracture energy.
+fn check_body_table(out: &std::path::Path, stem: &str, h: &[String], last: &[f64]) {
+    let text = std::fs::read_to_string(out.join(format!("{stem}_cracks.csv"))).unwrap();
+    let rows: Vec<Vec<String>> = text
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(String::from).collect())
+        .collect();
+    assert_eq!(rows.len(), 1, "{text}");
+    let v = |i: usize| rows[0][i].parse::<f64>().unwrap();
+    assert_eq!(v(3), last[col(h, "broken_joints")]);
+    let rel = |a: f64, b: f64| (a - b).abs() <= 1e-12 * a.abs().max(b.abs());
+    assert!(rel(v(4), last[col(h, "crack_area")]), "{text}");
+    assert!(rel(v(5), last[col(h, "fracture_energy")]), "{text}");
+    assert!(v(6) > 0.0, "first break {}", v(6));
 }
 
 /// Issue 19, "bar in uniaxial tension": a fully jointed, irregular Tet4 bar

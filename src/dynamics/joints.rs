@@ -34,6 +34,8 @@ pub(super) struct DomainJoints {
 struct JointRow {
     /// Global joint number ([`Model::joint_offsets`]).
     gid: u64,
+    /// Its body.
+    body: u32,
     /// Its set and place there (`u32::MAX`: a held body's, never advanced).
     set: u32,
     index: u32,
@@ -77,6 +79,7 @@ impl DomainJoints {
             let at = in_body.entry(body).or_insert(0);
             rows.push(JointRow {
                 gid: offsets[body as usize] + *at,
+                body,
                 set: u32::MAX,
                 index: 0,
                 faces: j.faces,
@@ -175,6 +178,54 @@ impl DomainJoints {
             }
         }
         out
+    }
+
+    /// Per jointed body here (ascending id): its joints, broken joints
+    /// (initial cracks not counted), crack area (m²), fracture energy (J),
+    /// first break (s; NaN if none) and the mean of its joints' reference
+    /// face centroids (m): `[body, joints, broken, area, energy, first, x, y, z]`.
+    pub(super) fn body_cracks(&self, x0: &[Vector3<f64>]) -> Vec<[f64; 9]> {
+        let mut by: std::collections::BTreeMap<u32, [f64; 9]> = Default::default();
+        for row in &self.rows {
+            let r = by.entry(row.body).or_insert_with(|| {
+                let mut v = [0.0; 9];
+                v[0] = f64::from(row.body);
+                v[5] = f64::NAN;
+                v
+            });
+            r[1] += 1.0;
+            let c = row
+                .faces
+                .a
+                .iter()
+                .map(|&n| x0[n as usize])
+                .sum::<Vector3<f64>>()
+                / 3.0;
+            for d in 0..3 {
+                r[6 + d] += c[d];
+            }
+            let Some(s) = self.sets.get(row.set as usize) else {
+                continue;
+            };
+            let (st, at) = (
+                &s.states[row.index as usize],
+                s.broke_at[row.index as usize],
+            );
+            r[4] += st.dissipated * row.faces.area;
+            if matches!(st.broken, Some(m) if m != crate::fracture::Mode::Initial) {
+                r[2] += 1.0;
+                r[3] += row.faces.area;
+                r[5] = if r[5].is_nan() { at } else { r[5].min(at) };
+            }
+        }
+        by.into_values()
+            .map(|mut r| {
+                for d in 0..3 {
+                    r[6 + d] /= r[1];
+                }
+                r
+            })
+            .collect()
     }
 
     /// Every joint's history for a checkpoint: global joint numbers and

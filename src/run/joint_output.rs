@@ -11,7 +11,7 @@
 
 use std::path::{Path, PathBuf};
 
-use mpi::topology::SimpleCommunicator;
+use mpi::topology::{Communicator, SimpleCommunicator};
 
 use crate::error::Result;
 use crate::io::{MeshPart, TimeSeriesWriter};
@@ -125,6 +125,46 @@ impl JointOutput {
             ],
         )?;
         Ok(())
+    }
+
+    /// Collective. `<dir>/<stem>_cracks.csv`: per jointed body (a particle
+    /// of a packing), its joints, broken joints, crack area, fracture
+    /// energy, first break and centroid, written by rank 0 from an
+    /// all-gather of the bodies' rows (O(jointed bodies)).
+    pub fn write_body_table(
+        comm: &SimpleCommunicator,
+        model: &Model,
+        mech: &Mechanics,
+        path: &Path,
+    ) -> Result<()> {
+        let mine: Vec<f64> = mech.domain.body_cracks().into_iter().flatten().collect();
+        let all = crate::parallel::all_gather_f64(comm, &mine);
+        let written = if comm.rank() == 0 {
+            let mut rows: Vec<&[f64]> = all.chunks_exact(9).collect();
+            rows.sort_by(|a, b| a[0].total_cmp(&b[0]));
+            let mut text = String::from(
+                "body,name,joints,broken,crack_area,fracture_energy,first_break,x,y,z\n",
+            );
+            for r in rows {
+                let name = &model.bodies[r[0] as usize].name;
+                let first = if r[5].is_nan() {
+                    String::new()
+                } else {
+                    format!("{:e}", r[5])
+                };
+                text.push_str(&format!(
+                    "{},{name},{},{},{:e},{:e},{first},{:e},{:e},{:e}\n",
+                    r[0], r[1], r[2], r[3], r[4], r[6], r[7], r[8]
+                ));
+            }
+            std::fs::write(path, text).map_err(|source| crate::error::Error::File {
+                path: path.display().to_string(),
+                source,
+            })
+        } else {
+            Ok(())
+        };
+        crate::parallel::agree(comm, written)
     }
 
     /// Collective. Close the series.

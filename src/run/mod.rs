@@ -323,7 +323,12 @@ impl Stages<'_, '_> {
             checkpoint = Some(at.checkpoint_path);
             self.times.output += clock.elapsed().as_secs_f64();
         }
-        let particle_files = out.finish(self.comm, self.model, &self.contacts.set)?;
+        let mut particle_files = out.finish(self.comm, self.model, &self.contacts.set)?;
+        if let (Some(m), true) = (self.mech.as_ref(), out.joints.is_some()) {
+            let path = out.dir.join(format!("{}_cracks.csv", out.stem));
+            joint_output::JointOutput::write_body_table(self.comm, self.model, m, &path)?;
+            particle_files.push(path);
+        }
         if let Some(b) = at.bar {
             b.finish_and_clear();
         }

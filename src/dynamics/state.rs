@@ -24,6 +24,9 @@ pub struct SavedMotion<'a> {
     /// Each rank's share of it, when saved by a run on as many ranks as
     /// this one: the sum then continues bitwise.
     pub dissipated_per_rank: Option<&'a [f64]>,
+    /// Each rank's share of the loads' work so far, when saved (a run on
+    /// another number of ranks puts the sum on rank 0).
+    pub external_work_per_rank: Option<&'a [f64]>,
 }
 
 /// Energies and momentum summed over the ranks.
@@ -226,6 +229,7 @@ impl ExplicitDomain {
             velocities_prev,
             dissipated,
             dissipated_per_rank,
+            external_work_per_rank,
         } = saved;
         for i in 0..self.n_part_nodes {
             self.x[i] = Vector3::from(positions[i]);
@@ -236,6 +240,11 @@ impl ExplicitDomain {
             _ if comm.rank() == 0 => dissipated,
             _ => 0.0,
         };
+        self.external_work = match external_work_per_rank {
+            Some(w) if w.len() == comm.size() as usize => w[comm.rank() as usize],
+            Some(w) if comm.rank() == 0 => w.iter().sum(),
+            _ => 0.0,
+        };
         self.v_prev.clear();
         if let Some(vp) = velocities_prev {
             self.v_prev.extend(vp.iter().map(|&p| Vector3::from(p)));
@@ -243,6 +252,11 @@ impl ExplicitDomain {
         self.detect(comm)?;
         self.redetect = false;
         Ok(())
+    }
+
+    /// Collective. Each rank's share of the loads' work, by rank.
+    pub fn gather_external_work(&self, comm: &SimpleCommunicator) -> Vec<f64> {
+        crate::parallel::all_gather_f64(comm, &[self.external_work])
     }
 
     /// Collective. Each rank's share of the dissipated energy, by rank.

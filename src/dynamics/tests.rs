@@ -282,6 +282,7 @@ fn undamped_vibration_conserves_momentum_and_energy() {
             velocities_prev: None,
             dissipated: 0.0,
             dissipated_per_rank: None,
+            external_work_per_rank: None,
         };
         dom.restore(comm, saved).unwrap();
         let angular = |dom: &ExplicitDomain| -> Vector3<f64> {
@@ -405,6 +406,7 @@ fn force_sum_is_the_serial_sum_in_any_element_order() {
             velocities_prev: None,
             dissipated: 0.0,
             dissipated_per_rank: None,
+            external_work_per_rank: None,
         };
         dom.restore(comm, saved).unwrap();
         let (x, v) = (dom.x.clone(), dom.v.clone());

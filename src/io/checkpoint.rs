@@ -309,6 +309,8 @@ pub struct CheckpointHead {
     pub thermal_contacts: u64,
     /// Each rank's share of `dissipated`.
     pub dissipated_per_rank: Option<Vec<f64>>,
+    /// Each rank's share of the loads' work so far (J), when saved.
+    pub external_work_per_rank: Option<Vec<f64>>,
     /// The heat account's base and steps since the last assembly, when saved.
     pub account: Option<([f64; 5], u64)>,
     /// The kinetic energy at which the run settled, for a settled run.
@@ -564,6 +566,9 @@ fn write_parallel_to(
     if let Some(d) = &head.dissipated_per_rank {
         small("state/dissipated_per_rank", d, 1)?;
     }
+    if let Some(w) = &head.external_work_per_rank {
+        small("state/external_work_per_rank", w, 1)?;
+    }
     if let (Some((base, steps)), Some(t0), Some(ts)) =
         (head.account, rows.account_t0, rows.account_t_sum)
     {
@@ -709,6 +714,11 @@ impl CheckpointFile {
             thermal_contacts: sc[10] as u64,
             dissipated_per_rank: if file.link_exists("state/dissipated_per_rank") {
                 Some(get(&file, path, "state/dissipated_per_rank", 1)?)
+            } else {
+                None
+            },
+            external_work_per_rank: if file.link_exists("state/external_work_per_rank") {
+                Some(get(&file, path, "state/external_work_per_rank", 1)?)
             } else {
                 None
             },

@@ -261,6 +261,7 @@ pub(super) fn restore_mechanics(
         velocities_prev: vp.as_deref(),
         dissipated: ck.dissipated,
         dissipated_per_rank: ck.dissipated_per_rank.as_deref(),
+        external_work_per_rank: ck.external_work_per_rank.as_deref(),
     };
     m.restore(comm, saved)?;
     m.counters.substeps = ck.substeps;
@@ -457,6 +458,7 @@ pub(super) fn capture(
         head.dissipated = m.state(comm).dissipated;
         head.substeps = m.counters.substeps;
         head.dissipated_per_rank = Some(m.gather_dissipated(comm));
+        head.external_work_per_rank = Some(m.gather_external_work(comm));
     } else if model.has_motion() {
         let x: Vec<[f64; 3]> = part.mesh.nodes[..no]
             .iter()

@@ -52,6 +52,21 @@ pub struct JointTotals {
 }
 
 impl JointTotals {
+    /// Count a joint of area `area` (m²) in state `st`: its dissipated
+    /// energy, and whether and how it broke (initial cracks not counted).
+    #[inline]
+    fn count(&mut self, st: &JointState, area: f64) {
+        self.dissipated += st.dissipated * area;
+        match st.broken {
+            Some(Mode::Initial) | None => {}
+            Some(mode) => {
+                self.broken += 1;
+                self.by_mode[usize::from(mode.code()) - 1] += 1;
+                self.crack_area += area;
+            }
+        }
+    }
+
     /// Add `o`'s counts and energies to these.
     pub fn add(&mut self, o: &JointTotals) {
         self.stored += o.stored;
@@ -193,15 +208,7 @@ impl JointSet {
     pub fn recount(&self) -> JointTotals {
         let mut tot = JointTotals::default();
         for (f, st) in self.faces.iter().zip(&self.states) {
-            tot.dissipated += st.dissipated * f.area;
-            match st.broken {
-                Some(Mode::Initial) | None => {}
-                Some(mode) => {
-                    tot.broken += 1;
-                    tot.by_mode[usize::from(mode.code()) - 1] += 1;
-                    tot.crack_area += f.area;
-                }
-            }
+            tot.count(st, f.area);
         }
         for (_, c) in &self.cracks {
             tot.friction += c.lost;
@@ -244,15 +251,7 @@ impl JointSet {
                 self.broke_at[j] = t;
                 self.new_cracks.push(j as u32);
             }
-            tot.dissipated += st.dissipated * f.area;
-            match st.broken {
-                Some(Mode::Initial) | None => {}
-                Some(mode) => {
-                    tot.broken += 1;
-                    tot.by_mode[usize::from(mode.code()) - 1] += 1;
-                    tot.crack_area += f.area;
-                }
-            }
+            tot.count(st, f.area);
         }
         // The joints that broke in this call start their crack contact
         // relaxed (the slip is their present sliding).

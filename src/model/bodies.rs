@@ -258,6 +258,28 @@ impl super::Model {
         }
     }
 
+    /// Per body, the global number of its first joint (joints numbered
+    /// body by body, each body's in its mesh's joint order), and the
+    /// total: O(bodies), the same on every rank.
+    pub fn joint_offsets(&self) -> (Vec<u64>, u64) {
+        let mut next = 0u64;
+        let offsets = self
+            .bodies
+            .iter()
+            .map(|b| {
+                let at = next;
+                if let BodySource::Mesh { mesh, .. } = b.source {
+                    next += self.meshes[mesh as usize]
+                        .joints
+                        .as_ref()
+                        .map_or(0, |j| j.faces.len() as u64);
+                }
+                at
+            })
+            .collect();
+        (offsets, next)
+    }
+
     /// Open the checkpoint files the bodies come from (every rank reads
     /// their heads; rows on demand).
     pub fn open_checkpoints(&self) -> crate::error::Result<Vec<CheckpointFile>> {

@@ -880,28 +880,6 @@ impl Model {
         self.meshes.iter().any(|m| m.joints.is_some())
     }
 
-    /// Per body, the global number of its first joint (joints numbered
-    /// body by body, each body's in its mesh's joint order), and the
-    /// total: O(bodies), the same on every rank.
-    pub fn joint_offsets(&self) -> (Vec<u64>, u64) {
-        let mut next = 0u64;
-        let offsets = self
-            .bodies
-            .iter()
-            .map(|b| {
-                let at = next;
-                if let BodySource::Mesh { mesh, .. } = b.source {
-                    next += self.meshes[mesh as usize]
-                        .joints
-                        .as_ref()
-                        .map_or(0, |j| j.faces.len() as u64);
-                }
-                at
-            })
-            .collect();
-        (offsets, next)
-    }
-
     /// Whether any body moves.
     pub fn has_motion(&self) -> bool {
         self.bodies.iter().any(|b| b.velocity != [0.0; 3])

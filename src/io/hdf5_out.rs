@@ -90,6 +90,11 @@ struct Inner {
     file: File,
     model: XdmfModel,
     usable: bool,
+    /// While the file is still `<stem>.h5.part`: it is renamed to
+    /// `<stem>.h5` by the first [`Inner::publish`] of a step (or by
+    /// [`Inner::finish`]), so that the first step's groups and heaps, the
+    /// largest metadata flush of the run, are written before the name exists.
+    pending: Option<PathBuf>,
 }
 
 /// Collective writer of a time series `<dir>/<stem>.h5` + `<dir>/<stem>.xdmf`; see
@@ -107,8 +112,9 @@ impl TimeSeriesWriter {
     /// Collective. Creates `<dir>/<stem>.h5` (and `dir`, if missing) and writes the
     /// mesh: `/mesh/coordinates` `[N, 3]` f64 and `/mesh/topology` `[E, 4]` u32.
     /// Outputs of an earlier run with the same stem are removed first. The file is
-    /// written as `<stem>.h5.part` and renamed once the mesh is flushed. The XDMF
-    /// file is written by the first [`write_step`](Self::write_step) (or by
+    /// written as `<stem>.h5.part` and renamed once the first step (or, if no
+    /// step is written, the closing flush) is on disk. The XDMF file is written
+    /// by the first [`write_step`](Self::write_step) (or by
     /// [`close`](Self::close) if no step is written).
     ///
     /// The mesh distribution is validated on all ranks first; on any failure all
@@ -192,26 +198,12 @@ impl TimeSeriesWriter {
             count: mesh.num_cells() as u64,
         };
         let h5_name = format!("{stem}.h5");
-        // The file is built under `<stem>.h5.part` and renamed once the mesh is on
-        // disk, so `<stem>.h5` never names a file without a complete mesh.
+        // The file is built under `<stem>.h5.part` and renamed by the first
+        // step's publish, so `<stem>.h5` never names a file without a complete
+        // mesh and first step.
         let part_path = part_path(&h5_path);
         let created = Inner::create(&comm, &part_path, mesh, nodes, cells);
-        let created = agree(&comm, &h5_path, "creating the HDF5 file", created).and_then(|c| {
-            comm.barrier();
-            let renamed = if rank == 0 {
-                std::fs::rename(&part_path, &h5_path)
-                    .map_err(|e| IoError::io(&h5_path, "renaming the new HDF5 file into place", e))
-            } else {
-                Ok(())
-            };
-            match agree(&comm, &h5_path, "renaming the new HDF5 file", renamed) {
-                Ok(()) => Ok(c),
-                Err(e) => {
-                    drop(c);
-                    Err(e)
-                }
-            }
-        });
+        let created = agree(&comm, &h5_path, "creating the HDF5 file", created);
         match created {
             Ok((file, xfer, time_ds, static_groups, field_groups)) => Ok(Self {
                 inner: Some(Inner {
@@ -233,6 +225,7 @@ impl TimeSeriesWriter {
                         ..XdmfModel::default()
                     },
                     usable: true,
+                    pending: Some(part_path),
                     h5_path,
                     comm,
                 }),
@@ -416,6 +409,7 @@ impl TimeSeriesWriter {
                 field_groups,
                 file: file.clone(),
                 usable: true,
+                pending: None,
                 h5_path: h5_path.clone(),
                 comm: comm.duplicate(),
             })
@@ -852,6 +846,9 @@ impl Inner {
         }
         // Every rank's data and metadata are on disk before the index names them.
         self.comm.barrier();
+        if !self.model.times.is_empty() {
+            self.rename_into_place()?;
+        }
         let indexed = if self.rank == 0 && !self.model.times.is_empty() {
             xdmf::write_atomic(&self.xdmf_path, &self.model.render())
         } else {
@@ -865,46 +862,81 @@ impl Inner {
         )
     }
 
-    /// Final flush, mesh-only XDMF if no step was written, and close. Collective.
-    fn finish(self) -> Result<(), IoError> {
+    /// Collective, after a flush and a barrier: renames `<stem>.h5.part` to
+    /// `<stem>.h5` if that is still to be done.
+    fn rename_into_place(&mut self) -> Result<(), IoError> {
+        let Some(part) = self.pending.take() else {
+            return Ok(());
+        };
+        let renamed = if self.rank == 0 {
+            std::fs::rename(&part, &self.h5_path)
+                .map_err(|e| IoError::io(&self.h5_path, "renaming the new HDF5 file into place", e))
+        } else {
+            Ok(())
+        };
+        let renamed = agree(
+            &self.comm,
+            &self.h5_path,
+            "renaming the new HDF5 file",
+            renamed,
+        );
+        if renamed.is_err() {
+            self.usable = false;
+        }
+        renamed
+    }
+
+    /// Final flush, the rename into place if no step did it, mesh-only XDMF
+    /// if no step was written, and close. Collective. A file that never
+    /// reached its place (an error before) is removed.
+    fn finish(mut self) -> Result<(), IoError> {
+        let mut result = Ok(());
+        if self.usable {
+            let flushed = ffi::flush_global(&self.file).map_err(|call| IoError::Hdf5Call {
+                path: self.h5_path.clone(),
+                call,
+                what: "flushing before close".into(),
+            });
+            result = agree(&self.comm, &self.h5_path, "flushing before close", flushed);
+            if result.is_ok() {
+                self.comm.barrier();
+                result = self.rename_into_place();
+            }
+            if result.is_ok() && self.model.times.is_empty() {
+                let indexed = if self.rank == 0 {
+                    xdmf::write_atomic(&self.xdmf_path, &self.model.render())
+                } else {
+                    Ok(())
+                };
+                result = agree(
+                    &self.comm,
+                    &self.xdmf_path,
+                    "writing the XDMF file",
+                    indexed,
+                );
+            }
+        }
         let Self {
             comm,
             rank,
             h5_path,
-            xdmf_path,
             fields,
             time_ds,
             static_groups,
             field_groups,
             file,
-            model,
-            usable,
             xfer,
+            pending,
             ..
         } = self;
-        let mut result = Ok(());
-        if usable {
-            let flushed = ffi::flush_global(&file).map_err(|call| IoError::Hdf5Call {
-                path: h5_path.clone(),
-                call,
-                what: "flushing before close".into(),
-            });
-            result = agree(&comm, &h5_path, "flushing before close", flushed);
-            if result.is_ok() && model.times.is_empty() {
-                comm.barrier();
-                let indexed = if rank == 0 {
-                    xdmf::write_atomic(&xdmf_path, &model.render())
-                } else {
-                    Ok(())
-                };
-                result = agree(&comm, &xdmf_path, "writing the XDMF file", indexed);
-            }
-        }
         drop((fields, time_ds, static_groups, field_groups, xfer));
         let closed = file
             .close()
             .map_err(|e| IoError::hdf5(&h5_path, "closing the file", e));
         let closed = agree(&comm, &h5_path, "closing the file", closed);
+        if let (Some(part), 0) = (pending, rank) {
+            let _ = std::fs::remove_file(part);
+        }
         result.and(closed)
     }
 }

@@ -50,7 +50,12 @@
 //! unreadable without `h5clear`.
 //!
 //! The HDF5 file is built as `<stem>.h5.part` and renamed to `<stem>.h5` only once
-//! the mesh is flushed, so `<stem>.h5` always has a complete mesh. A run that fails
+//! the first step is flushed (or, without steps, at the closing flush), so
+//! `<stem>.h5` always has a complete mesh, and the first step's metadata (its new
+//! groups and their reserved heaps, the run's largest flush) never change a file of
+//! that name. Later flushes are small (an object header per field, in-place symbol
+//! table and heap updates), but a kill in the middle of one is not covered by the
+//! scheme. A run that fails
 //! before its first step should call [`remove_outputs`] so that no half-written
 //! output is left behind; [`TimeSeriesWriter::create`] removes its own files when
 //! it fails.

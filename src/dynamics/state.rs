@@ -259,6 +259,30 @@ impl ExplicitDomain {
         crate::parallel::all_gather_f64(comm, &[self.external_work])
     }
 
+    /// Collective. Per group of bodies (`group_of_body[b]`, `groups` of
+    /// them), the sum of the last substep's node forces over the group's
+    /// nodes, over all ranks (N): element and joint forces cancel within a
+    /// body, so this is the contact force the other bodies exert on the
+    /// group (the load on a platen or a container). Gravity, tractions and
+    /// the reactions of prescribed velocities are not in it.
+    pub fn group_forces(
+        &self,
+        comm: &SimpleCommunicator,
+        group_of_body: &[usize],
+        groups: usize,
+    ) -> Vec<[f64; 3]> {
+        let mut local = vec![0.0; 3 * groups];
+        for (f, &b) in self.f[..self.n_owned].iter().zip(&self.owned_body) {
+            let g = group_of_body[b as usize];
+            for d in 0..3 {
+                local[3 * g + d] += f[d];
+            }
+        }
+        let mut sum = vec![0.0; 3 * groups];
+        comm.all_reduce_into(&local[..], &mut sum[..], SystemOperation::sum());
+        sum.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect()
+    }
+
     /// Collective. Each rank's share of the dissipated energy, by rank.
     pub fn gather_dissipated(&self, comm: &SimpleCommunicator) -> Vec<f64> {
         crate::parallel::all_gather_f64(comm, &[self.dissipated])

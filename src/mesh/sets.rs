@@ -16,6 +16,45 @@ fn to_u32(v: usize, what: &str) -> u32 {
 }
 
 impl TetMesh {
+    /// Adds the element set `name`: the tets whose centroid lies in the box
+    /// `min..=max`. Errors (as text) if the set exists already, the box is
+    /// empty or not finite, or no centroid lies in it; returns its size.
+    pub fn add_box_set(
+        &mut self,
+        name: &str,
+        min: [f64; 3],
+        max: [f64; 3],
+    ) -> Result<usize, String> {
+        if self.elem_sets.contains_key(name) {
+            return Err(format!(
+                "`{name}`: the mesh has an element set of that name already"
+            ));
+        }
+        if !(0..3).all(|d| min[d].is_finite() && max[d].is_finite() && min[d] <= max[d]) {
+            return Err(format!(
+                "`{name}`: min {min:?} must be finite and not above max {max:?}"
+            ));
+        }
+        let inside: Vec<u32> = (0..self.tets.len())
+            .filter(|&e| {
+                let c = self.tets[e].iter().fold([0.0; 3], |mut c, &v| {
+                    (0..3).for_each(|d| c[d] += 0.25 * self.nodes[v as usize][d]);
+                    c
+                });
+                (0..3).all(|d| c[d] >= min[d] && c[d] <= max[d])
+            })
+            .map(|e| e as u32)
+            .collect();
+        if inside.is_empty() {
+            return Err(format!(
+                "`{name}`: no element centroid lies in the box {min:?}..{max:?}"
+            ));
+        }
+        let n = inside.len();
+        self.elem_sets.insert(name.to_string(), inside);
+        Ok(n)
+    }
+
     /// Sorted, unique nodes of the face set `name`; `None` if there is no
     /// such face set.
     pub fn nodes_of_face_set(&self, name: &str) -> Option<Vec<u32>> {

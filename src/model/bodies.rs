@@ -323,3 +323,20 @@ fn mean(nodes: &[[f64; 3]]) -> [f64; 3] {
         .fold([0.0; 3], |a, p| [a[0] + p[0], a[1] + p[1], a[2] + p[2]]);
     [s[0] / n, s[1] / n, s[2] / n]
 }
+
+/// The elements of the set `set` of a body's mesh, or an error naming the
+/// body, the scenario key and the sets the mesh has.
+pub(super) fn elements_of<'m>(
+    m: &'m TetMesh,
+    set: &str,
+    body: &str,
+    key: &str,
+) -> Result<&'m [u32], String> {
+    m.elem_sets.get(set).map(Vec::as_slice).ok_or_else(|| {
+        let names: Vec<&str> = m.elem_sets.keys().map(String::as_str).collect();
+        format!(
+            "body `{body}`: {key}: no element set `{set}` in its mesh; available: {}",
+            names.join(", ")
+        )
+    })
+}

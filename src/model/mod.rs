@@ -145,6 +145,8 @@ pub struct OutputPlan {
     pub checkpoint: bool,
     /// Also overwrite the checkpoint every N steps (0: only at the end).
     pub checkpoint_every: u64,
+    /// Also a history row every N steps (0: only with the fields).
+    pub history_every: u64,
     /// Particle statistics.
     pub particles: Option<ParticleOutputSpec>,
 }
@@ -456,21 +458,17 @@ impl Model {
                     b.name
                 )));
             }
+            for (set, bx) in &b.element_sets {
+                m.add_box_set(set, bx.min, bx.max)
+                    .map_err(|e| model_err(format!("body `{}`: element_sets.{e}", b.name)))?;
+            }
             // One body per scenario entry, whatever the file's volumes.
             m.body.iter_mut().for_each(|x| *x = 0);
             let material = material_index(&b.material) as usize;
             // Element materials: the body's, or a region's.
             let mut mat_of_elem = vec![material as u32; m.tets.len()];
             for (set, mat) in &b.regions {
-                let elems = m.elem_sets.get(set).ok_or_else(|| {
-                    let names: Vec<&str> = m.elem_sets.keys().map(String::as_str).collect();
-                    model_err(format!(
-                        "body `{}`: regions: no element set `{set}` in its mesh; available: {}",
-                        b.name,
-                        names.join(", ")
-                    ))
-                })?;
-                for &e in elems {
+                for &e in bodies::elements_of(&m, set, &b.name, "regions").map_err(model_err)? {
                     mat_of_elem[e as usize] = material_index(mat);
                 }
             }
@@ -481,15 +479,8 @@ impl Model {
                     let in_set = match &f.set {
                         None => vec![true; m.tets.len()],
                         Some(set) => {
-                            let elems = m.elem_sets.get(set).ok_or_else(|| {
-                                let names: Vec<&str> =
-                                    m.elem_sets.keys().map(String::as_str).collect();
-                                model_err(format!(
-                                    "body `{}`: fracture.set: no element set `{set}` in its mesh; available: {}",
-                                    b.name,
-                                    names.join(", ")
-                                ))
-                            })?;
+                            let elems = bodies::elements_of(&m, set, &b.name, "fracture.set")
+                                .map_err(model_err)?;
                             let mut v = vec![false; m.tets.len()];
                             elems.iter().for_each(|&e| v[e as usize] = true);
                             v
@@ -834,6 +825,7 @@ impl Model {
                 stem: sc.output_stem(),
                 checkpoint: s.output.checkpoint,
                 checkpoint_every: s.output.checkpoint_every,
+                history_every: s.output.history_every,
                 particles: s.output.particles.clone(),
             },
             solver: s.solver.clone(),

@@ -137,7 +137,8 @@ impl Position {
             model.contact.as_ref().map_or(0, |c| c.every),
             model.output.checkpoint_every,
             out.every_step() || settling.spec.is_some(),
-        );
+        )
+        .with_history_every(model.output.history_every);
         Position {
             step: start_step,
             start_step,
@@ -291,6 +292,17 @@ impl Stages<'_, '_> {
             // before the output allocates its blocks.
             release_free_memory();
             self.write(out, step)?;
+        } else if at.schedule.is_history(step) {
+            let (mech, contacts) = (self.mech.as_ref(), &self.contacts.set);
+            out.history_row(
+                self.comm,
+                self.model,
+                &self.part,
+                &mut self.sys,
+                mech,
+                contacts,
+                step,
+            )?;
         }
         self.times.output += clock.elapsed().as_secs_f64();
         if !settled && step < self.model.steps {
@@ -326,8 +338,9 @@ impl Stages<'_, '_> {
         let mut particle_files = out.finish(self.comm, self.model, &self.contacts.set)?;
         if let (Some(m), true) = (self.mech.as_ref(), out.joints.is_some()) {
             let path = out.dir.join(format!("{}_cracks.csv", out.stem));
-            joint_output::JointOutput::write_body_table(self.comm, self.model, m, &path)?;
-            particle_files.push(path);
+            particle_files.extend(joint_output::JointOutput::write_body_table(
+                self.comm, self.model, m, &path,
+            )?);
         }
         if let Some(b) = at.bar {
             b.finish_and_clear();

@@ -144,6 +144,13 @@ impl Output {
                 }
             }
         }
+        if mechanics {
+            for g in &groups.names {
+                for d in ["x", "y", "z"] {
+                    header.push(format!("{g}_force_{d}"));
+                }
+            }
+        }
         let header_ref: Vec<&str> = header.iter().map(String::as_str).collect();
         let history = if continues {
             HistoryWriter::reopen(&history_path, &header_ref, 1, keep_until)
@@ -267,6 +274,26 @@ impl Output {
         if let (Some(j), Some(m)) = (self.joints.as_mut(), mech) {
             j.write(comm, time, m)?;
         }
+        self.history_row(comm, model, part, sys, mech, contacts, step)
+    }
+
+    /// Collective. Append the history row of `step` (with or without fields).
+    #[allow(clippy::too_many_arguments)]
+    pub fn history_row(
+        &mut self,
+        comm: &SimpleCommunicator,
+        model: &Model,
+        part: &Part,
+        sys: &mut Option<ThermalSystem>,
+        mech: Option<&Mechanics>,
+        contacts: &ContactSet,
+        step: u64,
+    ) -> Result<()> {
+        let time = step as f64 * model.dt;
+        let t = match sys.as_ref() {
+            Some(s) => Some(s.node_temperatures(part)?),
+            None => None,
+        };
         let mut row = vec![step as f64, time];
         if let Some(s) = sys.as_mut() {
             let e = s.energy()?;
@@ -315,6 +342,12 @@ impl Output {
         if let Some(t) = &t {
             for s in self.groups.reduce(&self.stats.compute(comm, t)) {
                 row.extend_from_slice(&s);
+            }
+        }
+        if let Some(m) = mech {
+            let ng = self.groups.names.len();
+            for f in m.domain.group_forces(comm, &self.groups.group, ng) {
+                row.extend_from_slice(&f);
             }
         }
         self.history.append(&row)?;

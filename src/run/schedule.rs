@@ -20,6 +20,8 @@ pub(super) struct Schedule {
     tick: u64,
     /// Stop after every step (particle statistics, settle check).
     every_step: bool,
+    /// A history row every so many steps (0: only with the fields).
+    history_every: u64,
 }
 
 impl Schedule {
@@ -48,7 +50,19 @@ impl Schedule {
             check_every: Self::CHECK_EVERY,
             tick: (steps / 200).max(1),
             every_step,
+            history_every: 0,
         }
+    }
+
+    /// Also stop for a history row every `n` steps (0: never).
+    pub fn with_history_every(mut self, n: u64) -> Schedule {
+        self.history_every = n;
+        self
+    }
+
+    /// Whether a history row without fields is written at `step`.
+    pub fn is_history(&self, step: u64) -> bool {
+        self.history_every > 0 && step.is_multiple_of(self.history_every) && !self.is_output(step)
     }
 
     /// The next field output step, if any is left.
@@ -71,6 +85,8 @@ impl Schedule {
             if self.every_step { step + 1 } else { steps },
             step.checked_div(self.checkpoint_every)
                 .map_or(steps, |k| (k + 1) * self.checkpoint_every),
+            step.checked_div(self.history_every)
+                .map_or(steps, |k| (k + 1) * self.history_every),
         ]
         .into_iter()
         .min()

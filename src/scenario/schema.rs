@@ -188,6 +188,16 @@ pub struct CrackPlane {
     pub normal: [f64; 3],
 }
 
+/// An element set given by an axis-aligned box (m, scenario coordinates).
+#[derive(Debug, Clone, Copy, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BoxSet {
+    /// Lower corner.
+    pub min: [f64; 3],
+    /// Upper corner.
+    pub max: [f64; 3],
+}
+
 /// One body.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -238,6 +248,10 @@ pub struct BodySpec {
     /// `{ <element set> = "<material>" }` (a bonded multi-material body).
     #[serde(default)]
     pub regions: BTreeMap<String, String>,
+    /// Element sets by position, `{ <name> = { min = [..], max = [..] } }`:
+    /// the tets whose centroid lies in the box (after `rotate`/`translate`).
+    #[serde(default)]
+    pub element_sets: BTreeMap<String, BoxSet>,
     /// Cohesive joints between the tets of an element set, which break
     /// (mechanics only, issue 19): `{ set = "...", material = "..." }`.
     #[serde(default)]
@@ -624,6 +638,10 @@ pub struct OutputSpec {
     /// Also overwrite the checkpoint every N steps (0: only at the end).
     #[serde(default)]
     pub checkpoint_every: u64,
+    /// Also write a history row every N steps between field steps (0: only
+    /// with the fields).
+    #[serde(default)]
+    pub history_every: u64,
     /// Particle statistics: CSV and PNG of the particles' temperatures.
     #[serde(default)]
     pub particles: Option<ParticleOutputSpec>,

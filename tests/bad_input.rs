@@ -441,6 +441,27 @@ fn unknown_region_set_is_named() {
 }
 
 #[test]
+fn an_element_set_box_holding_no_element_is_named() {
+    let d = scenario_dir("mech-box-set");
+    let s = write(
+        &d,
+        "bad.toml",
+        &MECH.replace(
+            "material = \"m\"\n",
+            "material = \"m\"\nelement_sets = { far = { min = [5.0, 5.0, 5.0], max = [6.0, 6.0, 6.0] } }\n",
+        ),
+    );
+    let (_, err) = run_bad(1, &s, &d.join("out"), &[]);
+    assert!(
+        err.contains("bad.toml")
+            && err.contains("element_sets.`far`")
+            && err.contains("no element centroid"),
+        "{err}"
+    );
+    assert_no_output(&d.join("out"));
+}
+
+#[test]
 fn mechanics_blow_up_is_an_error_not_a_corrupt_file() {
     // A step right at the critical one with a stiff contact: the run must
     // stop with an error naming an element or node, and leave a readable file.

@@ -139,6 +139,10 @@ pub struct ExplicitDomain {
     pub(super) v_prev: Vec<Vector3<f64>>,
     /// Time step (s).
     pub dt: f64,
+    /// Run time (the thermal clock, `time.dt`) per substep: `dt` when the
+    /// clocks are coupled, `time.dt / substeps` when they are not. Joint
+    /// breaking times are on this clock.
+    pub(super) run_time_per_substep: f64,
     pub(super) gravity: Vector3<f64>,
     pub(super) damping: f64,
     /// Damping of bodies that touch nothing (None: `damping` everywhere).
@@ -338,6 +342,7 @@ impl ExplicitDomain {
             recv_at: Vec::new(),
             send_buf: Vec::new(),
             dt,
+            run_time_per_substep: coupling_dt / substeps.max(1) as f64,
             gravity: Vector3::from(mm.gravity),
             damping: mm.damping,
             free_damping: mm.free_damping,

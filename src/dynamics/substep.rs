@@ -255,8 +255,8 @@ impl ExplicitDomain {
         // Owned node forces, summed in key order; then the owners advance.
         self.sum_owned_forces();
         if !self.joints.is_empty() {
-            // Positions at t_n = substeps × Δt.
-            let t = self.counters.substeps as f64 * self.dt;
+            // Positions at t_n = substeps × Δt, on the run's clock.
+            let t = self.counters.substeps as f64 * self.run_time_per_substep;
             self.joints.add_forces(&self.x, t, &mut self.f);
             self.mark_cracks();
         }

@@ -124,6 +124,24 @@ fn merge(
 mod tests {
     use super::*;
 
+    #[test]
+    fn box_sets_take_the_tets_whose_centroid_is_inside() {
+        let mut m = tet(0.0);
+        m.append(tet(2.0), 1);
+        // Centroids at x = 0.25 and 2.25.
+        assert_eq!(
+            m.add_box_set("right", [2.0, -1.0, -1.0], [3.0, 1.0, 1.0]),
+            Ok(1)
+        );
+        assert_eq!(m.elem_sets["right"], vec![1]);
+        let e = m.add_box_set("right", [0.0; 3], [1.0; 3]).unwrap_err();
+        assert!(e.contains("already"), "{e}");
+        let e = m.add_box_set("none", [5.0; 3], [6.0; 3]).unwrap_err();
+        assert!(e.contains("no element centroid"), "{e}");
+        let e = m.add_box_set("bad", [1.0; 3], [0.0; 3]).unwrap_err();
+        assert!(e.contains("not above max"), "{e}");
+    }
+
     fn tet(offset: f64) -> TetMesh {
         let mut m = TetMesh {
             nodes: vec![

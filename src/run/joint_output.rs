@@ -131,21 +131,31 @@ impl JointOutput {
     /// of a packing), its joints, broken joints, crack area, fracture
     /// energy, first break and centroid, written by rank 0 from an
     /// all-gather of the bodies' rows (O(jointed bodies)).
+    /// Also draws `<stem>_particle_cracks.png` beside `path` when there
+    /// are several jointed bodies (see [`crack_fraction_curves`]); returns
+    /// the files written.
     pub fn write_body_table(
         comm: &SimpleCommunicator,
         model: &Model,
         mech: &Mechanics,
         path: &Path,
-    ) -> Result<()> {
+    ) -> Result<Vec<PathBuf>> {
         let mine: Vec<f64> = mech.domain.body_cracks().into_iter().flatten().collect();
         let all = crate::parallel::all_gather_f64(comm, &mine);
+        let mut rows: Vec<&[f64]> = all.chunks_exact(9).collect();
+        rows.sort_by(|a, b| a[0].total_cmp(&b[0]));
+        let png = (rows.len() > 1).then(|| {
+            let name = path.file_name().map_or(String::new(), |n| {
+                n.to_string_lossy()
+                    .replace("_cracks.csv", "_particle_cracks.png")
+            });
+            path.with_file_name(name)
+        });
         let written = if comm.rank() == 0 {
-            let mut rows: Vec<&[f64]> = all.chunks_exact(9).collect();
-            rows.sort_by(|a, b| a[0].total_cmp(&b[0]));
             let mut text = String::from(
                 "body,name,joints,broken,crack_area,fracture_energy,first_break,x,y,z\n",
             );
-            for r in rows {
+            for r in &rows {
                 let name = &model.bodies[r[0] as usize].name;
                 let first = if r[5].is_nan() {
                     String::new()
@@ -157,19 +167,136 @@ impl JointOutput {
                     r[0], r[1], r[2], r[3], r[4], r[6], r[7], r[8]
                 ));
             }
-            std::fs::write(path, text).map_err(|source| crate::error::Error::File {
-                path: path.display().to_string(),
-                source,
-            })
+            std::fs::write(path, text)
+                .map_err(|source| crate::error::Error::File {
+                    path: path.display().to_string(),
+                    source,
+                })
+                .and_then(|()| match &png {
+                    Some(png) => particle_crack_plot(model, &rows, png),
+                    None => Ok(()),
+                })
         } else {
             Ok(())
         };
-        crate::parallel::agree(comm, written)
+        crate::parallel::agree(comm, written)?;
+        Ok(std::iter::once(path.to_path_buf()).chain(png).collect())
     }
 
     /// Collective. Close the series.
     pub fn close(self) -> Result<()> {
         self.writer.close()?;
         Ok(())
+    }
+}
+
+/// Per radial band of the bodies' centroids about the vertical axis
+/// `axis` (x, y), the fraction of its bodies with at least one broken joint
+/// against time, from each body's first breaking time (`rows` as in
+/// `<stem>_cracks.csv`: body, joints, broken, crack area, fracture energy,
+/// first break (NaN: none), x, y, z). `bins` bands of equal width out to
+/// the farthest body; each curve is a step function from 0 to `t_end`.
+pub(super) fn crack_fraction_curves(
+    rows: &[&[f64]],
+    axis: [f64; 2],
+    bins: usize,
+    t_end: f64,
+) -> Vec<(String, Vec<(f64, f64)>)> {
+    let r = |row: &[f64]| (row[6] - axis[0]).hypot(row[7] - axis[1]);
+    let r_max = rows.iter().map(|row| r(row)).fold(0.0, f64::max);
+    let bins = bins.max(1);
+    let width = if r_max > 0.0 {
+        r_max / bins as f64
+    } else {
+        1.0
+    };
+    let band = |row: &[f64]| ((r(row) / width) as usize).min(bins - 1);
+    (0..bins)
+        .filter_map(|b| {
+            let members: Vec<&&[f64]> = rows.iter().filter(|row| band(row) == b).collect();
+            if members.is_empty() {
+                return None;
+            }
+            let n = members.len() as f64;
+            let mut times: Vec<f64> = members
+                .iter()
+                .map(|row| row[5])
+                .filter(|t| !t.is_nan())
+                .collect();
+            times.sort_by(f64::total_cmp);
+            let mut points = vec![(0.0, 0.0)];
+            for (k, &t) in times.iter().enumerate() {
+                points.push((t, k as f64 / n));
+                points.push((t, (k + 1) as f64 / n));
+            }
+            points.push((
+                t_end.max(points.last().map_or(0.0, |p| p.0)),
+                times.len() as f64 / n,
+            ));
+            let label = format!(
+                "r {:.3}-{:.3} m ({} bodies)",
+                b as f64 * width,
+                (b + 1) as f64 * width,
+                members.len()
+            );
+            Some((label, points))
+        })
+        .collect()
+}
+
+/// `<stem>_particle_cracks.png`: [`crack_fraction_curves`] about the
+/// particle statistics' axis (default the z axis), in its radial bins
+/// (default 4).
+fn particle_crack_plot(model: &Model, rows: &[&[f64]], path: &Path) -> Result<()> {
+    use crate::io::plot::{write_png, LinePlot, Series};
+    let (axis, bins) = model
+        .output
+        .particles
+        .as_ref()
+        .map_or(([0.0, 0.0], 4), |p| (p.axis, p.radial_bins.min(8)));
+    let t_end = model.steps as f64 * model.dt;
+    let curves = crack_fraction_curves(rows, axis, bins, t_end);
+    let plot = LinePlot {
+        title: "Cracked particles, by distance from the axis",
+        x_label: "time [s]",
+        y_label: "fraction of the bodies with a broken joint",
+        series: curves
+            .iter()
+            .map(|(label, points)| Series {
+                label,
+                points,
+                dashed: false,
+            })
+            .collect(),
+    };
+    write_png(&plot, path, (1000, 700))
+        .map_err(|e| crate::error::Error::Io(crate::io::IoError::invalid(path, e.to_string())))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::crack_fraction_curves;
+
+    #[test]
+    fn crack_fractions_step_up_at_first_breaks_per_radial_band() {
+        let nan = f64::NAN;
+        // body, joints, broken, area, energy, first break, x, y, z
+        let rows: Vec<[f64; 9]> = vec![
+            [0.0, 10.0, 1.0, 1e-4, 1e-3, 0.5, 0.1, 0.0, 0.0],
+            [1.0, 10.0, 0.0, 0.0, 0.0, nan, 0.0, 0.2, 0.0],
+            [2.0, 10.0, 2.0, 2e-4, 2e-3, 0.25, 0.0, 1.0, 0.0],
+            [3.0, 10.0, 0.0, 0.0, 0.0, nan, -1.0, 0.0, 0.0],
+        ];
+        let refs: Vec<&[f64]> = rows.iter().map(|r| &r[..]).collect();
+        let c = crack_fraction_curves(&refs, [0.0, 0.0], 2, 1.0);
+        assert_eq!(c.len(), 2);
+        // Inner band (r < 0.5): bodies 0 and 1, one cracked at 0.5 s.
+        assert_eq!(c[0].1, vec![(0.0, 0.0), (0.5, 0.0), (0.5, 0.5), (1.0, 0.5)]);
+        assert!(c[0].0.contains("2 bodies"));
+        // Outer band: bodies 2 and 3, one cracked at 0.25 s.
+        assert_eq!(
+            c[1].1,
+            vec![(0.0, 0.0), (0.25, 0.0), (0.25, 0.5), (1.0, 0.5)]
+        );
     }
 }

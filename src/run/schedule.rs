@@ -169,6 +169,18 @@ mod tests {
     }
 
     #[test]
+    fn history_rows_between_outputs() {
+        // 1000 steps, outputs at 0, 500, 1000, a history row every 3 steps.
+        let s = Schedule::new(1000, &[0, 500, 1000], 0, 0, 0, false).with_history_every(3);
+        assert_eq!(s.next_stop(0), 3);
+        assert_eq!(s.next_stop(498), 500);
+        assert!(s.is_history(3) && s.is_history(999) && !s.is_history(4));
+        // Not at an output step: the output writes the row.
+        let s = Schedule::new(1000, &[0, 300, 1000], 0, 0, 0, false).with_history_every(3);
+        assert!(!s.is_history(300) && s.is_history(303));
+    }
+
+    #[test]
     fn every_step_and_restart() {
         let s = Schedule::new(100_000, &[0, 100_000], 0, 0, 0, true);
         assert_eq!(s.next_stop(7), 8);

@@ -1,0 +1,146 @@
+//! Thermal shock of a packing (issue 19, beyond the papers): 50 jointed
+//! ceramic nuts on a lattice stand on a plate held at 300 °C. Heat enters
+//! the bottom layer through the contact faces, and the hot faces expanding
+//! against the cold rest of each nut crack it. Asserted: the temperatures
+//! stay in [20, 300] °C and the heat balances; the bottom layer cracks
+//! before the top one; the per-particle table and its plot agree with the
+//! history; the energy per unit of crack area is at least G_I; and 1 and 2
+//! ranks break the same joints at the same moments (energies to 1e-8).
+
+mod common;
+
+use common::*;
+
+/// scenarios/packing-thermal-shock.toml.
+const G_I: f64 = 20.0;
+const T_COLD: f64 = 20.0;
+const T_HOT: f64 = 300.0;
+/// Lattice layer height.
+const LAYER: f64 = 0.0155;
+
+/// One row of `<stem>_cracks.csv`.
+struct Particle {
+    name: String,
+    broken: f64,
+    area: f64,
+    energy: f64,
+    first: Option<f64>,
+    z: f64,
+}
+
+fn table(text: &str) -> Vec<Particle> {
+    let mut lines = text.lines();
+    assert_eq!(
+        lines.next().unwrap(),
+        "body,name,joints,broken,crack_area,fracture_energy,first_break,x,y,z"
+    );
+    lines
+        .map(|l| {
+            let c: Vec<&str> = l.split(',').collect();
+            Particle {
+                name: c[1].to_string(),
+                broken: c[3].parse().unwrap(),
+                area: c[4].parse().unwrap(),
+                energy: c[5].parse().unwrap(),
+                first: (!c[6].is_empty()).then(|| c[6].parse().unwrap()),
+                z: c[9].parse().unwrap(),
+            }
+        })
+        .collect()
+}
+
+#[test]
+fn a_packing_of_ceramic_nuts_cracks_where_the_plate_heats_it() {
+    let scen = root().join("scenarios/packing-thermal-shock.toml");
+    let stem = "packing-thermal-shock";
+    let mut csv = Vec::new();
+    for ranks in [1, 2] {
+        let out = out_dir(&format!("packing-thermal-shock-{ranks}"));
+        run_ok(ranks, &scen, &out, &[]);
+        csv.push(std::fs::read_to_string(out.join(format!("{stem}_cracks.csv"))).unwrap());
+        assert!(out.join(format!("{stem}_particle_cracks.png")).is_file());
+        if ranks == 1 {
+            continue;
+        }
+        let (h, rows) = history(&out, stem);
+        let c = |n: &str| col(&h, n);
+        for r in &rows {
+            // Bounded conduction: no temperature leaves [20, 300] °C.
+            assert!(
+                r[c("nut_min_T")] >= T_COLD - 1e-9 && r[c("nut_max_T")] <= T_HOT + 1e-9,
+                "t = {}: nut temperatures {} .. {}",
+                r[1],
+                r[c("nut_min_T")],
+                r[c("nut_max_T")]
+            );
+        }
+        let last = rows.last().unwrap();
+        let stored = last[c("stored_heat")] - rows[0][c("stored_heat")];
+        let inflow = last[c("boundary_heat_in")];
+        assert!(
+            (stored - inflow).abs() < 1e-6 * inflow,
+            "heat stored {stored} against heat in {inflow}"
+        );
+        let nuts = table(&csv[1]);
+        assert_eq!(nuts.len(), 50);
+        let broken: f64 = nuts.iter().map(|p| p.broken).sum();
+        let area: f64 = nuts.iter().map(|p| p.area).sum();
+        assert_eq!(broken, last[c("broken_joints")], "table against history");
+        assert!((area - last[c("crack_area")]).abs() < 1e-9 * area.max(1e-12));
+        assert!(broken > 0.0, "no nut cracked");
+        // Damage dissipates at least G_I per unit of new crack area (more in
+        // mixed mode and in joints damaged but not broken).
+        let energy = last[c("fracture_energy")];
+        eprintln!(
+            "{broken} broken joints, crack area {area:.4e} m^2, {energy:.4e} J: {:.1} J/m^2",
+            energy / area
+        );
+        assert!(energy >= 0.99 * G_I * area, "{energy} J for {area} m^2");
+        // The bottom layer, on the hot plate, cracks first.
+        let (bottom, top): (Vec<&Particle>, Vec<&Particle>) =
+            nuts.iter().partition(|p| p.z < 0.5 * LAYER);
+        assert_eq!((bottom.len(), top.len()), (25, 25));
+        let first_top = top
+            .iter()
+            .filter_map(|p| p.first)
+            .fold(f64::INFINITY, f64::min);
+        for p in &bottom {
+            let t = p
+                .first
+                .unwrap_or_else(|| panic!("{} on the plate did not crack", p.name));
+            assert!(
+                t < first_top,
+                "{} cracked at {t} s, a top nut at {first_top}",
+                p.name
+            );
+        }
+        let times: Vec<f64> = bottom.iter().filter_map(|p| p.first).collect();
+        eprintln!(
+            "bottom layer cracks from {:.4} s to {:.4} s; top layer: {}",
+            times.iter().copied().fold(f64::INFINITY, f64::min),
+            times.iter().copied().fold(0.0, f64::max),
+            if first_top.is_finite() {
+                format!("from {first_top} s")
+            } else {
+                "no crack".into()
+            }
+        );
+    }
+    // The same joints break at the same moments on 1 and 2 ranks (the
+    // temperatures agree to the solver's tolerance, so the energies to 1e-8).
+    let (one, two) = (table(&csv[0]), table(&csv[1]));
+    for (a, b) in one.iter().zip(&two) {
+        assert_eq!(
+            (&a.name, a.broken, a.area, a.first),
+            (&b.name, b.broken, b.area, b.first),
+            "1 against 2 ranks"
+        );
+        assert!(
+            (a.energy - b.energy).abs() <= 1e-8 * a.energy.abs(),
+            "{}: {} J against {} J",
+            a.name,
+            a.energy,
+            b.energy
+        );
+    }
+}

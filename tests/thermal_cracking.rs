@@ -192,3 +192,56 @@ fn a_bad_ramp_names_the_key() {
         assert!(err.contains("thermal.bc[1].ramp"), "ramp = {bad}: {err}");
     }
 }
+
+/// A ramped temperature on 2 ranks, one of which owns none of its rows (a
+/// jointed body is held by one rank): the lifting's re-evaluation is
+/// collective, so both ranks take part (it deadlocked before), and the
+/// temperatures are those of 1 rank to the solver's tolerance.
+#[test]
+fn a_ramp_on_a_rank_without_its_rows_gives_the_one_rank_answer() {
+    let dir = out_dir("thermal-cracking-ramp-ranks");
+    std::fs::create_dir_all(&dir).unwrap();
+    let scen = dir.join("ramp.toml");
+    std::fs::write(
+        &scen,
+        r#"title = "ramped wall of a jointed box"
+[time]
+dt = 1e-4
+steps = 4
+[[materials]]
+name = "rock"
+conductivity = 1.0
+specific_heat = 1000.0
+density = 2400.0
+young = 20e9
+poisson = 0.2
+expansion = 1e-5
+tensile_strength = 10e6
+cohesion = 20e6
+friction_angle = 30.0
+g_i = 50.0
+g_ii = 100.0
+fracture_penalty = 103e9
+[[bodies]]
+name = "b"
+material = "rock"
+initial_temperature = 0.0
+mesh = { kind = "box", size = [0.1, 0.1, 0.1], element_size = 0.02 }
+fracture = {}
+[thermal]
+theta = 1.0
+bc = [{ kind = "temperature", set = "xmin", value = 10.0, ramp = 2e-4 }]
+[mechanics]
+[output]
+every = 1
+"#,
+    )
+    .unwrap();
+    let mut res = Vec::new();
+    for ranks in [1, 2] {
+        let out = dir.join(format!("r{ranks}"));
+        run_ok(ranks, &scen, &out, &[]);
+        res.push(read_results(&out, "ramp"));
+    }
+    assert_same_temperatures(&res[0], &res[1], 1e-8, "ramp, 1 against 2 ranks");
+}

@@ -267,7 +267,25 @@ impl<'p> ThermalSystem<'p> {
         // ramp), zero elsewhere.
         let mut xd = t.duplicate()?;
         xd.pointwise_mult(&t_end, &dmask)?;
-        let ramp_a0 = !ramped.is_empty();
+        // Whether any rank has a ramp, and the longest: the lifting's
+        // re-evaluation is collective, so every rank takes part (a rank
+        // without ramped rows would otherwise skip the MatDuplicate and
+        // the products the others wait in).
+        let (any_ramp, ramp_until) = {
+            let mine = [
+                f64::from(u8::from(!ramped.is_empty())),
+                ramped.iter().map(|r| r.3).fold(0.0, f64::max),
+            ];
+            let mut all = [0.0; 2];
+            mpi::traits::CommunicatorCollectives::all_reduce_into(
+                comm,
+                &mine[..],
+                &mut all[..],
+                mpi::collective::SystemOperation::max(),
+            );
+            (all[0] > 0.0, all[1])
+        };
+        let ramp_a0 = any_ramp;
         let mut f_free = t.duplicate()?;
         f_free.pointwise_mult(&ops.load, &free_mask)?;
 
@@ -363,7 +381,7 @@ impl<'p> ThermalSystem<'p> {
             )
         };
 
-        let ramp = if ramped.is_empty() {
+        let ramp = if !any_ramp {
             None
         } else {
             let n = t.view()?.len();
@@ -381,7 +399,7 @@ impl<'p> ThermalSystem<'p> {
             let mut m = free_mask.duplicate()?;
             m.copy_from(&free_mask)?;
             Some(Ramp {
-                until: ramped.iter().map(|r| r.3).fold(0.0, f64::max),
+                until: ramp_until,
                 start,
                 end,
                 time,

@@ -39,7 +39,7 @@ fn main() {
     let mut set = JointSet::new(jointed.joints.clone(), &material).expect("joints");
     let nj = set.faces.len();
     let x0: Vec<Vector3<f64>> = jointed.nodes.iter().map(|p| Vector3::from(*p)).collect();
-    let mut out = vec![[Vector3::zeros(); 6]; nj];
+    let mut out = vec![[Vector3::zeros(); 3]; nj];
     // Each tet is moved rigidly by its own offset, so the joints open,
     // slide and close (a smooth field would move both faces alike). The
     // opening at a joint's peak is about f_t h / p_f.

@@ -17,7 +17,7 @@ pub(super) struct DomainJoints {
     /// One set per fracture material (ascending material index).
     pub(super) sets: Vec<JointSet>,
     /// Each set's forces of the last substep (a's corners, then b's).
-    out: Vec<Vec<[Vector3<f64>; 6]>>,
+    out: Vec<Vec<[Vector3<f64>; 3]>>,
     /// Totals of the last substep, over this rank's sets.
     pub(super) totals: JointTotals,
     /// Broken joints when the thermal rows were last numbered.
@@ -111,7 +111,7 @@ impl DomainJoints {
                 set.start_broken(j, &x);
             }
             d.sets.push(set);
-            d.out.push(vec![[Vector3::zeros(); 6]; n]);
+            d.out.push(vec![[Vector3::zeros(); 3]; n]);
         }
         d.rows = rows;
         Ok(d)
@@ -157,9 +157,12 @@ impl DomainJoints {
         let mut tot = JointTotals::default();
         for (set, out) in self.sets.iter_mut().zip(&mut self.out) {
             let s = set.forces(x, t, out);
+            // a's corners get the joint's forces, b's their negatives
+            // (exactly: f − g is f + (−g) in floating point).
             for (faces, forces) in set.faces.iter().zip(out.iter()) {
-                for (k, &l) in faces.a.iter().chain(&faces.b).enumerate() {
-                    f[l as usize] += forces[k];
+                for k in 0..3 {
+                    f[faces.a[k] as usize] += forces[k];
+                    f[faces.b[k] as usize] -= forces[k];
                 }
             }
             tot.add(&s);

@@ -96,6 +96,8 @@ impl FractureMaterial {
             g_ii: self.g_ii,
             eta: self.bk_exponent,
             min_strength2: self.tensile_strength.min(self.cohesion).powi(2),
+            nf: 2.0 * self.g_i / self.tensile_strength,
+            sf: 2.0 * self.g_ii / self.cohesion,
         }
     }
 }
@@ -115,6 +117,10 @@ pub struct CohesiveLaw {
     /// onset displacement min(f_t, c) / k no mixity or compression damages
     /// the joint.
     min_strength2: f64,
+    /// Final openings in pure opening and pure sliding, 2 G_I / f_t and
+    /// 2 G_II / c (m): independent of the stiffness.
+    nf: f64,
+    sf: f64,
 }
 
 /// How a joint broke.
@@ -203,8 +209,8 @@ impl CohesiveLaw {
         // Camanho–Dávila: B = δ_s² / (δ_s² + δ_n²), the shear share of the energy.
         let b = if l2 > 0.0 { s2 / l2 } else { 0.0 };
         let be = if self.eta == 1.0 { b } else { b.powf(self.eta) };
-        let (n0, nf) = (self.ft / self.k, 2.0 * self.g_i / self.ft);
-        let (s0, sf) = (self.c / self.k, 2.0 * self.g_ii / self.c);
+        let (n0, nf) = (self.ft / self.k, self.nf);
+        let (s0, sf) = (self.c / self.k, self.sf);
         // Camanho–Dávila onset δ_0² = δ_n0² + (δ_s0² − δ_n0²) B^η, final δ_f = (δ_n0 δ_nf + (δ_s0 δ_sf − δ_n0 δ_nf) B^η) / δ_0.
         let onset = (n0 * n0 + (s0 * s0 - n0 * n0) * be).sqrt();
         let last = (n0 * nf + (s0 * sf - n0 * nf) * be) / onset;

@@ -223,14 +223,16 @@ impl JointSet {
     }
 
     /// Advance every joint to the positions `x` (indexed by the faces'
-    /// node numbers) at time `t` and write its six forces (a's corners,
-    /// then b's) to `out` (one entry per joint): an intact joint's
-    /// tractions, a broken one's crack contact. Returns the totals.
+    /// node numbers) at time `t` and write the forces on a's three corners
+    /// to `out` (one entry per joint): an intact joint's tractions, a
+    /// broken one's crack contact. The forces on b's corners are exactly
+    /// their negatives (both kernels act corner pair by corner pair), so
+    /// they are not stored. Returns the totals.
     pub fn forces(
         &mut self,
         x: &[Vector3<f64>],
         t: f64,
-        out: &mut [[Vector3<f64>; 6]],
+        out: &mut [[Vector3<f64>; 3]],
     ) -> JointTotals {
         let mut tot = JointTotals::default();
         let fresh = self.new_cracks.len();
@@ -242,11 +244,10 @@ impl JointSet {
             let xb = [p(f.b[0]), p(f.b[1]), p(f.b[2])];
             let st = &mut self.states[j];
             let was_broken = st.broken.is_some();
-            let (fa, fb) = out[j].split_at_mut(3);
-            let fa: &mut [Vector3<f64>; 3] = fa.try_into().expect("three corners");
-            let fb: &mut [Vector3<f64>; 3] = fb.try_into().expect("three corners");
+            // b's forces are −a's: a local the compiler drops.
+            let mut fb = [Vector3::zeros(); 3];
             let law = self.law.with_stiffness(self.stiffness[j]);
-            tot.stored += joint_forces(&law, f.area, &xa, &xb, st, fa, fb);
+            tot.stored += joint_forces(&law, f.area, &xa, &xb, st, &mut out[j], &mut fb);
             if st.broken.is_some() && !was_broken {
                 self.broke_at[j] = t;
                 self.new_cracks.push(j as u32);
@@ -268,10 +269,18 @@ impl JointSet {
             let f = &self.faces[j];
             let p = |n: u32| x[n as usize];
             let (xa, xb) = (f.a.map(p), f.b.map(p));
-            let (fa, fb) = out[j].split_at_mut(3);
-            let fa: &mut [Vector3<f64>; 3] = fa.try_into().expect("three corners");
-            let fb: &mut [Vector3<f64>; 3] = fb.try_into().expect("three corners");
-            let r = crack_forces(self.stiffness[j], mu, f.area, &xa, &xb, cs, fa, fb);
+            let mut fb = [Vector3::zeros(); 3];
+            let r = crack_forces(
+                self.stiffness[j],
+                mu,
+                f.area,
+                &xa,
+                &xb,
+                cs,
+                &mut out[j],
+                &mut fb,
+            );
+            debug_assert!((0..3).all(|i| fb[i] == -out[j][i]));
             tot.stored += r.stored;
             tot.friction += cs.lost;
             tot.closed += usize::from(cs.closed);
@@ -320,7 +329,7 @@ mod tests {
         let nf = 2.0 * m.g_i / m.tensile_strength;
         let steps = 20000;
         let (mut peak, mut work, mut prev) = (0.0f64, 0.0, 0.0);
-        let mut out = vec![[Vector3::zeros(); 6]];
+        let mut out = vec![[Vector3::zeros(); 3]];
         let mut last = JointTotals::default();
         for i in 0..=steps {
             let lift = 1.1 * nf * i as f64 / steps as f64;
@@ -331,11 +340,8 @@ mod tests {
             last = set.forces(&x, i as f64, &mut out);
             // Upward pull on the upper tet = −(the joint's force on it).
             let b_is_upper = upper.contains(&(set.faces[0].b[0] as usize));
-            let on_upper: f64 = if b_is_upper {
-                out[0][3..].iter().map(|f| f.z).sum()
-            } else {
-                out[0][..3].iter().map(|f| f.z).sum()
-            };
+            let on_a: f64 = out[0].iter().map(|f| f.z).sum();
+            let on_upper = if b_is_upper { -on_a } else { on_a };
             let pull = -on_upper;
             peak = peak.max(pull / area);
             if i > 0 {

@@ -293,16 +293,7 @@ impl Stages<'_, '_> {
             release_free_memory();
             self.write(out, step)?;
         } else if at.schedule.is_history(step) {
-            let (mech, contacts) = (self.mech.as_ref(), &self.contacts.set);
-            out.history_row(
-                self.comm,
-                self.model,
-                &self.part,
-                &mut self.sys,
-                mech,
-                contacts,
-                step,
-            )?;
+            self.write_history(out, step)?;
         }
         self.times.output += clock.elapsed().as_secs_f64();
         if !settled && step < self.model.steps {
@@ -387,6 +378,13 @@ impl Stages<'_, '_> {
             contacts,
             step,
         )
+    }
+
+    /// Collective. Write the history row of `step` alone.
+    fn write_history(&mut self, out: &mut Output, step: u64) -> Result<()> {
+        let (comm, model, part) = (self.comm, self.model, &self.part);
+        let (mech, contacts) = (self.mech.as_ref(), &self.contacts.set);
+        out.history_row(comm, model, part, &mut self.sys, mech, contacts, step)
     }
 
     /// Collective. Record the particle statistics of `step`.

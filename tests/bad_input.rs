@@ -682,3 +682,49 @@ fn unknown_petsc_options_are_named_on_one_and_two_ranks() {
     );
     run_ok(1, &s, &ok, &["-ksp_monitr", "--allow-unused-petsc-options"]);
 }
+
+/// Issue 20: emissivity outside (0, 1], a negative film coefficient, a
+/// radiating body without an emissivity, and radiation with temperatures
+/// below absolute zero for want of a temperature offset: each error names
+/// its key, and nothing is written.
+#[test]
+fn bad_ambient_keys_are_named() {
+    let ambient = "\n[thermal.ambient]\ntemperature = 20.0\nradiation = true\n";
+    let cases: [(&str, String, &str); 4] = [
+        (
+            "emissivity",
+            BASE.replace("density = 100.0", "density = 100.0\nemissivity = 1.5") + ambient,
+            "materials[0].emissivity",
+        ),
+        (
+            "negative-h",
+            BASE.replace("density = 100.0", "density = 100.0\nemissivity = 0.5")
+                + &ambient.replace("radiation = true", "h = -5.0"),
+            "thermal.ambient.h",
+        ),
+        (
+            "no-emissivity",
+            BASE.to_string() + ambient,
+            "materials[0].emissivity",
+        ),
+        (
+            "offset",
+            BASE.replace("density = 100.0", "density = 100.0\nemissivity = 0.5")
+                .replace("value = 1.0", "value = -300.0")
+                + ambient,
+            "thermal.temperature_offset",
+        ),
+    ];
+    for (name, text, key) in cases {
+        let d = scenario_dir(&format!("ambient-{name}"));
+        let s = write(&d, "bad.toml", &text);
+        for ranks in [1, 2] {
+            let (_, err) = run_bad(ranks, &s, &d.join("out"), &[]);
+            assert!(
+                err.contains("bad.toml") && err.contains(key),
+                "{name}: {err}"
+            );
+            assert_no_output(&d.join("out"));
+        }
+    }
+}

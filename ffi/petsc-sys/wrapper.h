@@ -2,4 +2,5 @@
 #include <petscvec.h>
 #include <petscmat.h>
 #include <petscksp.h>
+#include <petscsnes.h>
 #include <petscviewer.h>

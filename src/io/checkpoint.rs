@@ -8,7 +8,7 @@
 //! - `/state/positions`, `/state/velocities` (N×3 f64, when mechanics ran),
 //!   `/state/temperature` (N f64, when the thermal problem ran)
 //! - `/state/scalars` (f64): step, time, substeps, heat account (5 values),
-//!   dissipated energy, peak kinetic energy, thermal contacts
+//!   dissipated energy, peak kinetic energy, thermal contacts, radiated heat
 //!
 //! The file is written to `<path>.tmp` and renamed, so a crash never
 //! leaves a half-written checkpoint under the final name.
@@ -29,14 +29,17 @@ const SCALARS: usize = 12;
 /// The heat account's running state as saved.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct SavedAccount {
-    /// Base account: stored, stored change, Dirichlet in, flux in, convection in.
-    pub base: [f64; 5],
+    /// Base account: stored, stored change, Dirichlet in, flux in,
+    /// convection in, radiation in.
+    pub base: [f64; 6],
     /// Steps since the last assembly.
     pub steps: u64,
     /// Temperatures at the last assembly, per node.
     pub t0: Vec<f64>,
     /// Sum of the step temperatures since then, per node.
     pub t_sum: Vec<f64>,
+    /// The radiated heat since then, per node (radiating runs).
+    pub rad_sum: Option<Vec<f64>>,
 }
 
 /// Everything needed to continue a run, or to start another from its state.
@@ -74,8 +77,9 @@ pub struct Checkpoint {
     pub ksp_iterations: u64,
     /// Nodal temperatures.
     pub temperature: Option<Vec<f64>>,
-    /// Heat account: stored, stored change, Dirichlet in, flux in, convection in.
-    pub heat: [f64; 5],
+    /// Heat account: stored, stored change, Dirichlet in, flux in,
+    /// convection in, radiation in.
+    pub heat: [f64; 6],
     /// Energy dissipated by contact damping and friction (J).
     pub dissipated: f64,
     /// Largest kinetic energy seen (J), for the settling test.
@@ -93,6 +97,18 @@ pub struct Checkpoint {
     /// The kinetic energy (J) at which the run settled, when this is the
     /// checkpoint of a settled run: a restart from it takes no more steps.
     pub settled: Option<f64>,
+}
+
+/// The saved account base: 6 values, or 5 from before radiation (then 0).
+fn account_base(v: &[f64]) -> Option<[f64; 6]> {
+    match v.len() {
+        5 | 6 => {
+            let mut b = [0.0; 6];
+            b[..v.len()].copy_from_slice(v);
+            Some(b)
+        }
+        _ => None,
+    }
 }
 
 fn tmp_path(path: &Path) -> PathBuf {
@@ -178,7 +194,7 @@ impl Checkpoint {
             } else {
                 None
             },
-            heat: [sc[3], sc[4], sc[5], sc[6], sc[7]],
+            heat: [sc[3], sc[4], sc[5], sc[6], sc[7], sc[11]],
             dissipated: sc[8],
             peak_kinetic: sc[9],
             thermal_contacts: sc[10] as u64,
@@ -190,7 +206,7 @@ impl Checkpoint {
             account: if file.link_exists("state/account_base") {
                 let base = get::<f64>(&file, path, "state/account_base", 1)?;
                 let steps = get::<u64>(&file, path, "state/account_steps", 1)?;
-                let (Ok(base), Some(&steps)) = (<[f64; 5]>::try_from(base), steps.first()) else {
+                let (Some(base), Some(&steps)) = (account_base(&base), steps.first()) else {
                     return Err(IoError::invalid(
                         path,
                         "state/account_base or state/account_steps has the wrong length",
@@ -201,6 +217,11 @@ impl Checkpoint {
                     steps,
                     t0: get(&file, path, "state/account_t0", 1)?,
                     t_sum: get(&file, path, "state/account_t_sum", 1)?,
+                    rad_sum: if file.link_exists("state/account_rad_sum") {
+                        Some(get(&file, path, "state/account_rad_sum", 1)?)
+                    } else {
+                        None
+                    },
                 })
             } else {
                 None
@@ -256,6 +277,12 @@ impl Checkpoint {
                 "state/account_t_sum",
                 self.account.as_ref().map(|a| a.t_sum.len()),
             ),
+            (
+                "state/account_rad_sum",
+                self.account
+                    .as_ref()
+                    .and_then(|a| a.rad_sum.as_ref().map(Vec::len)),
+            ),
         ] {
             if len.is_some_and(|l| l != nn) {
                 return bad(format!(
@@ -299,8 +326,9 @@ pub struct CheckpointHead {
     pub body_elems: Vec<[u32; 2]>,
     /// Krylov iterations so far.
     pub ksp_iterations: u64,
-    /// Heat account: stored, stored change, Dirichlet in, flux in, convection in.
-    pub heat: [f64; 5],
+    /// Heat account: stored, stored change, Dirichlet in, flux in,
+    /// convection in, radiation in.
+    pub heat: [f64; 6],
     /// Energy dissipated by contact damping and friction (J).
     pub dissipated: f64,
     /// Largest kinetic energy seen (J).
@@ -312,7 +340,7 @@ pub struct CheckpointHead {
     /// Each rank's share of the loads' work so far (J), when saved.
     pub external_work_per_rank: Option<Vec<f64>>,
     /// The heat account's base and steps since the last assembly, when saved.
-    pub account: Option<([f64; 5], u64)>,
+    pub account: Option<([f64; 6], u64)>,
     /// The kinetic energy at which the run settled, for a settled run.
     pub settled: Option<f64>,
     /// Which node fields the file holds.
@@ -323,6 +351,8 @@ pub struct CheckpointHead {
     pub has_velocities_prev: bool,
     /// Temperatures.
     pub has_temperature: bool,
+    /// The radiated heat per node since the last assembly (radiating runs).
+    pub has_rad_sum: bool,
     /// Whether it holds the cohesive joints' histories.
     pub has_joints: bool,
     /// The number of ranks of the run that wrote the file, when it saved
@@ -368,6 +398,8 @@ pub struct CheckpointRows<'a> {
     pub account_t0: Option<&'a [f64]>,
     /// Heat account: sum of the step temperatures since.
     pub account_t_sum: Option<&'a [f64]>,
+    /// Heat account: the radiated heat since, per node (radiating runs).
+    pub account_rad_sum: Option<&'a [f64]>,
     /// Cohesive joints: global joint numbers, their saved values
     /// ([`crate::fracture::set::SAVED_JOINT`] each) and the total.
     pub joints: Option<(&'a [u32], &'a [f64], u64)>,
@@ -576,6 +608,9 @@ fn write_parallel_to(
         small_u("state/account_steps", &[steps])?;
         nodes("state/account_t0", t0, 1)?;
         nodes("state/account_t_sum", ts, 1)?;
+        if let Some(r) = rows.account_rad_sum {
+            nodes("state/account_rad_sum", r, 1)?;
+        }
     }
     if let Some(ke) = head.settled {
         small("state/settled", &[ke], 1)?;
@@ -601,10 +636,11 @@ fn write_parallel_to(
     sc[0] = head.step as f64;
     sc[1] = head.time;
     sc[2] = head.substeps as f64;
-    sc[3..8].copy_from_slice(&head.heat);
+    sc[3..8].copy_from_slice(&head.heat[..5]);
     sc[8] = head.dissipated;
     sc[9] = head.peak_kinetic;
     sc[10] = head.thermal_contacts as f64;
+    sc[11] = head.heat[5];
     small("state/scalars", &sc, 1)?;
     super::ffi::flush_global(&file).map_err(call("flushing the checkpoint"))
 }
@@ -685,8 +721,8 @@ impl CheckpointFile {
         let account = if file.link_exists("state/account_base") {
             let base = get::<f64>(&file, path, "state/account_base", 1)?;
             let steps = first("state/account_steps")?;
-            match (<[f64; 5]>::try_from(base), steps) {
-                (Ok(b), Some(s)) => Some((b, s)),
+            match (account_base(&base), steps) {
+                (Some(b), Some(s)) => Some((b, s)),
                 _ => {
                     return Err(IoError::invalid(
                         path,
@@ -708,7 +744,7 @@ impl CheckpointFile {
             body_nodes: rows::<u32, 2>(get(&file, path, "bodies/nodes", 2)?),
             body_elems: rows::<u32, 2>(get(&file, path, "bodies/elems", 2)?),
             ksp_iterations: first("state/counters")?.unwrap_or(0),
-            heat: [sc[3], sc[4], sc[5], sc[6], sc[7]],
+            heat: [sc[3], sc[4], sc[5], sc[6], sc[7], sc[11]],
             dissipated: sc[8],
             peak_kinetic: sc[9],
             thermal_contacts: sc[10] as u64,
@@ -734,6 +770,7 @@ impl CheckpointFile {
             has_velocities: file.link_exists("state/velocities"),
             has_velocities_prev: file.link_exists("state/velocities_prev"),
             has_temperature: file.link_exists("state/temperature"),
+            has_rad_sum: file.link_exists("state/account_rad_sum"),
             has_joints: file.link_exists("state/joints"),
             partition_ranks: if file.link_exists("partition/rank") {
                 first("partition/ranks")?
@@ -759,6 +796,7 @@ impl CheckpointFile {
             "state/temperature",
             "state/account_t0",
             "state/account_t_sum",
+            "state/account_rad_sum",
         ] {
             if file.link_exists(name) && rows_of(name)? != nodes {
                 return bad(format!(
@@ -939,16 +977,17 @@ mod tests {
             velocities_prev: Some(vec![[-1.5, 2.5, -0.0]; 4]),
             ksp_iterations: 123_456,
             temperature: Some(vec![1.0, 2.0, 3.0, f64::MIN_POSITIVE]),
-            heat: [1.0, 2.0, 3.0, 4.0, 5.0],
+            heat: [1.0, 2.0, 3.0, 4.0, 5.0, -6.0],
             dissipated: 0.5,
             peak_kinetic: 2.5,
             settled: Some(1e-3),
             dissipated_per_rank: Some(vec![0.25, 0.5]),
             account: Some(SavedAccount {
-                base: [1.0, 2.0, 3.0, 4.0, 5.0],
+                base: [1.0, 2.0, 3.0, 4.0, 5.0, -6.5],
                 steps: 17,
                 t0: vec![0.5; 4],
                 t_sum: vec![8.5; 4],
+                rad_sum: Some(vec![0.25; 4]),
             }),
             thermal_contacts: 3,
         }
@@ -991,6 +1030,7 @@ mod tests {
             temperature: c.temperature.as_deref(),
             account_t0: c.account.as_ref().map(|a| &a.t0[..]),
             account_t_sum: c.account.as_ref().map(|a| &a.t_sum[..]),
+            account_rad_sum: c.account.as_ref().and_then(|a| a.rad_sum.as_deref()),
             joints: None,
         };
         crate::testutil::on_one_rank(|comm| write_parallel(comm, p, &head, &rows))

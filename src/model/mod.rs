@@ -7,6 +7,7 @@
 //! ([`crate::parallel::Part::build`]); [`Model::whole_mesh`] makes them
 //! all on one process for `fdem check` and tests.
 
+pub mod ambient;
 mod bcs;
 mod bodies;
 
@@ -38,6 +39,8 @@ pub struct Material {
     pub elastic: Option<ElasticMaterial>,
     /// Fracture constants of joints made of it (issue 19).
     pub fracture: Option<crate::fracture::law::FractureMaterial>,
+    /// Surface emissivity (0 when not given).
+    pub emissivity: f64,
 }
 
 /// One body: a connected Tet4 mesh region with one material.
@@ -117,6 +120,10 @@ pub struct ThermalProblem {
     pub bcs: Vec<(SetTarget, ThermalKind)>,
     /// Volumetric source per body (W/m³).
     pub source: Vec<f64>,
+    /// Added to temperatures to make them absolute (K; seed 001's TOFFST).
+    pub offset: f64,
+    /// Free-surface convection and radiation (issue 20).
+    pub ambient: Option<ambient::Ambient>,
 }
 
 /// Contact heat transfer settings resolved to material indices.
@@ -239,6 +246,7 @@ impl Model {
                         viscosity: m.viscosity,
                     }),
                 fracture: m.fracture().ok().flatten(),
+                emissivity: m.emissivity.unwrap_or(0.0),
             })
             .collect();
         let material_index = |n: &str| {
@@ -648,6 +656,8 @@ impl Model {
             capacity: thermal_spec.capacity,
             conduction: thermal_spec.conduction,
             source: vec![0.0; bodies.len()],
+            offset: thermal_spec.temperature_offset,
+            ambient: (thermal_spec.ambient.as_ref()).map(|a| ambient::Ambient::new(a, &bodies)),
             ..Default::default()
         };
         for (i, init) in thermal_spec.initial.iter().enumerate() {

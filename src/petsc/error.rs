@@ -34,6 +34,16 @@ pub enum PetscError {
         /// Iterations done.
         iterations: i32,
     },
+    /// A Newton solve ended with a negative `SNESConvergedReason`.
+    #[error("nonlinear solver diverged: {reason} (SNESConvergedReason {code}) after {iterations} Newton iterations; try a smaller time step, other -snes_linesearch_type or -snes_max_it")]
+    NonlinearDiverged {
+        /// PETSc's name of the reason, e.g. `DIVERGED_LINE_SEARCH`.
+        reason: String,
+        /// The numeric reason.
+        code: i32,
+        /// Newton iterations done.
+        iterations: i32,
+    },
     /// Misuse detected on the Rust side (bad sizes, options with NUL bytes...).
     #[error("{0}")]
     Usage(String),

@@ -127,6 +127,36 @@ impl<'p> Matrix<'p> {
         self.raw
     }
 
+    /// A matrix PETSc owns (a callback's argument), wrapped for the safe
+    /// methods and never destroyed by us.
+    ///
+    /// # Safety
+    /// `raw` must be a valid `Mat` that outlives the wrapper.
+    pub(super) unsafe fn borrowed(raw: ffi::Mat) -> std::mem::ManuallyDrop<Self> {
+        std::mem::ManuallyDrop::new(Matrix {
+            raw,
+            _petsc: PhantomData,
+        })
+    }
+
+    /// Collective. Copy the values of `x`, which has this matrix's pattern.
+    pub fn copy_values_from(&mut self, x: &Matrix) -> Result<()> {
+        petsc_call!(MatCopy(
+            x.raw,
+            self.raw,
+            ffi::MatStructure::SAME_NONZERO_PATTERN
+        ))
+    }
+
+    /// Collective. Add `d` to the diagonal (its entries are in the pattern).
+    pub fn add_diagonal(&mut self, d: &Vector) -> Result<()> {
+        petsc_call!(MatDiagonalSet(
+            self.raw,
+            d.as_raw(),
+            ffi::InsertMode::ADD_VALUES
+        ))
+    }
+
     /// Add a dense block `vals` (row-major, rows.len() × cols.len()) at
     /// global indices. Call [`Matrix::assemble`] after all additions.
     pub fn add_values(&mut self, rows: &[PetscInt], cols: &[PetscInt], vals: &[f64]) -> Result<()> {

@@ -13,6 +13,7 @@
 pub mod error;
 mod ksp;
 mod matrix;
+mod snes;
 mod vector;
 
 use std::ffi::{CStr, CString};
@@ -25,6 +26,7 @@ use petsc_sys as ffi;
 pub use error::PetscError;
 pub use ksp::{Ksp, SolveStats};
 pub use matrix::{Matrix, Pattern};
+pub use snes::{Nonlinear, NonlinearStats, Snes};
 pub use vector::{Vector, VectorView, VectorViewMut};
 
 use crate::petsc_call;

@@ -47,6 +47,18 @@ impl<'p> Vector<'p> {
         Ok(v)
     }
 
+    /// A vector PETSc owns (a callback's argument), wrapped for the safe
+    /// methods and never destroyed by us.
+    ///
+    /// # Safety
+    /// `raw` must be a valid `Vec` that outlives the wrapper.
+    pub(super) unsafe fn borrowed(raw: ffi::Vec) -> std::mem::ManuallyDrop<Self> {
+        std::mem::ManuallyDrop::new(Vector {
+            raw,
+            _petsc: PhantomData,
+        })
+    }
+
     /// The raw handle (for calls the safe layer does not wrap).
     pub fn as_raw(&self) -> ffi::Vec {
         self.raw

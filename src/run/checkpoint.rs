@@ -145,6 +145,7 @@ impl Snapshot {
             ("state/temperature", c.temperature.map(|v| (1, v))),
             ("state/account_t0", c.account_t0.map(|v| (1, v))),
             ("state/account_t_sum", c.account_t_sum.map(|v| (1, v))),
+            ("state/account_rad_sum", c.account_rad_sum.map(|v| (1, v))),
         ];
         let fields = present
             .into_iter()
@@ -315,6 +316,11 @@ pub(super) fn restore_thermal(
             Some(_) => Some((
                 saved.rows1(comm, "state/account_t0", owned)?,
                 saved.rows1(comm, "state/account_t_sum", owned)?,
+                if ck.has_rad_sum {
+                    saved.rows1(comm, "state/account_rad_sum", owned)?
+                } else {
+                    Vec::new()
+                },
             )),
             None => None,
         };
@@ -323,7 +329,14 @@ pub(super) fn restore_thermal(
     let (t, account) = agree(comm, read().map_err(|e| unreadable(saved.origin(), e)))?;
     // Per node in the file; the copies of a node tied by intact joints share a row.
     let t = part.nodes_to_rows(&t);
-    let account = account.map(|(t0, ts)| (part.nodes_to_rows(&t0), part.nodes_to_rows(&ts)));
+    let account = account.map(|(t0, ts, rs)| {
+        let rs = if rs.is_empty() {
+            rs
+        } else {
+            part.nodes_to_rows(&rs)
+        };
+        (part.nodes_to_rows(&t0), part.nodes_to_rows(&ts), rs)
+    });
     let h = ck.heat;
     let heat = EnergyAccount {
         stored: h[0],
@@ -331,9 +344,10 @@ pub(super) fn restore_thermal(
         dirichlet_in: h[2],
         flux_in: h[3],
         convection_in: h[4],
+        radiation_in: h[5],
     };
     match (ck.account, account) {
-        (Some((b, steps)), Some((t0, t_sum))) => {
+        (Some((b, steps)), Some((t0, t_sum, rad_sum))) => {
             let state = crate::thermal::system::AccountState {
                 base: EnergyAccount {
                     stored: b[0],
@@ -341,10 +355,12 @@ pub(super) fn restore_thermal(
                     dirichlet_in: b[2],
                     flux_in: b[3],
                     convection_in: b[4],
+                    radiation_in: b[5],
                 },
                 t0,
                 t_sum,
                 steps,
+                rad_sum,
             };
             s.restore_exact(&t, &state, ck.step)?;
         }
@@ -364,6 +380,7 @@ pub(super) struct Captured {
     temperature: Option<Vec<f64>>,
     account_t0: Option<Vec<f64>>,
     account_t_sum: Option<Vec<f64>>,
+    account_rad_sum: Option<Vec<f64>>,
 }
 
 /// Collective. Write the checkpoint: every rank its part's rows.
@@ -411,6 +428,7 @@ pub(super) fn save_checkpoint(
         temperature: c.temperature.as_deref(),
         account_t0: c.account_t0.as_deref(),
         account_t_sum: c.account_t_sum.as_deref(),
+        account_rad_sum: c.account_rad_sum.as_deref(),
         joints: joints
             .as_ref()
             .map(|(ids, v)| (&ids[..], &v[..], total_joints)),
@@ -470,7 +488,7 @@ pub(super) fn capture(
             .collect();
         positions = Some(x);
     }
-    let (mut temperature, mut t0, mut t_sum) = (None, None, None);
+    let (mut temperature, mut t0, mut t_sum, mut rad_sum) = (None, None, None, None);
     if let Some(s) = sys.as_mut() {
         // Saved per node: copies tied by intact joints share a row.
         temperature = Some(part.rows_to_nodes(&s.t.to_local_vec()?));
@@ -483,11 +501,15 @@ pub(super) fn capture(
                 a.base.dirichlet_in,
                 a.base.flux_in,
                 a.base.convection_in,
+                a.base.radiation_in,
             ],
             a.steps,
         ));
         t0 = Some(part.rows_to_nodes(&a.t0));
         t_sum = Some(part.rows_to_nodes(&a.t_sum));
+        if !a.rad_sum.is_empty() {
+            rad_sum = Some(part.rows_to_nodes(&a.rad_sum));
+        }
         let e = s.energy()?;
         head.heat = [
             e.stored,
@@ -495,12 +517,14 @@ pub(super) fn capture(
             e.dirichlet_in,
             e.flux_in,
             e.convection_in,
+            e.radiation_in,
         ];
     }
     head.has_positions = positions.is_some();
     head.has_velocities = velocities.is_some();
     head.has_velocities_prev = velocities_prev.is_some();
     head.has_temperature = temperature.is_some();
+    head.has_rad_sum = rad_sum.is_some();
     Ok(Captured {
         head,
         positions,
@@ -509,5 +533,6 @@ pub(super) fn capture(
         temperature,
         account_t0: t0,
         account_t_sum: t_sum,
+        account_rad_sum: rad_sum,
     })
 }

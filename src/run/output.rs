@@ -98,6 +98,9 @@ impl Output {
                 "ksp_iterations",
                 "contacts",
                 "contact_area",
+                "convection_heat_in",
+                "radiation_heat_in",
+                "newton_iterations",
             ] {
                 header.push(h.into());
             }
@@ -303,6 +306,9 @@ impl Output {
                 s.iterations as f64,
                 contacts.total_pairs as f64,
                 contacts.total_area,
+                e.convection_in,
+                e.radiation_in,
+                s.newton_iterations as f64,
             ]);
         }
         if let Some(Mechanics {

@@ -110,6 +110,8 @@ pub struct RunSummary {
     pub steps: u64,
     /// Total Krylov iterations.
     pub ksp_iterations: u64,
+    /// Total Newton iterations (radiating runs; 0 when linear).
+    pub newton_iterations: u64,
     /// Solver in use.
     pub solver: String,
     /// Phase times.
@@ -167,6 +169,14 @@ impl std::fmt::Display for RunSummary {
             self.ksp_iterations,
             self.ksp_iterations as f64 / self.steps.max(1) as f64
         )?;
+        if self.newton_iterations > 0 {
+            writeln!(
+                f,
+                "  newton      {} iterations, {:.2} per step",
+                self.newton_iterations,
+                self.newton_iterations as f64 / self.steps.max(1) as f64
+            )?;
+        }
         writeln!(
             f,
             "  time [s]    model {:.3} | partition {:.3} | contact {:.3} | assembly+setup {:.3} | stepping {:.3} | output {:.3}",
@@ -244,6 +254,13 @@ impl std::fmt::Display for RunSummary {
                 self.energy.boundary_in(),
                 self.energy.stored_change - self.energy.boundary_in()
             )?;
+            if self.energy.radiation_in != 0.0 || self.energy.convection_in != 0.0 {
+                writeln!(
+                    f,
+                    "  ambient     convection in {:.6e}, radiation in {:.6e}",
+                    self.energy.convection_in, self.energy.radiation_in
+                )?;
+            }
         }
         writeln!(
             f,
@@ -519,6 +536,7 @@ impl Stages<'_, '_> {
             elements: self.model.totals().1 as usize,
             steps: step - start_step,
             ksp_iterations: sys.map_or(0, |s| s.iterations),
+            newton_iterations: sys.map_or(0, |s| s.newton_iterations),
             start_step,
             settled,
             checkpoint,

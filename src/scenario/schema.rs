@@ -160,6 +160,9 @@ pub struct MaterialSpec {
     /// G_I + (G_II − G_I) B^η (default 1).
     #[serde(default)]
     pub bk_exponent: Option<f64>,
+    /// Surface emissivity ε in (0, 1] (radiation to the ambient, issue 20).
+    #[serde(default)]
+    pub emissivity: Option<f64>,
 }
 
 /// Joints that can break (issue 19): the body's tets of `set` made
@@ -522,6 +525,33 @@ pub struct ThermalSpec {
     /// Initial temperatures on named sets (override the body's value).
     #[serde(default)]
     pub initial: Vec<InitialSpec>,
+    /// Added to every temperature to make it absolute (K) where radiation
+    /// needs it: 273.15 for °C input, 0 for kelvin (seed 001's TOFFST).
+    #[serde(default)]
+    pub temperature_offset: f64,
+    /// Heat exchange of the free surfaces with the surroundings.
+    #[serde(default)]
+    pub ambient: Option<AmbientSpec>,
+}
+
+/// Convection and radiation of the bodies' free surfaces to an ambient
+/// (issue 20): on every boundary face, less the area in contact with
+/// another body.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AmbientSpec {
+    /// Ambient temperature (scenario unit; plus the offset for radiation).
+    pub temperature: f64,
+    /// Convection coefficient h (W/m²/K), default 0.
+    #[serde(default)]
+    pub h: f64,
+    /// Radiate with each material's emissivity, ε σ (T⁴ − T_env⁴).
+    #[serde(default)]
+    pub radiation: bool,
+    /// The bodies (names or scenario entries) that exchange heat with the
+    /// ambient; default all.
+    #[serde(default)]
+    pub bodies: Vec<String>,
 }
 
 fn default_theta() -> f64 {
@@ -536,6 +566,8 @@ impl Default for ThermalSpec {
             conduction: ConductionKind::default(),
             bc: Vec::new(),
             initial: Vec::new(),
+            temperature_offset: 0.0,
+            ambient: None,
         }
     }
 }

@@ -378,6 +378,106 @@ impl Scenario {
                 );
             }
         }
+        self.validate_ambient()
+    }
+
+    /// Emissivities, the temperature offset and `thermal.ambient` (issue 20).
+    fn validate_ambient(&self) -> Result<(), (String, String)> {
+        let bad = |k: &str, m: String| Err((k.to_string(), m));
+        for (i, m) in self.materials.iter().enumerate() {
+            if let Some(e) = m.emissivity {
+                if !(e > 0.0 && e <= 1.0) {
+                    return bad(
+                        &format!("materials[{i}].emissivity"),
+                        format!("must be in (0, 1], got {e} (material `{}`)", m.name),
+                    );
+                }
+            }
+        }
+        let thermal = self.thermal_spec();
+        let offset = thermal.temperature_offset;
+        if !offset.is_finite() {
+            return bad("thermal.temperature_offset", "must be finite".into());
+        }
+        let Some(a) = &thermal.ambient else {
+            return Ok(());
+        };
+        if !self.has_thermal() {
+            return bad(
+                "thermal.ambient",
+                "needs the thermal problem (a [thermal] table)".into(),
+            );
+        }
+        if !a.temperature.is_finite() {
+            return bad("thermal.ambient.temperature", "must be finite".into());
+        }
+        if !(a.h.is_finite() && a.h >= 0.0) {
+            return bad(
+                "thermal.ambient.h",
+                format!("must be a non-negative number (W/m^2/K), got {}", a.h),
+            );
+        }
+        for (i, name) in a.bodies.iter().enumerate() {
+            if !self.bodies.iter().any(|b| &b.name == name) {
+                return bad(
+                    &format!("thermal.ambient.bodies[{i}]"),
+                    format!("no body named `{name}`"),
+                );
+            }
+        }
+        if !a.radiation {
+            return Ok(());
+        }
+        let exposed = |b: &BodySpec| a.bodies.is_empty() || a.bodies.contains(&b.name);
+        for b in self.bodies.iter().filter(|b| exposed(b)) {
+            let mats = std::iter::once(&b.material).chain(b.regions.values());
+            for name in mats {
+                let i = self.materials.iter().position(|m| &m.name == name);
+                if let Some(i) = i.filter(|&i| self.materials[i].emissivity.is_none()) {
+                    return bad(
+                        &format!("materials[{i}].emissivity"),
+                        format!(
+                            "missing (material `{name}` of body `{}`): thermal.ambient.radiation \
+                             needs it",
+                            b.name
+                        ),
+                    );
+                }
+            }
+        }
+        // Radiation needs absolute temperatures: none may lie below -offset.
+        let mut temps: Vec<(String, f64)> =
+            vec![("thermal.ambient.temperature".into(), a.temperature)];
+        for (i, b) in self.bodies.iter().enumerate() {
+            temps.push((
+                format!("bodies[{i}].initial_temperature"),
+                b.initial_temperature,
+            ));
+        }
+        for (i, init) in thermal.initial.iter().enumerate() {
+            temps.push((format!("thermal.initial[{i}].value"), init.value));
+        }
+        for (i, bc) in thermal.bc.iter().enumerate() {
+            match bc {
+                ThermalBcSpec::Temperature { value, .. } => {
+                    temps.push((format!("thermal.bc[{i}].value"), *value))
+                }
+                ThermalBcSpec::Convection { ambient, .. } => {
+                    temps.push((format!("thermal.bc[{i}].ambient"), *ambient))
+                }
+                _ => {}
+            }
+        }
+        if let Some((key, t)) = temps.into_iter().find(|(_, t)| t + offset < 0.0) {
+            return bad(
+                "thermal.temperature_offset",
+                format!(
+                    "{key} = {t} is below absolute zero with thermal.temperature_offset = \
+                     {offset}; radiation needs absolute temperatures (273.15 for degrees \
+                     Celsius, 0 for kelvin)"
+                ),
+            );
+        }
         Ok(())
     }
 

@@ -31,6 +31,86 @@ pub struct Operators<'p> {
     pub load_flux: Vector<'p>,
     /// Load of convection ambient terms only.
     pub load_convection: Vector<'p>,
+    /// Free-surface radiation to the ambient, when the scenario asks for it.
+    pub radiation: Option<Radiation<'p>>,
+}
+
+/// Radiation of the free surfaces (issue 20): per PETSc row, ε σ times the
+/// row's free area (its faces' thirds less the contact surface's share).
+pub struct Radiation<'p> {
+    /// ε σ a_free per row (W/K⁴).
+    pub coef: Vector<'p>,
+    /// Added to temperatures to make them absolute.
+    pub offset: f64,
+    /// The ambient's absolute temperature to the fourth.
+    pub ambient4: f64,
+}
+
+/// Collective. Per owned PETSc row: the free area of the faces of bodies
+/// that see the ambient, and the same weighted by emissivity. A node's
+/// area is the third of each of its boundary faces' areas (lumped, as eq
+/// 24 shares contact areas); the contact surface's share of it (S w of
+/// each pair, eq 25) is taken off, so closed contacts do not exchange
+/// with the ambient.
+fn free_areas<'p>(
+    petsc: &'p Petsc,
+    model: &Model,
+    part: &Part,
+    contacts: &ContactSet,
+    ambient: &crate::model::ambient::Ambient,
+) -> Result<(Vector<'p>, Vector<'p>)> {
+    let owned = part.owned_rows();
+    let mut full = Vector::new(petsc, owned)?;
+    full.set(0.0)?;
+    let mut eps = full.duplicate()?;
+    eps.set(0.0)?;
+    let mut touching = full.duplicate()?;
+    touching.set(0.0)?;
+    let g = |l: u32| part.petsc[l as usize] as i32;
+    for e in 0..part.num_elements() {
+        if !ambient.body[part.mesh.body[e] as usize] || part.face_mask[e] == 0 {
+            continue;
+        }
+        let tet = part.mesh.tets[e];
+        let emissivity = model.materials[part.elem_material[e] as usize].emissivity;
+        for (f, local) in crate::mesh::LOCAL_FACES.iter().enumerate() {
+            if part.face_mask[e] & (1 << f) == 0 {
+                continue;
+            }
+            let face = local.map(|i| tet[i]);
+            let (area, _) =
+                element::triangle_area_normal(&face.map(|n| part.mesh.nodes[n as usize]));
+            full.set_values(&face.map(g), &[area / 3.0; 3], true)?;
+            eps.set_values(&face.map(g), &[emissivity * area / 3.0; 3], true)?;
+        }
+    }
+    for (p, d) in contacts.local.iter().zip(&contacts.dofs) {
+        let rows = d.petsc.map(|n| n as i32);
+        let mut v = [0.0; 8];
+        for i in 0..4 {
+            v[i] = p.surface.s_target * p.surface.w_target[i];
+            v[4 + i] = p.surface.s_contactor * p.surface.w_contactor[i];
+        }
+        touching.set_values(&rows, &v, true)?;
+    }
+    full.assemble()?;
+    eps.assemble()?;
+    touching.assemble()?;
+    {
+        let t = touching.view()?;
+        let mut ev = eps.view_mut()?;
+        let mut fv = full.view_mut()?;
+        for i in 0..fv.len() {
+            let free = if fv[i] > 0.0 {
+                (1.0 - t[i] / fv[i]).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            fv[i] *= free;
+            ev[i] *= free;
+        }
+    }
+    Ok((full, eps))
 }
 
 /// Per (target body, contactor body): Σ over pairs of g v_i per node (seed
@@ -194,6 +274,31 @@ pub fn assemble<'p>(
         stiffness.add_values(&idx, &idx, &hm)?;
         load_convection.set_values(&idx, &hl, true)?;
     }
+    // Free surfaces: lumped convection h a (T − T_env) and the radiation
+    // coefficient ε σ a (seed 001 sec 7.1.4; issue 20).
+    let mut radiation = None;
+    if let Some(amb) = model.thermal.ambient.as_ref() {
+        let (area, eps) = free_areas(petsc, model, part, contacts, amb)?;
+        let (lo, _) = area.ownership_range();
+        if amb.h > 0.0 {
+            let a = area.view()?;
+            for (i, &ai) in a.iter().enumerate().filter(|(_, &ai)| ai > 0.0) {
+                let r = (lo + i) as i32;
+                stiffness.add_values(&[r], &[r], &[amb.h * ai])?;
+                load_convection.set_values(&[r], &[amb.h * ai * amb.temperature], true)?;
+            }
+        }
+        if amb.radiation {
+            let mut coef = eps;
+            coef.scale(super::radiation::STEFAN_BOLTZMANN)?;
+            let offset = model.thermal.offset;
+            radiation = Some(Radiation {
+                coef,
+                offset,
+                ambient4: (amb.temperature + offset).powi(4),
+            });
+        }
+    }
     // Contact conductance (the capacity holds zeros there: one pattern).
     match mode {
         DeltaT::Local => {
@@ -239,5 +344,6 @@ pub fn assemble<'p>(
         capacity_rowsum,
         load_flux,
         load_convection,
+        radiation,
     })
 }

@@ -5,6 +5,8 @@ pub mod assembly;
 pub mod element;
 pub mod limits;
 pub mod monotone;
+pub mod nonlinear;
+pub mod radiation;
 pub mod system;
 
 pub use system::{SolverChoice, StepStats, ThermalSystem};

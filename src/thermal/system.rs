@@ -30,11 +30,12 @@ use crate::contact::{ContactSet, DeltaT};
 use crate::error::Error;
 use crate::model::Model;
 use crate::parallel::Part;
-use crate::petsc::{Ksp, Matrix, Petsc, Result, Vector};
+use crate::petsc::{Ksp, Matrix, Petsc, Result, Snes, Vector};
 use crate::scenario::{CapacityKind, ConductionKind, SolverSpec};
 use mpi::topology::SimpleCommunicator;
 
 use super::assembly::{assemble, Operators};
+use super::nonlinear::{emission, RadiatingStep};
 
 /// Linear solver defaults by problem size (the options database wins).
 #[derive(Debug, Clone, PartialEq)]
@@ -101,6 +102,8 @@ impl SolverChoice {
 pub struct StepStats {
     /// Krylov iterations (0 for the explicit scheme).
     pub iterations: i32,
+    /// Newton iterations (0 for a linear step).
+    pub newton: i32,
 }
 
 /// Heat balance since the start (J, or the user's energy unit).
@@ -116,12 +119,14 @@ pub struct EnergyAccount {
     pub flux_in: f64,
     /// Heat in by convection (negative when the body cools).
     pub convection_in: f64,
+    /// Heat in by radiation from the ambient (negative when it cools).
+    pub radiation_in: f64,
 }
 
 impl EnergyAccount {
     /// Total heat in through the boundary (and sources).
     pub fn boundary_in(&self) -> f64 {
-        self.dirichlet_in + self.flux_in + self.convection_in
+        self.dirichlet_in + self.flux_in + self.convection_in + self.radiation_in
     }
 }
 
@@ -138,12 +143,16 @@ pub struct AccountState {
     pub t_sum: Vec<f64>,
     /// Steps since then.
     pub steps: u64,
+    /// The radiated heat per row since then (empty without radiation).
+    pub rad_sum: Vec<f64>,
 }
 
 enum Scheme<'p> {
     Explicit {
         e: Matrix<'p>,
         g: Vector<'p>,
+        /// Δt / m_i on free rows, 0 on prescribed ones.
+        dt_minv: Vector<'p>,
     },
     Implicit {
         /// The system matrix; the KSP factorises it once.
@@ -153,6 +162,25 @@ enum Scheme<'p> {
         rhs: Vector<'p>,
         ksp: Box<Ksp<'p>>,
     },
+    /// The implicit step with radiation: Newton on A T + θ R(T) = rhs.
+    Newton {
+        b: Matrix<'p>,
+        g: Vector<'p>,
+        snes: Box<Snes<'p, RadiatingStep<'p>>>,
+    },
+}
+
+/// Radiation's state: the coefficients, R at the step's start and end,
+/// and the radiated heat per row since the last assembly (the account).
+struct Radiating<'p> {
+    /// ε σ a_free on every row.
+    coef: Vector<'p>,
+    offset: f64,
+    ambient4: f64,
+    r0: Vector<'p>,
+    r1: Vector<'p>,
+    /// Σ Δt (θ R(Tⁿ⁺¹) + (1 − θ) R(Tⁿ)) per row.
+    sum: Vector<'p>,
 }
 
 /// Prescribed temperatures that ramp: per owned row, the start and end
@@ -200,6 +228,10 @@ pub struct ThermalSystem<'p> {
     pub solver_name: String,
     /// Ramped prescribed temperatures, while any ramps.
     ramp: Option<Ramp<'p>>,
+    /// Free-surface radiation (issue 20).
+    rad: Option<Radiating<'p>>,
+    /// Total Newton iterations so far (radiating runs).
+    pub newton_iterations: u64,
 }
 
 impl<'p> ThermalSystem<'p> {
@@ -212,7 +244,8 @@ impl<'p> ThermalSystem<'p> {
         solver: &SolverSpec,
         contacts: &ContactSet,
     ) -> crate::error::Result<Self> {
-        let ops = assemble(petsc, comm, model, part, contacts)?;
+        let mut ops = assemble(petsc, comm, model, part, contacts)?;
+        let radiation = ops.radiation.take();
         let symmetric = model
             .contact
             .as_ref()
@@ -311,7 +344,7 @@ impl<'p> ThermalSystem<'p> {
             let mut g = t.duplicate()?;
             g.pointwise_mult(&ops.load, &dt_minv)?;
             (
-                Scheme::Explicit { e, g },
+                Scheme::Explicit { e, g, dt_minv },
                 "explicit (lumped, no solve)".to_string(),
                 None,
             )
@@ -348,37 +381,81 @@ impl<'p> ThermalSystem<'p> {
             for (k, v) in &solver.options {
                 petsc.set_default_option(k, if v.is_empty() { None } else { Some(v) })?;
             }
-            let mut ksp = Box::new(Ksp::new(petsc)?);
-            ksp.set_operator(&a)?;
-            ksp.set_types(
-                solver.ksp_type.as_deref().unwrap_or(&choice.ksp_type),
-                solver.pc_type.as_deref().unwrap_or(&choice.pc_type),
-            )?;
-            ksp.set_tolerances(
-                solver.rtol.unwrap_or(1e-10),
-                solver.atol.unwrap_or(1e-50),
-                solver.max_it.unwrap_or(10_000) as i32,
-            )?;
-            ksp.set_from_options()?;
-            let (kt, pt) = ksp.types()?;
-            // Warm start from the previous step (a direct solve ignores it).
-            if kt != "preonly" {
-                ksp.set_initial_guess_nonzero(true)?;
-                warm_start = true;
+            if let Some(rad) = radiation.as_ref() {
+                let mut coef_free = rad.coef.duplicate()?;
+                coef_free.pointwise_mult(&rad.coef, &free_mask)?;
+                let j = a.duplicate()?;
+                let step = RadiatingStep {
+                    rhs: t.duplicate()?,
+                    work: t.duplicate()?,
+                    a,
+                    coef_free,
+                    theta,
+                    offset: rad.offset,
+                    ambient4: rad.ambient4,
+                    symmetric,
+                };
+                let mut snes = Box::new(Snes::new(petsc, step, t.duplicate()?, j)?);
+                snes.set_linear(
+                    solver.ksp_type.as_deref().unwrap_or(&choice.ksp_type),
+                    solver.pc_type.as_deref().unwrap_or(&choice.pc_type),
+                    solver.rtol.unwrap_or(1e-10),
+                    solver.atol.unwrap_or(1e-50),
+                )?;
+                // Newton to 1e-10 of the first residual, or a step below
+                // 1e-12 of the temperatures (round-off near a steady state).
+                snes.set_tolerances(1e-300, 1e-10, 1e-12, 50)?;
+                snes.set_from_options()?;
+                let name = snes.types()?;
+                (Scheme::Newton { b, g, snes }, name, a0)
+            } else {
+                let mut ksp = Box::new(Ksp::new(petsc)?);
+                ksp.set_operator(&a)?;
+                ksp.set_types(
+                    solver.ksp_type.as_deref().unwrap_or(&choice.ksp_type),
+                    solver.pc_type.as_deref().unwrap_or(&choice.pc_type),
+                )?;
+                ksp.set_tolerances(
+                    solver.rtol.unwrap_or(1e-10),
+                    solver.atol.unwrap_or(1e-50),
+                    solver.max_it.unwrap_or(10_000) as i32,
+                )?;
+                ksp.set_from_options()?;
+                let (kt, pt) = ksp.types()?;
+                // Warm start from the previous step (a direct solve ignores it).
+                if kt != "preonly" {
+                    ksp.set_initial_guess_nonzero(true)?;
+                    warm_start = true;
+                }
+                ksp.set_up()?;
+                let rhs = t.duplicate()?;
+                (
+                    Scheme::Implicit {
+                        _a: a,
+                        b,
+                        g,
+                        rhs,
+                        ksp,
+                    },
+                    format!("{kt}/{pt}"),
+                    a0,
+                )
             }
-            ksp.set_up()?;
-            let rhs = t.duplicate()?;
-            (
-                Scheme::Implicit {
-                    _a: a,
-                    b,
-                    g,
-                    rhs,
-                    ksp,
-                },
-                format!("{kt}/{pt}"),
-                a0,
-            )
+        };
+        let rad = match radiation {
+            None => None,
+            Some(r) => {
+                let mut sum = t.duplicate()?;
+                sum.set(0.0)?;
+                Some(Radiating {
+                    offset: r.offset,
+                    ambient4: r.ambient4,
+                    r0: t.duplicate()?,
+                    r1: t.duplicate()?,
+                    sum,
+                    coef: r.coef,
+                })
+            }
         };
 
         let ramp = if !any_ramp {
@@ -434,6 +511,8 @@ impl<'p> ThermalSystem<'p> {
             iterations: 0,
             solver_name,
             ramp,
+            rad,
+            newton_iterations: 0,
         })
     }
 
@@ -458,7 +537,11 @@ impl<'p> ThermalSystem<'p> {
                 }
                 // Zero on free rows: keep the prescribed rows only.
                 r.xd.pointwise_mult(&r.xd.duplicate_from()?, &self.dmask)?;
-                if let (Some(a0), Scheme::Implicit { g, .. }) = (&r.a0, &mut self.scheme) {
+                let g = match &mut self.scheme {
+                    Scheme::Implicit { g, .. } | Scheme::Newton { g, .. } => Some(g),
+                    Scheme::Explicit { .. } => None,
+                };
+                if let (Some(a0), Some(g)) = (&r.a0, g) {
                     // g = f_free − free ∘ (A xd) + xd.
                     a0.mult(&r.xd, g)?;
                     g.scale(-1.0)?;
@@ -470,15 +553,27 @@ impl<'p> ThermalSystem<'p> {
             }
             _ => false,
         };
+        // Radiation at the step's start.
+        if let Some(r) = self.rad.as_mut() {
+            emission(&r.coef, &self.t, r.offset, r.ambient4, &mut r.r0)?;
+        }
         let stats = match &mut self.scheme {
-            Scheme::Explicit { e, g } => {
+            Scheme::Explicit { e, g, dt_minv } => {
                 e.mult_add(&self.t, g, &mut self.t_next)?;
+                if let Some(r) = self.rad.as_mut() {
+                    // Seed 000 eq 23 with the radiated power: − Δt M_L⁻¹ R(Tⁿ).
+                    r.r1.pointwise_mult(&r.r0, dt_minv)?;
+                    self.t_next.axpy(-1.0, &r.r1)?;
+                }
                 if let (true, Some(r)) = (ramping, &self.ramp) {
                     self.t_next
                         .pointwise_mult(&self.t_next.duplicate_from()?, &r.free_mask)?;
                     self.t_next.axpy(1.0, &r.xd)?;
                 }
-                StepStats { iterations: 0 }
+                StepStats {
+                    iterations: 0,
+                    newton: 0,
+                }
             }
             Scheme::Implicit { b, g, rhs, ksp, .. } => {
                 b.mult_add(&self.t, g, rhs)?;
@@ -488,14 +583,42 @@ impl<'p> ThermalSystem<'p> {
                 let s = ksp.solve(rhs, &mut self.t_next)?;
                 StepStats {
                     iterations: s.iterations,
+                    newton: 0,
+                }
+            }
+            Scheme::Newton { b, g, snes } => {
+                let r = self.rad.as_mut().expect("a radiating step has its state");
+                let theta = self.theta;
+                let p = snes.problem_mut();
+                // rhs = B Tⁿ + g − (1 − θ) R_free(Tⁿ).
+                b.mult_add(&self.t, g, &mut p.rhs)?;
+                p.work.pointwise_mult(&r.r0, &self.dmask)?;
+                p.work.aypx(-1.0, &r.r0)?;
+                p.rhs.axpy(-(1.0 - theta), &p.work)?;
+                self.t_next.copy_from(&self.t)?;
+                let s = snes.solve(&mut self.t_next)?;
+                StepStats {
+                    iterations: s.linear,
+                    newton: s.newton,
                 }
             }
         };
+        // The radiated heat of the step: Δt (θ R(Tⁿ⁺¹) + (1 − θ) R(Tⁿ)).
+        if let Some(r) = self.rad.as_mut() {
+            if self.theta != 0.0 {
+                emission(&r.coef, &self.t_next, r.offset, r.ambient4, &mut r.r1)?;
+                r.sum.axpy(self.dt * self.theta, &r.r1)?;
+            }
+            if self.theta != 1.0 {
+                r.sum.axpy(self.dt * (1.0 - self.theta), &r.r0)?;
+            }
+        }
         std::mem::swap(&mut self.t, &mut self.t_next);
         self.t_sum.axpy(1.0, &self.t)?;
         self.steps += 1;
         self.steps_total += 1;
         self.iterations += stats.iterations.max(0) as u64;
+        self.newton_iterations += stats.newton.max(0) as u64;
         Ok(stats)
     }
 
@@ -530,6 +653,12 @@ impl<'p> ThermalSystem<'p> {
         let ks_total = self.work.sum()?;
         r.axpy(self.dt, &self.work)?;
         r.axpy(-time, &ops.load)?;
+        // Radiated heat: on prescribed rows the reservoir supplies it.
+        let mut radiation_in = 0.0;
+        if let Some(rad) = self.rad.as_ref() {
+            r.axpy(1.0, &rad.sum)?;
+            radiation_in = -rad.sum.sum()?;
+        }
         let dirichlet_in = r.dot(&self.dmask)?;
         let stored = ops.capacity_rowsum.dot(&self.t)?;
         let stored0 = ops.capacity_rowsum.dot(&self.t0)?;
@@ -542,6 +671,7 @@ impl<'p> ThermalSystem<'p> {
             dirichlet_in: b.dirichlet_in + dirichlet_in,
             flux_in: b.flux_in + flux_in,
             convection_in: b.convection_in + convection_in,
+            radiation_in: b.radiation_in + radiation_in,
         })
     }
 
@@ -571,6 +701,7 @@ impl<'p> ThermalSystem<'p> {
         next.t0.copy_from(&next.t)?;
         next.base = account;
         next.iterations = self.iterations;
+        next.newton_iterations = self.newton_iterations;
         next.assemblies = self.assemblies + 1;
         next.steps_total = self.steps_total;
         *self = next;
@@ -603,6 +734,9 @@ impl<'p> ThermalSystem<'p> {
         self.t.copy_from_slice(owned)?;
         self.t0.copy_from(&self.t)?;
         self.t_sum.set(0.0)?;
+        if let Some(r) = self.rad.as_mut() {
+            r.sum.set(0.0)?;
+        }
         self.steps = 0;
         self.steps_total = steps;
         let stored = account.stored;
@@ -619,6 +753,10 @@ impl<'p> ThermalSystem<'p> {
             t0: self.t0.to_local_vec()?,
             t_sum: self.t_sum.to_local_vec()?,
             steps: self.steps,
+            rad_sum: match self.rad.as_ref() {
+                Some(r) => r.sum.to_local_vec()?,
+                None => Vec::new(),
+            },
         })
     }
 
@@ -628,6 +766,13 @@ impl<'p> ThermalSystem<'p> {
         self.t.copy_from_slice(owned)?;
         self.t0.copy_from_slice(&state.t0)?;
         self.t_sum.copy_from_slice(&state.t_sum)?;
+        if let Some(r) = self.rad.as_mut() {
+            if state.rad_sum.is_empty() {
+                r.sum.set(0.0)?;
+            } else {
+                r.sum.copy_from_slice(&state.rad_sum)?;
+            }
+        }
         self.steps = state.steps;
         self.steps_total = steps;
         self.base = state.base;

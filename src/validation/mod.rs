@@ -1,5 +1,6 @@
 //! Analytic and exact reference solutions the validation tests compare against.
 
+pub mod ambient;
 pub mod lumped;
 pub mod pipe_network;
 pub mod semidiscrete;

@@ -715,7 +715,20 @@ fn bad_ambient_keys_are_named() {
             "thermal.temperature_offset",
         ),
     ];
-    for (name, text, key) in cases {
+    let gap = "\n[contact]\nresistance = 1.0\ngap = { view_factor = 1.5 }\n";
+    let gap_cases = [
+        (
+            "gap-view",
+            BASE.to_string() + gap,
+            "contact.gap.view_factor",
+        ),
+        (
+            "gap-k",
+            BASE.to_string() + &gap.replace("view_factor = 1.5", "conductivity = -1.0"),
+            "contact.gap.conductivity",
+        ),
+    ];
+    for (name, text, key) in cases.into_iter().chain(gap_cases) {
         let d = scenario_dir(&format!("ambient-{name}"));
         let s = write(&d, "bad.toml", &text);
         for ranks in [1, 2] {

@@ -7,6 +7,7 @@
 //! every pair is found by exactly one rank.
 
 mod detect;
+pub mod gap;
 pub mod penalty;
 pub mod search;
 mod surface;
@@ -65,6 +66,10 @@ pub struct ContactSet {
     pub total_pairs: u64,
     /// Contact area over all ranks, Σ S (m²).
     pub total_area: f64,
+    /// This rank's near-field gap links (issue 20), in search order.
+    pub gaps: Vec<gap::GapLink>,
+    /// The searching faces' area linked across gaps, over all ranks (m²).
+    pub total_gap_area: f64,
 }
 
 impl ContactSet {
@@ -72,6 +77,7 @@ impl ContactSet {
     /// to `rtol` (the caller agrees over the ranks).
     pub fn same_local(&self, other: &ContactSet, rtol: f64) -> bool {
         self.local.len() == other.local.len()
+            && self.gaps == other.gaps
             && self.local.iter().zip(&other.local).all(|(a, b)| {
                 a.target == b.target
                     && a.contactor == b.contactor

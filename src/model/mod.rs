@@ -1,11 +1,9 @@
-//! The data model every stage shares, of the size of the number of bodies:
-//! materials, bodies (each with where its mesh comes from), the meshes
-//! bodies are made from (a body's own mesh, or a template its copies
-//! share), and the boundary conditions resolved to a body and a named set.
-//! Built from a scenario; holds no MPI or PETSc state. No rank builds the
-//! mesh of every body: each makes the bodies it holds
-//! ([`crate::parallel::Part::build`]); [`Model::whole_mesh`] makes them
-//! all on one process for `fdem check` and tests.
+//! The data model every stage shares, of the size of the number of bodies: materials,
+//! bodies (each with where its mesh comes from), the meshes bodies are made from (a body's
+//! own mesh, or a template its copies share), and the boundary conditions resolved to a
+//! body and a named set. Built from a scenario; holds no MPI or PETSc state. No rank builds
+//! the mesh of every body: each makes the bodies it holds ([`crate::parallel::Part::build`]);
+//! [`Model::whole_mesh`] makes them all on one process for `fdem check` and tests.
 
 pub mod ambient;
 mod bcs;
@@ -137,6 +135,8 @@ pub struct ContactModel {
     pub operator: crate::contact::ContactOperator,
     /// Detection cadence in steps (0: once).
     pub every: u64,
+    /// Near-field gap heat (issue 20).
+    pub gap: Option<crate::scenario::GapSpec>,
 }
 
 /// What a run writes, and where.
@@ -748,6 +748,7 @@ impl Model {
                     delta_t: c.delta_t,
                     operator: c.operator,
                     every: c.every,
+                    gap: c.gap.clone(),
                 })
             }
         };

@@ -148,6 +148,11 @@ impl<'p> Matrix<'p> {
         ))
     }
 
+    /// Zero every stored entry, keeping the pattern.
+    pub fn zero_entries(&mut self) -> Result<()> {
+        petsc_call!(MatZeroEntries(self.raw))
+    }
+
     /// Collective. Add `d` to the diagonal (its entries are in the pattern).
     pub fn add_diagonal(&mut self, d: &Vector) -> Result<()> {
         petsc_call!(MatDiagonalSet(

@@ -101,6 +101,7 @@ impl Output {
                 "convection_heat_in",
                 "radiation_heat_in",
                 "newton_iterations",
+                "gap_area",
             ] {
                 header.push(h.into());
             }
@@ -309,6 +310,7 @@ impl Output {
                 e.convection_in,
                 e.radiation_in,
                 s.newton_iterations as f64,
+                contacts.total_gap_area,
             ]);
         }
         if let Some(Mechanics {

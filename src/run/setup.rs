@@ -12,7 +12,8 @@ use mpi::collective::SystemOperation;
 use mpi::traits::*;
 
 use crate::contact::{
-    ContactPair, ContactSearch, ContactSet, ContactTets, OwnAndGhosts, PairDofs, THERMAL_SEARCH,
+    ContactPair, ContactSearch, ContactSet, ContactTets, OwnAndGhosts, PairDofs, SearchOptions,
+    THERMAL_SEARCH,
 };
 use crate::dynamics::ExplicitDomain;
 use crate::error::{Error, Result};
@@ -98,8 +99,11 @@ struct ThermalSearch {
     search: ContactSearch,
     /// Whether bodies move (at their prescribed velocities).
     moving: bool,
-    /// Margin of the ghost exchange: above the search's padding of any tet.
+    /// Margin of the ghost exchange: above the search's padding of any tet
+    /// and the pinball distance.
     exchange_margin: f64,
+    /// The pinball distance of near-field gaps (issue 20), when computed.
+    pinball: Option<f64>,
 }
 
 /// Thermal contact detection: where the pairs come from, and the pairs
@@ -151,12 +155,15 @@ impl Contacts {
                 .fold(0.0, f64::max);
             let mut max_ext = 0.0;
             comm.all_reduce_into(&ext, &mut max_ext, SystemOperation::max());
+            let gap = model.contact.as_ref().and_then(|c| c.gap.as_ref());
+            let pinball = gap.map(|g| g.pinball.unwrap_or(0.5 * max_ext));
             Source::Search(Box::new(ThermalSearch {
                 pieces: Pieces::new(&own),
                 own,
                 search: ContactSearch::new(),
                 moving,
-                exchange_margin: 1e-6 * max_ext,
+                exchange_margin: (1e-6 * max_ext).max(pinball.unwrap_or(0.0)),
+                pinball,
             }))
         };
         let mut contacts = Contacts {
@@ -253,6 +260,7 @@ impl Contacts {
         let clock = Instant::now();
         // Search time, counted once: the mechanics' in its own counters.
         let searched;
+        let mut gaps = Vec::new();
         let local = match (&mut self.source, mech) {
             (Source::None, _) => return Ok(ContactSet::default()),
             (Source::Mechanics, Some(m)) => {
@@ -276,14 +284,21 @@ impl Contacts {
                     |b| bodies[b as usize].is_held(),
                     |b| bodies[b as usize].velocity == [0.0; 3],
                 );
-                let candidates = og.search(&mut ts.search, &tets, THERMAL_SEARCH);
+                let opts = SearchOptions {
+                    margin: ts.pinball.unwrap_or(0.0),
+                    ..THERMAL_SEARCH
+                };
+                let candidates = og.search(&mut ts.search, &tets, opts);
                 searched = t.elapsed().as_secs_f64();
                 self.search_time += searched;
                 self.searches += 1;
+                if let Some(p) = ts.pinball {
+                    gaps = og.gap_links(&candidates, p);
+                }
                 og.contact_pairs(&candidates)
             }
         };
-        let set = contact_set(comm, local);
+        let set = contact_set(comm, local, gaps);
         self.surface_time += clock.elapsed().as_secs_f64() - searched;
         Ok(set)
     }
@@ -300,19 +315,27 @@ fn moved_positions(model: &Model, part: &Part, t: f64, x: &mut [[f64; 3]]) {
 
 /// Collective. The contact set of this rank's `local` pairs (each with its
 /// nodes' PETSc numbers, materials and bodies), and the totals over the ranks.
-fn contact_set(comm: &SimpleCommunicator, local: Vec<(ContactPair, PairDofs)>) -> ContactSet {
+fn contact_set(
+    comm: &SimpleCommunicator,
+    local: Vec<(ContactPair, PairDofs)>,
+    gaps: Vec<crate::contact::gap::GapLink>,
+) -> ContactSet {
     let (local, dofs): (Vec<ContactPair>, Vec<PairDofs>) = local.into_iter().unzip();
     let mine = [
         local.len() as f64,
         local.iter().map(ContactPair::area).sum::<f64>(),
+        gaps.iter().map(|g| g.area).sum::<f64>(),
     ];
-    let mut total = [0.0; 2];
+    let mut total = [0.0; 3];
     comm.all_reduce_into(&mine[..], &mut total[..], SystemOperation::sum());
     ContactSet {
         local,
         dofs,
         total_pairs: total[0] as u64,
-        total_area: total[1],
+        // + 0.0: an empty sum is −0.0, which the history would print.
+        total_area: total[1] + 0.0,
+        gaps,
+        total_gap_area: total[2] + 0.0,
     }
 }
 

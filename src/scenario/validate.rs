@@ -399,9 +399,49 @@ impl Scenario {
         if !offset.is_finite() {
             return bad("thermal.temperature_offset", "must be finite".into());
         }
-        let Some(a) = &thermal.ambient else {
+        let gap = self.contact.as_ref().and_then(|c| c.gap.as_ref());
+        if let Some(g) = gap {
+            if let Some(p) = g.pinball.filter(|p| !(p.is_finite() && *p > 0.0)) {
+                return bad(
+                    "contact.gap.pinball",
+                    format!("must be positive (m), got {p}"),
+                );
+            }
+            for (key, v) in [("conductivity", g.conductivity), ("h", g.h)] {
+                if !(v.is_finite() && v >= 0.0) {
+                    return bad(
+                        &format!("contact.gap.{key}"),
+                        format!("must be a non-negative number, got {v}"),
+                    );
+                }
+            }
+            if !(g.view_factor > 0.0 && g.view_factor <= 1.0) {
+                return bad(
+                    "contact.gap.view_factor",
+                    format!("must be in (0, 1], got {}", g.view_factor),
+                );
+            }
+            if self.mechanics.is_some() {
+                return bad(
+                    "contact.gap",
+                    "near-field gap heat is computed in thermal runs only so far (a run \
+                     with [mechanics] finds no gaps)"
+                        .into(),
+                );
+            }
+        }
+        let gap_radiation = gap.is_some_and(|g| g.radiation);
+        let Some(a) = thermal.ambient.clone().or_else(|| {
+            gap_radiation.then(|| AmbientSpec {
+                temperature: -offset,
+                h: 0.0,
+                radiation: false,
+                bodies: Vec::new(),
+            })
+        }) else {
             return Ok(());
         };
+        let a = &a;
         if !self.has_thermal() {
             return bad(
                 "thermal.ambient",
@@ -425,10 +465,16 @@ impl Scenario {
                 );
             }
         }
-        if !a.radiation {
+        if !(a.radiation || gap_radiation) {
             return Ok(());
         }
-        let exposed = |b: &BodySpec| a.bodies.is_empty() || a.bodies.contains(&b.name);
+        let key = if a.radiation {
+            "thermal.ambient.radiation"
+        } else {
+            "contact.gap.radiation"
+        };
+        let exposed =
+            |b: &BodySpec| gap_radiation || a.bodies.is_empty() || a.bodies.contains(&b.name);
         for b in self.bodies.iter().filter(|b| exposed(b)) {
             let mats = std::iter::once(&b.material).chain(b.regions.values());
             for name in mats {
@@ -437,8 +483,7 @@ impl Scenario {
                     return bad(
                         &format!("materials[{i}].emissivity"),
                         format!(
-                            "missing (material `{name}` of body `{}`): thermal.ambient.radiation \
-                             needs it",
+                            "missing (material `{name}` of body `{}`): {key} needs it",
                             b.name
                         ),
                     );

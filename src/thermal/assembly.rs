@@ -40,10 +40,43 @@ pub struct Operators<'p> {
 pub struct Radiation<'p> {
     /// ε σ a_free per row (W/K⁴).
     pub coef: Vector<'p>,
+    /// Radiation across near-field gaps: the Laplacian L of the links'
+    /// σ F A shares, so the power leaving the rows is L (T + offset)⁴.
+    pub gap: Option<Matrix<'p>>,
     /// Added to temperatures to make them absolute.
     pub offset: f64,
     /// The ambient's absolute temperature to the fourth.
     pub ambient4: f64,
+}
+
+/// The rows of a gap link: the searching face's corners, then the facing face's.
+fn gap_rows(l: &crate::contact::gap::GapLink) -> [i32; 6] {
+    let mut r = [0; 6];
+    for j in 0..3 {
+        r[j] = l.rows_a[j] as i32;
+        r[3 + j] = l.rows_b[j] as i32;
+    }
+    r
+}
+
+/// Add the links of gap `l` with total conductance `g` to `m`: corner i of
+/// the searching face to corner j of the facing one with g β_j / 3, so
+/// the heat is g (mean T_a − T_b at the ray's point), and every row sums
+/// to zero (heat is exchanged, not made).
+fn add_links(m: &mut Matrix, l: &crate::contact::gap::GapLink, g: f64) -> Result<()> {
+    let idx = gap_rows(l);
+    let mut block = [0.0; 36];
+    for i in 0..3 {
+        for j in 0..3 {
+            let c = g * l.beta[j] / 3.0;
+            let (a, b) = (i, 3 + j);
+            block[6 * a + a] += c;
+            block[6 * b + b] += c;
+            block[6 * a + b] -= c;
+            block[6 * b + a] -= c;
+        }
+    }
+    m.add_values(&idx, &idx, &block)
 }
 
 /// Collective. Per owned PETSc row: the free area of the faces of bodies
@@ -90,6 +123,20 @@ fn free_areas<'p>(
         for i in 0..4 {
             v[i] = p.surface.s_target * p.surface.w_target[i];
             v[4 + i] = p.surface.s_contactor * p.surface.w_contactor[i];
+        }
+        touching.set_values(&rows, &v, true)?;
+    }
+    // A face across a near-field gap sees the other body, not the ambient.
+    for l in &contacts.gaps {
+        let rows: Vec<i32> = l
+            .rows_a
+            .iter()
+            .chain(&l.rows_b)
+            .map(|&n| n as i32)
+            .collect();
+        let mut v = [l.area / 3.0; 6];
+        for j in 0..3 {
+            v[3 + j] = l.area * l.beta[j];
         }
         touching.set_values(&rows, &v, true)?;
     }
@@ -219,6 +266,10 @@ pub fn assemble<'p>(
             let idx = f.map(g);
             p.add(&idx, &idx)?;
         }
+        for l in &contacts.gaps {
+            let idx = gap_rows(l);
+            p.add(&idx, &idx)?;
+        }
         match mode {
             DeltaT::Local => {
                 for d in &contacts.dofs {
@@ -274,6 +325,18 @@ pub fn assemble<'p>(
         stiffness.add_values(&idx, &idx, &hm)?;
         load_convection.set_values(&idx, &hl, true)?;
     }
+    // Near-field gaps (seed 001 sec 7.1): conduction k/g and convection h
+    // over the searching face's area, as links from its corners (a third
+    // each) to the facing face's corners (the ray point's weights).
+    let gap_spec = model.contact.as_ref().and_then(|c| c.gap.as_ref());
+    if let Some(gs) = gap_spec {
+        for l in &contacts.gaps {
+            let h = gs.conductivity / l.gap + gs.h;
+            if h > 0.0 {
+                add_links(&mut stiffness, l, h * l.area)?;
+            }
+        }
+    }
     // Free surfaces: lumped convection h a (T − T_env) and the radiation
     // coefficient ε σ a (seed 001 sec 7.1.4; issue 20).
     let mut radiation = None;
@@ -294,6 +357,7 @@ pub fn assemble<'p>(
             let offset = model.thermal.offset;
             radiation = Some(Radiation {
                 coef,
+                gap: None,
                 offset,
                 ambient4: (amb.temperature + offset).powi(4),
             });
@@ -324,6 +388,38 @@ pub fn assemble<'p>(
     }
     capacity.assemble()?;
     stiffness.assemble()?;
+    // Radiation across gaps: L in the operators' pattern.
+    let mut gap_radiation = None;
+    if let Some(gs) = gap_spec.filter(|g| g.radiation) {
+        let mut lap = capacity.duplicate()?;
+        lap.zero_entries()?;
+        for l in &contacts.gaps {
+            let [ea, eb] = l.materials.map(|m| model.materials[m as usize].emissivity);
+            let f = gs.view_factor * super::radiation::grey_exchange(ea, eb);
+            add_links(&mut lap, l, super::radiation::STEFAN_BOLTZMANN * f * l.area)?;
+        }
+        lap.assemble()?;
+        gap_radiation = Some(lap);
+    }
+    if let Some(lap) = gap_radiation {
+        let r = match radiation.take() {
+            Some(r) => r,
+            None => {
+                let mut coef = Vector::new(petsc, owned)?;
+                coef.set(0.0)?;
+                Radiation {
+                    coef,
+                    gap: None,
+                    offset: model.thermal.offset,
+                    ambient4: 0.0,
+                }
+            }
+        };
+        radiation = Some(Radiation {
+            gap: Some(lap),
+            ..r
+        });
+    }
     if model.thermal.conduction == ConductionKind::Bounded {
         let transposed = stiffness.transpose()?;
         stiffness.update_owned_rows(&transposed, |r, c, v, t| {

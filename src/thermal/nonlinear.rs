@@ -5,7 +5,10 @@
 //! free rows (seed 001 sec 7.1.4, lumped to the nodes),
 //!   F(T) = A T − rhs + θ R(T),   J = A + θ diag(4 c (T + offset)³),
 //! where rhs = B Tⁿ + g − (1 − θ) R(Tⁿ). Prescribed rows have c = 0 here,
-//! so they keep T = T_d.
+//! so they keep T = T_d. Radiation across near-field gaps adds L u(T) to
+//! R, u = (T + offset)⁴, with L the Laplacian of the links' σ F A shares,
+//! and P L diag(4 (T + offset)³) to J (P: the free rows); J is then not
+//! symmetric.
 
 use crate::petsc::{Matrix, Nonlinear, Result, Vector};
 
@@ -27,6 +30,55 @@ pub fn emission(
     Ok(())
 }
 
+/// out = c ∘ ((x + offset)⁴ − ambient4) + L (x + offset)⁴ (no L: the first
+/// term only), with `u` room for the fourth powers.
+pub fn radiated(
+    coef: &Vector,
+    gap: Option<&Matrix>,
+    x: &Vector,
+    offset: f64,
+    ambient4: f64,
+    u: &mut Vector,
+    out: &mut Vector,
+) -> Result<()> {
+    let Some(lap) = gap else {
+        return emission(coef, x, offset, ambient4, out);
+    };
+    fourth_powers(x, offset, u)?;
+    lap.mult(u, out)?;
+    let (c, xv) = (coef.view()?, x.view()?);
+    let mut o = out.view_mut()?;
+    for i in 0..o.len() {
+        o[i] += emitted(c[i], xv[i], offset, ambient4);
+    }
+    Ok(())
+}
+
+fn fourth_powers(x: &Vector, offset: f64, u: &mut Vector) -> Result<()> {
+    let xv = x.view()?;
+    let mut uv = u.view_mut()?;
+    for i in 0..uv.len() {
+        let a = xv[i] + offset;
+        uv[i] = (a * a) * (a * a);
+    }
+    Ok(())
+}
+
+/// Radiation across gaps in a Newton step: L, the free rows' mask, and
+/// room for L scaled and for the fourth powers and their product.
+pub struct GapRadiation<'p> {
+    /// The links' Laplacian.
+    pub lap: Matrix<'p>,
+    /// 1 on free rows, 0 on prescribed ones.
+    pub free: Vector<'p>,
+    /// Room for P L D.
+    pub scaled: Matrix<'p>,
+    /// Room for u.
+    pub u: Vector<'p>,
+    /// Room for L u.
+    pub lu: Vector<'p>,
+}
+
 /// One radiating theta step: the data of F and J.
 pub struct RadiatingStep<'p> {
     /// The constrained A = M/Δt + θK (prescribed rows identity).
@@ -45,6 +97,8 @@ pub struct RadiatingStep<'p> {
     pub symmetric: bool,
     /// Room for R or its slope.
     pub work: Vector<'p>,
+    /// Radiation across near-field gaps, when computed.
+    pub gap: Option<GapRadiation<'p>>,
 }
 
 impl Nonlinear for RadiatingStep<'_> {
@@ -58,7 +112,14 @@ impl Nonlinear for RadiatingStep<'_> {
             self.ambient4,
             &mut self.work,
         )?;
-        f.axpy(self.theta, &self.work)
+        f.axpy(self.theta, &self.work)?;
+        if let Some(g) = self.gap.as_mut() {
+            fourth_powers(x, self.offset, &mut g.u)?;
+            g.lap.mult(&g.u, &mut g.lu)?;
+            self.work.pointwise_mult(&g.lu, &g.free)?;
+            f.axpy(self.theta, &self.work)?;
+        }
+        Ok(())
     }
 
     fn jacobian(&mut self, x: &Vector, j: &mut Matrix) -> Result<()> {
@@ -71,6 +132,19 @@ impl Nonlinear for RadiatingStep<'_> {
             }
         }
         j.add_diagonal(&self.work)?;
+        if let Some(g) = self.gap.as_mut() {
+            {
+                let xv = x.view()?;
+                let mut d = g.u.view_mut()?;
+                for i in 0..d.len() {
+                    let a = xv[i] + self.offset;
+                    d[i] = 4.0 * a * a * a;
+                }
+            }
+            g.scaled.copy_values_from(&g.lap)?;
+            g.scaled.diagonal_scale(Some(&g.free), Some(&g.u))?;
+            j.axpy_same_pattern(self.theta, &g.scaled)?;
+        }
         if self.symmetric {
             j.set_symmetric(true)?;
         }

@@ -35,7 +35,7 @@ use crate::scenario::{CapacityKind, ConductionKind, SolverSpec};
 use mpi::topology::SimpleCommunicator;
 
 use super::assembly::{assemble, Operators};
-use super::nonlinear::{emission, RadiatingStep};
+use super::nonlinear::{radiated, GapRadiation, RadiatingStep};
 
 /// Linear solver defaults by problem size (the options database wins).
 #[derive(Debug, Clone, PartialEq)]
@@ -175,6 +175,10 @@ enum Scheme<'p> {
 struct Radiating<'p> {
     /// ε σ a_free on every row.
     coef: Vector<'p>,
+    /// The gap links' Laplacian, when gaps radiate.
+    gap: Option<Matrix<'p>>,
+    /// Room for the fourth powers.
+    u: Vector<'p>,
     offset: f64,
     ambient4: f64,
     r0: Vector<'p>,
@@ -246,10 +250,12 @@ impl<'p> ThermalSystem<'p> {
     ) -> crate::error::Result<Self> {
         let mut ops = assemble(petsc, comm, model, part, contacts)?;
         let radiation = ops.radiation.take();
-        let symmetric = model
-            .contact
-            .as_ref()
-            .is_none_or(|c| c.delta_t == DeltaT::Local || contacts.total_pairs == 0);
+        let gap_radiates = radiation.as_ref().is_some_and(|r| r.gap.is_some());
+        let symmetric = !gap_radiates
+            && model
+                .contact
+                .as_ref()
+                .is_none_or(|c| c.delta_t == DeltaT::Local || contacts.total_pairs == 0);
         let theta = model.thermal.theta;
         let dt = model.dt;
         let owned = part.owned_rows();
@@ -385,7 +391,18 @@ impl<'p> ThermalSystem<'p> {
                 let mut coef_free = rad.coef.duplicate()?;
                 coef_free.pointwise_mult(&rad.coef, &free_mask)?;
                 let j = a.duplicate()?;
+                let gap = match rad.gap.as_ref() {
+                    None => None,
+                    Some(lap) => Some(GapRadiation {
+                        lap: lap.duplicate()?,
+                        free: free_mask.duplicate_from()?,
+                        scaled: lap.duplicate()?,
+                        u: t.duplicate()?,
+                        lu: t.duplicate()?,
+                    }),
+                };
                 let step = RadiatingStep {
+                    gap,
                     rhs: t.duplicate()?,
                     work: t.duplicate()?,
                     a,
@@ -448,6 +465,8 @@ impl<'p> ThermalSystem<'p> {
                 let mut sum = t.duplicate()?;
                 sum.set(0.0)?;
                 Some(Radiating {
+                    u: t.duplicate()?,
+                    gap: r.gap,
                     offset: r.offset,
                     ambient4: r.ambient4,
                     r0: t.duplicate()?,
@@ -555,7 +574,16 @@ impl<'p> ThermalSystem<'p> {
         };
         // Radiation at the step's start.
         if let Some(r) = self.rad.as_mut() {
-            emission(&r.coef, &self.t, r.offset, r.ambient4, &mut r.r0)?;
+            let x = &self.t;
+            radiated(
+                &r.coef,
+                r.gap.as_ref(),
+                x,
+                r.offset,
+                r.ambient4,
+                &mut r.u,
+                &mut r.r0,
+            )?;
         }
         let stats = match &mut self.scheme {
             Scheme::Explicit { e, g, dt_minv } => {
@@ -606,7 +634,16 @@ impl<'p> ThermalSystem<'p> {
         // The radiated heat of the step: Δt (θ R(Tⁿ⁺¹) + (1 − θ) R(Tⁿ)).
         if let Some(r) = self.rad.as_mut() {
             if self.theta != 0.0 {
-                emission(&r.coef, &self.t_next, r.offset, r.ambient4, &mut r.r1)?;
+                let x = &self.t_next;
+                radiated(
+                    &r.coef,
+                    r.gap.as_ref(),
+                    x,
+                    r.offset,
+                    r.ambient4,
+                    &mut r.u,
+                    &mut r.r1,
+                )?;
                 r.sum.axpy(self.dt * self.theta, &r.r1)?;
             }
             if self.theta != 1.0 {

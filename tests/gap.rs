@@ -1,0 +1,140 @@
+//! Issue 20, near-field gaps and contact status: two parallel plates
+//! across a 1 mm gap against the grey-body radiation and gap-conduction
+//! fluxes (computed here), and a block lifted off a hot plate going from
+//! closed to near-field to free, on one and two ranks.
+
+mod common;
+
+use std::path::Path;
+
+use common::*;
+use fdem::thermal::radiation::{grey_exchange, STEFAN_BOLTZMANN};
+
+/// Plate thickness (m) and the held temperatures (K) of gap-plates.toml.
+const T_PLATE: f64 = 0.01;
+const T_HOT: f64 = 1000.0;
+
+/// The last history row of `dir`'s gap-plates run and its column lookup.
+fn last_row(dir: &Path, stem: &str) -> (Vec<String>, Vec<f64>) {
+    let (h, rows) = history(dir, stem);
+    let last = rows.last().unwrap().clone();
+    (h, last)
+}
+
+/// Steady flux through the hot plate, k (T_held − T_face) / t, and
+/// through the cold one, and the two faces' temperatures (the hot plate's
+/// coldest and the cold plate's hottest nodes).
+fn plate_fluxes(dir: &Path, k: f64, t_cold: f64) -> (f64, f64, f64, f64) {
+    let (h, r) = last_row(dir, "gap-plates");
+    let (face_hot, face_cold) = (r[col(&h, "hot_min_T")], r[col(&h, "cold_max_T")]);
+    let q_hot = k * (T_HOT - face_hot) / T_PLATE;
+    let q_cold = k * (face_cold - t_cold) / T_PLATE;
+    (q_hot, q_cold, face_hot, face_cold)
+}
+
+#[test]
+fn radiation_across_a_gap_matches_grey_parallel_plates() {
+    let scen = root().join("scenarios/gap-plates.toml");
+    let f = grey_exchange(0.8, 0.8);
+    let nominal = STEFAN_BOLTZMANN * f * (T_HOT.powi(4) - 500f64.powi(4));
+    assert!((nominal - 35_439.8).abs() < 0.1, "{nominal}");
+    let mut fluxes = Vec::new();
+    for ranks in [1, 2] {
+        let dir = out_dir(&format!("gap/plates-radiation-{ranks}"));
+        let out = run_ok(ranks, &scen, &dir, &[]);
+        assert!(out.contains("newtonls"), "{out}");
+        let (q_hot, q_cold, th, tc) = plate_fluxes(&dir, 1e4, 500.0);
+        eprintln!("{ranks} rank(s): q = {q_hot:.2} / {q_cold:.2} W/m^2, faces {th:.4} / {tc:.4} K");
+        // The same heat leaves the hot plate and enters the cold one.
+        assert!((q_hot - q_cold).abs() < 1e-6 * q_hot, "{q_hot} vs {q_cold}");
+        // Against the faces' own temperatures, and the nominal 1000 / 500 K.
+        let exact = STEFAN_BOLTZMANN * f * (th.powi(4) - tc.powi(4));
+        assert!((q_hot - exact).abs() < 1e-3 * exact, "{q_hot} vs {exact}");
+        assert!(
+            (q_hot - nominal).abs() < 5e-3 * nominal,
+            "{q_hot} vs {nominal}"
+        );
+        let (h, r) = last_row(&dir, "gap-plates");
+        let area = r[col(&h, "gap_area")];
+        assert!((area - 0.01).abs() < 1e-12, "gap area {area}");
+        assert_eq!(r[col(&h, "contacts")], 0.0);
+        fluxes.push(q_hot);
+    }
+    assert!((fluxes[0] - fluxes[1]).abs() < 1e-8 * fluxes[0]);
+}
+
+#[test]
+fn conduction_across_a_gap_is_k_over_g() {
+    let scen = root().join("scenarios/gap-plates.toml");
+    let dir = out_dir("gap/plates-conduction");
+    let set = [
+        "--set",
+        "contact.gap.radiation=false",
+        "--set",
+        "contact.gap.conductivity=1.0",
+        "--set",
+        "thermal.bc.1.value=900.0",
+        "--set",
+        "materials.0.conductivity=1e5",
+    ];
+    let out = run_ok(2, &scen, &dir, &set);
+    assert!(
+        !out.contains("newtonls"),
+        "a linear gap keeps the KSP path: {out}"
+    );
+    let (q_hot, q_cold, th, tc) = plate_fluxes(&dir, 1e5, 900.0);
+    eprintln!("conduction: q = {q_hot:.3} W/m^2, faces {th:.5} / {tc:.5} K");
+    assert!((q_hot - q_cold).abs() < 1e-6 * q_hot);
+    assert!((q_hot - 1.0 * (th - tc) / 1e-3).abs() < 1e-6 * q_hot);
+    assert!((q_hot - 1e5).abs() < 1e-3 * 1e5, "{q_hot} vs 1e5 W/m^2");
+}
+
+/// Seed 001 sec 7.1.1: the status follows the gap, and each mechanism
+/// takes over in turn.
+#[test]
+fn a_lifted_block_goes_from_closed_to_near_field_to_free() {
+    let scen = root().join("scenarios/lift-off.toml");
+    let mut runs = Vec::new();
+    for ranks in [1, 2] {
+        let dir = out_dir(&format!("gap/lift-off-{ranks}"));
+        run_ok(ranks, &scen, &dir, &[]);
+        let (h, rows) = history(&dir, "lift-off");
+        let c = |name: &str| col(&h, name);
+        for r in &rows {
+            let (t, pairs, gap) = (r[c("time")], r[c("contacts")], r[c("gap_area")]);
+            if t <= 4.0 {
+                assert!(
+                    pairs > 0.0 && gap == 0.0,
+                    "t = {t}: closed ({pairs} pairs, gap {gap})"
+                );
+            } else if (6.0..=29.0).contains(&t) {
+                assert!(pairs == 0.0, "t = {t}: no overlap");
+                assert!(
+                    (gap - 0.0025).abs() < 1e-12,
+                    "t = {t}: near field over the block's face, {gap}"
+                );
+            } else if t >= 31.0 {
+                assert!(pairs == 0.0 && gap == 0.0, "t = {t}: free");
+            }
+        }
+        // The block's heating rate (K/s) in each phase.
+        let mean = |t: f64| rows.iter().find(|r| r[c("time")] == t).unwrap()[c("block_mean_T")];
+        let closed = (mean(4.0) - mean(0.0)) / 4.0;
+        let near = (mean(29.0) - mean(9.0)) / 20.0;
+        let free = (mean(60.0) - mean(35.0)) / 25.0;
+        eprintln!(
+            "{ranks} rank(s): block dT/dt closed {closed:.4}, near {near:.4}, free {free:.4} K/s"
+        );
+        assert!(closed > 10.0 * near && near > 0.0 && free < 0.0);
+        // Heat balance over the status changes and rebuilds.
+        let last = rows.last().unwrap();
+        let stored = last[c("stored_heat")] - rows[0][c("stored_heat")];
+        let inflow = last[c("boundary_heat_in")];
+        assert!(
+            (stored - inflow).abs() < 1e-8 * stored.abs(),
+            "{stored} vs {inflow}"
+        );
+        runs.push(read_results(&dir, "lift-off"));
+    }
+    assert_same_temperatures(&runs[0], &runs[1], 1e-8, "lift-off, 1 vs 2 ranks");
+}

@@ -727,6 +727,17 @@ fn bad_ambient_keys_are_named() {
             BASE.to_string() + &gap.replace("view_factor = 1.5", "conductivity = -1.0"),
             "contact.gap.conductivity",
         ),
+        (
+            "cmy-pressure",
+            BASE.to_string() + "\n[contact]\ncmy = { roughness = 1e-6, slope = 0.1, hardness = 1e9 }\n",
+            "contact.cmy.pressure",
+        ),
+        (
+            "cmy-hardness",
+            BASE.to_string()
+                + "\n[contact]\ncmy = { roughness = 1e-6, slope = 0.1, hardness = -1.0, pressure = 1.0 }\n",
+            "contact.cmy.hardness",
+        ),
     ];
     for (name, text, key) in cases.into_iter().chain(gap_cases) {
         let d = scenario_dir(&format!("ambient-{name}"));

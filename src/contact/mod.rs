@@ -6,6 +6,7 @@
 //! Pure: no MPI or PETSc. The caller says which tets it owns, so that
 //! every pair is found by exactly one rank.
 
+pub mod conductance;
 mod detect;
 pub mod gap;
 pub mod penalty;
@@ -44,7 +45,7 @@ impl ContactPair {
 /// What the assembly needs of a contact pair besides its surface: the
 /// PETSc numbers of its eight nodes (the target's four, then the
 /// contactor's), and the two elements' materials and bodies.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct PairDofs {
     /// PETSc numbers of the target's then the contactor's nodes.
     pub petsc: [u32; 8],
@@ -52,6 +53,9 @@ pub struct PairDofs {
     pub materials: [u32; 2],
     /// Bodies of the target and the contactor.
     pub bodies: [u32; 2],
+    /// Contact pressure (Pa): the penalty's normal force over the pair's
+    /// surface in a run with mechanics (when a conductance needs it), else 0.
+    pub pressure: f64,
 }
 
 /// The contact pairs an operator is assembled with: this rank's, and the

@@ -20,6 +20,7 @@ use crate::contact::penalty::{pair_stiffness, LinearizedOverlap};
 use crate::contact::{
     tet_pair_contact, ContactPair, ContactSurface, OwnAndGhosts, PairDofs, SearchOptions, TetFaces,
 };
+use crate::contact::{tet_tet_penalty, PenaltyParams};
 use crate::error::{Error, Result};
 use crate::geometry::{face_planes, planes_within, TetPlanes};
 use crate::mechanics::MechElement;
@@ -696,10 +697,32 @@ impl ExplicitDomain {
             .iter()
             .filter_map(|c| {
                 let (a, b) = (c.ta as usize, c.tb as usize);
-                one(
+                let (p, mut d) = one(
                     (&self.pair_tets[a], &self.pair_info[a]),
                     (&self.pair_tets[b], &self.pair_info[b]),
-                )
+                )?;
+                if let (true, Some((params, _))) = (self.contact_pressure, &self.penalty) {
+                    // The penalty's normal force now over the pair's surface.
+                    let (la, lb) = (&self.pair_tets[a], &self.pair_tets[b]);
+                    let at = |t: &[u32; 4], f: &dyn Fn(u32) -> [f64; 3]| t.map(f);
+                    let xf = |l: u32| -> [f64; 3] { self.x[l as usize].into() };
+                    let vf = |l: u32| -> [f64; 3] { self.v[l as usize].into() };
+                    let pp = PenaltyParams {
+                        stiffness: c.stiffness,
+                        reduced_mass: c.reduced_mass,
+                        time_step: self.dt,
+                        ..*params
+                    };
+                    let r = tet_tet_penalty(
+                        &at(la, &xf),
+                        &at(lb, &xf),
+                        &at(la, &vf),
+                        &at(lb, &vf),
+                        &pp,
+                    );
+                    d.pressure = r.map_or(0.0, |r| r.normal_force / p.area());
+                }
+                Some((p, d))
             })
             .chain(self.thermal_only.iter().filter_map(|&(a, b)| {
                 let (a, b) = (a as usize, b as usize);

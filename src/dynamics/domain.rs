@@ -90,6 +90,9 @@ pub struct ExplicitDomain {
     /// Substep count at the last detection.
     pub(super) detected_at: Option<u64>,
     pub(super) penalty: Option<(PenaltyParams, f64)>,
+    /// Give each thermal contact pair its penalty pressure (a conductance
+    /// that follows it, issue 20).
+    pub contact_pressure: bool,
     /// Search margin (m) of the current candidates, between `margin_min`
     /// and [`MARGIN_GROWTH`] × `margin_min`, chosen at each detection.
     pub(super) margin: f64,
@@ -312,6 +315,12 @@ impl ExplicitDomain {
             thermal_info: Vec::new(),
             detected_at: None,
             penalty,
+            contact_pressure: model.contact.as_ref().is_some_and(|c| {
+                c.cmy
+                    .iter()
+                    .flatten()
+                    .any(|m| m.is_some_and(|m| m.pressure.is_none()))
+            }),
             margin,
             margin_min: margin,
             candidates: Vec::new(),

@@ -137,6 +137,8 @@ pub struct ContactModel {
     pub every: u64,
     /// Near-field gap heat (issue 20).
     pub gap: Option<crate::scenario::GapSpec>,
+    /// Pressure-dependent conductance between materials i and j, if any.
+    pub cmy: Vec<Vec<Option<crate::contact::conductance::Cmy>>>,
 }
 
 /// What a run writes, and where.
@@ -729,19 +731,17 @@ impl Model {
                     .unwrap_or(f64::INFINITY);
                 let nm = materials.len();
                 let mut rc = vec![vec![default; nm]; nm];
+                let mut cmy = vec![vec![c.cmy; nm]; nm];
                 for p in &c.pair {
                     let r = contact_resistance(p.resistance, p.conductance)
                         .map_err(|m| model_err(format!("contact.pair: {m}")))?
                         .unwrap_or(f64::INFINITY);
-                    let idx = |n: &str| {
-                        materials
-                            .iter()
-                            .position(|m| m.name == n)
-                            .expect("validated")
-                    };
+                    let idx = |n: &str| materials.iter().position(|m| m.name == n).unwrap();
                     let (a, b) = (idx(&p.materials[0]), idx(&p.materials[1]));
-                    rc[a][b] = r;
-                    rc[b][a] = r;
+                    (rc[a][b], rc[b][a]) = (r, r);
+                    if p.cmy.is_some() {
+                        (cmy[a][b], cmy[b][a]) = (p.cmy, p.cmy);
+                    }
                 }
                 Some(ContactModel {
                     resistance: rc,
@@ -749,6 +749,7 @@ impl Model {
                     operator: c.operator,
                     every: c.every,
                     gap: c.gap.clone(),
+                    cmy,
                 })
             }
         };

@@ -102,6 +102,8 @@ impl Output {
                 "radiation_heat_in",
                 "newton_iterations",
                 "gap_area",
+                "contact_pressure",
+                "contact_conductance",
             ] {
                 header.push(h.into());
             }
@@ -312,6 +314,18 @@ impl Output {
                 s.newton_iterations as f64,
                 contacts.total_gap_area,
             ]);
+            // Area-weighted mean pressure and Σ S/Rc of the thermal pairs.
+            let mut mine = [0.0; 3];
+            for (p, d) in contacts.local.iter().zip(&contacts.dofs) {
+                let rc = crate::thermal::assembly::pair_resistance(model, d);
+                mine[0] += p.area() * d.pressure;
+                mine[1] += p.area();
+                mine[2] += if rc.is_finite() { p.area() / rc } else { 0.0 };
+            }
+            let mut all = [0.0; 3];
+            comm.all_reduce_into(&mine[..], &mut all[..], SystemOperation::sum());
+            let pressure = if all[1] > 0.0 { all[0] / all[1] } else { 0.0 };
+            row.extend_from_slice(&[pressure, all[2]]);
         }
         if let Some(Mechanics {
             domain: m,

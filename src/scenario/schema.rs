@@ -63,6 +63,10 @@ pub struct ContactSpec {
     /// Heat across near-field gaps between bodies (issue 20).
     #[serde(default)]
     pub gap: Option<GapSpec>,
+    /// Pressure-dependent conductance (Cooper–Mikic–Yovanovich) for every
+    /// pair of materials, instead of `resistance` (issue 20).
+    #[serde(default)]
+    pub cmy: Option<crate::contact::conductance::Cmy>,
 }
 
 /// Heat across the gap between boundary faces of different bodies that
@@ -106,6 +110,9 @@ pub struct ContactPairSpec {
     /// 1/Rc for this pair.
     #[serde(default)]
     pub conductance: Option<f64>,
+    /// Cooper–Mikic–Yovanovich conductance for this pair (issue 20).
+    #[serde(default)]
+    pub cmy: Option<crate::contact::conductance::Cmy>,
 }
 
 /// Resistance from a `resistance`/`conductance` choice (infinite: no contact heat).

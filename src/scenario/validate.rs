@@ -399,6 +399,22 @@ impl Scenario {
         if !offset.is_finite() {
             return bad("thermal.temperature_offset", "must be finite".into());
         }
+        if let Some(c) = &self.contact {
+            let pairs = c.pair.iter().enumerate();
+            let all = c.cmy.iter().map(|m| ("contact.cmy".to_string(), m));
+            let each = pairs
+                .filter_map(|(i, p)| Some((format!("contact.pair[{i}].cmy"), p.cmy.as_ref()?)));
+            for (key, m) in all.chain(each) {
+                m.check(&key).map_err(|e| (key.clone(), e))?;
+                if m.pressure.is_none() && self.mechanics.is_none() {
+                    return bad(
+                        &format!("{key}.pressure"),
+                        "a run without [mechanics] has no contact pressure: prescribe it (Pa)"
+                            .into(),
+                    );
+                }
+            }
+        }
         let gap = self.contact.as_ref().and_then(|c| c.gap.as_ref());
         if let Some(g) = gap {
             if let Some(p) = g.pinball.filter(|p| !(p.is_finite() && *p > 0.0)) {

@@ -49,6 +49,34 @@ pub struct Radiation<'p> {
     pub ambient4: f64,
 }
 
+/// The contact resistance of a pair (m² K/W): the Cooper–Mikic–Yovanovich
+/// 1/h at the prescribed or the pair's penalty pressure where the material
+/// pair has it (issue 20), else the scenario's Rc; infinite: no heat.
+pub fn pair_resistance(model: &Model, d: &crate::contact::PairDofs) -> f64 {
+    let [a, b] = d.materials;
+    let cmy = model
+        .contact
+        .as_ref()
+        .and_then(|c| c.cmy[a as usize][b as usize]);
+    match cmy {
+        None => model.resistance(a, b),
+        Some(c) => {
+            let k = |m: u32| model.materials[m as usize].conductivity;
+            let h = crate::contact::conductance::cmy_conductance(
+                k(a),
+                k(b),
+                &c,
+                c.pressure.unwrap_or(d.pressure),
+            );
+            if h > 0.0 {
+                1.0 / h
+            } else {
+                f64::INFINITY
+            }
+        }
+    }
+}
+
 /// The rows of a gap link: the searching face's corners, then the facing face's.
 fn gap_rows(l: &crate::contact::gap::GapLink) -> [i32; 6] {
     let mut r = [0; 6];
@@ -166,7 +194,7 @@ fn free_areas<'p>(
 fn average_rows(model: &Model, contacts: &ContactSet) -> BTreeMap<(u32, u32), BTreeMap<u32, f64>> {
     let mut rows: BTreeMap<(u32, u32), BTreeMap<u32, f64>> = Default::default();
     for (p, d) in contacts.local.iter().zip(&contacts.dofs) {
-        let g = p.area() / model.resistance(d.materials[0], d.materials[1]);
+        let g = p.area() / pair_resistance(model, d);
         let r = rows.entry((d.bodies[0], d.bodies[1])).or_default();
         for i in 0..4 {
             *r.entry(d.petsc[i]).or_default() += g * p.surface.w_target[i];
@@ -367,7 +395,7 @@ pub fn assemble<'p>(
     match mode {
         DeltaT::Local => {
             for (p, d) in contacts.local.iter().zip(&contacts.dofs) {
-                let rc = model.resistance(d.materials[0], d.materials[1]);
+                let rc = pair_resistance(model, d);
                 if !rc.is_finite() {
                     continue;
                 }

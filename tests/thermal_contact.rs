@@ -1,13 +1,16 @@
-//! Issue 20, near-field gaps and contact status: two parallel plates
-//! across a 1 mm gap against the grey-body radiation and gap-conduction
-//! fluxes (computed here), and a block lifted off a hot plate going from
-//! closed to near-field to free, on one and two ranks.
+//! Issue 20, thermal contact physics: two parallel plates across a 1 mm
+//! gap against the grey-body radiation and gap-conduction fluxes
+//! (computed here); a block lifted off a hot plate going from closed to
+//! near-field to free; the Cooper–Mikic–Yovanovich conductance at a
+//! prescribed pressure (plates) and at the penalty contact's pressure (a
+//! block on a floor under growing loads); on one and two ranks.
 
 mod common;
 
 use std::path::Path;
 
 use common::*;
+use fdem::contact::conductance::{cmy_conductance, Cmy};
 use fdem::thermal::radiation::{grey_exchange, STEFAN_BOLTZMANN};
 
 /// Plate thickness (m) and the held temperatures (K) of gap-plates.toml.
@@ -137,4 +140,86 @@ fn a_lifted_block_goes_from_closed_to_near_field_to_free() {
         runs.push(read_results(&dir, "lift-off"));
     }
     assert_same_temperatures(&runs[0], &runs[1], 1e-8, "lift-off, 1 vs 2 ranks");
+}
+
+/// The CMY constants of cmy-plates.toml.
+const PLATES_CMY: Cmy = Cmy {
+    roughness: 1e-6,
+    slope: 0.1,
+    hardness: 1e9,
+    pressure: None,
+};
+
+/// Steady plates pressed at 1, 10 and 100 MPa: the conductance per area
+/// q / (T_hot face − T_cold face) is the correlation's at that pressure.
+#[test]
+fn prescribed_pressure_gives_the_cmy_conductance() {
+    let scen = root().join("scenarios/cmy-plates.toml");
+    for (k, p) in [1e6, 1e7, 1e8].into_iter().enumerate() {
+        let dir = out_dir(&format!("thermal-contact/cmy-{k}"));
+        let set = format!("contact.cmy.pressure={p}");
+        run_ok(1 + k % 2, &scen, &dir, &["--set", &set]);
+        let (h, r) = last_row(&dir, "cmy-plates");
+        let (th, tc) = (r[col(&h, "hot_min_T")], r[col(&h, "cold_max_T")]);
+        let q = 50.0 * (100.0 - th) / T_PLATE;
+        let q_cold = 50.0 * tc / T_PLATE;
+        assert!((q - q_cold).abs() < 1e-6 * q, "{q} vs {q_cold}");
+        let measured = q / (th - tc);
+        let want = cmy_conductance(50.0, 50.0, &PLATES_CMY, p);
+        eprintln!("P = {p:e} Pa: h = {measured:.1} W/m^2/K, CMY {want:.1}");
+        assert!(
+            (measured - want).abs() < 0.02 * want,
+            "P = {p}: {measured} vs {want}"
+        );
+        let g = r[col(&h, "contact_conductance")];
+        assert!((g - want * r[col(&h, "contact_area")]).abs() < 1e-9 * g);
+    }
+}
+
+/// A block on a floor under gravity g, 2 g, 4 g (hot-block-on-floor.toml
+/// with CMY instead of a constant Rc): the penalty contact carries the
+/// weight, its mean pressure times the contact area is ρ V g, and the
+/// conductance is the correlation's at that pressure.
+#[test]
+fn the_penalty_pressure_drives_the_cmy_conductance() {
+    let scen = root().join("scenarios/hot-block-on-floor.toml");
+    let cmy = Cmy {
+        roughness: 1e-5,
+        slope: 0.1,
+        hardness: 1e5,
+        pressure: None,
+    };
+    let weight = 2000.0 * 1e-3 * 9.81;
+    let mut last = 0.0;
+    for (k, load) in [1.0, 2.0, 4.0].into_iter().enumerate() {
+        let dir = out_dir(&format!("thermal-contact/cmy-block-{k}"));
+        let g = format!("mechanics.gravity=[0.0, 0.0, {}]", -9.81 * load);
+        let set = [
+            "--set",
+            "contact.resistance=none",
+            "--set",
+            "contact.cmy={roughness=1e-5, slope=0.1, hardness=1e5}",
+            "--set",
+            "time.steps=100",
+            "--set",
+            &g,
+        ];
+        run_ok(1 + k % 2, &scen, &dir, &set);
+        let (h, r) = last_row(&dir, "hot-block-on-floor");
+        let (p, area) = (r[col(&h, "contact_pressure")], r[col(&h, "contact_area")]);
+        let conductance = r[col(&h, "contact_conductance")];
+        eprintln!("{load} g: P = {p:.1} Pa over {area:.5} m^2, S/Rc = {conductance:.4} W/K");
+        assert!(
+            (p * area - load * weight).abs() < 0.02 * load * weight,
+            "{} N",
+            p * area
+        );
+        let want = cmy_conductance(1.0, 1.0, &cmy, p) * area;
+        assert!(
+            (conductance - want).abs() < 0.02 * want,
+            "{conductance} vs {want}"
+        );
+        assert!(conductance > last, "the conductance grows with the load");
+        last = conductance;
+    }
 }

@@ -738,6 +738,16 @@ fn bad_ambient_keys_are_named() {
                 + "\n[contact]\ncmy = { roughness = 1e-6, slope = 0.1, hardness = -1.0, pressure = 1.0 }\n",
             "contact.cmy.hardness",
         ),
+        (
+            "friction-heating",
+            BASE.to_string() + "\n[contact]\nfriction_heating = { fraction = 1.5 }\n",
+            "contact.friction_heating.fraction",
+        ),
+        (
+            "friction-heating-no-mechanics",
+            BASE.to_string() + "\n[contact]\nfriction_heating = { fraction = 1.0 }\n",
+            "contact.friction_heating",
+        ),
     ];
     for (name, text, key) in cases.into_iter().chain(gap_cases) {
         let d = scenario_dir(&format!("ambient-{name}"));

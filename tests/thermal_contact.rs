@@ -223,3 +223,75 @@ fn the_penalty_pressure_drives_the_cmy_conductance() {
         last = conductance;
     }
 }
+
+/// Seed 001 sec 7.1.4 (FHTG, FWGT): a block dragged across a plate. The
+/// friction power is μ N v; the heat the bodies receive is η times the
+/// friction work (handed over one thermal step later), split w : 1 − w.
+#[test]
+fn friction_heats_the_sliding_bodies() {
+    let scen = root().join("scenarios/sliding-block.toml");
+    let (mu, v, w) = (0.3, 0.1, 0.3);
+    let block_mass = 2000.0 * 0.05f64.powi(3);
+    let normal = block_mass * 9.81 + 4000.0 * 0.05 * 0.05;
+    let plate_capacity = 2000.0 * 0.2 * 0.1 * 0.02 * 1.0;
+    let mut heats = Vec::new();
+    for ranks in [1, 2] {
+        let dir = out_dir(&format!("thermal-contact/sliding-{ranks}"));
+        run_ok(ranks, &scen, &dir, &[]);
+        let (h, rows) = history(&dir, "sliding-block");
+        let c = |name: &str| col(&h, name);
+        let at = |t: f64| {
+            rows.iter()
+                .find(|r| (r[c("time")] - t).abs() < 1e-9)
+                .unwrap()
+        };
+        let rate = (at(0.5)[c("friction_work")] - at(0.2)[c("friction_work")]) / 0.3;
+        eprintln!(
+            "{ranks} rank(s): friction power {rate:.5} W, mu N v = {:.5} W",
+            mu * normal * v
+        );
+        assert!(
+            (rate - mu * normal * v).abs() < 0.01 * mu * normal * v,
+            "{rate}"
+        );
+        // Heat in at each step = the friction work up to the step before.
+        for k in 1..rows.len() {
+            let (q, work) = (
+                rows[k][c("friction_heat_in")],
+                rows[k - 1][c("friction_work")],
+            );
+            assert!(
+                (q - work).abs() <= 1e-8 * work.max(1e-12),
+                "row {k}: {q} vs {work}"
+            );
+        }
+        let last = rows.last().unwrap();
+        let q = last[c("friction_heat_in")];
+        let stored = last[c("stored_heat")] - rows[0][c("stored_heat")];
+        assert!(
+            (stored - q).abs() < 1e-9 * q,
+            "all the heat is friction's: {stored} vs {q}"
+        );
+        // Each body nearly isothermal: its heat is its capacity times its mean rise.
+        let block = block_mass * 1.0 * last[c("block_mean_T")];
+        let plate = plate_capacity * last[c("plate_mean_T")];
+        eprintln!(
+            "  block {block:.6} J ({:.4}), plate {plate:.6} J",
+            block / q
+        );
+        assert!(
+            (block - w * q).abs() < 0.01 * w * q,
+            "block {block} vs {}",
+            w * q
+        );
+        assert!(
+            (plate - (1.0 - w) * q).abs() < 0.01 * (1.0 - w) * q,
+            "plate {plate}"
+        );
+        heats.push(q);
+    }
+    assert!(
+        (heats[0] - heats[1]).abs() < 1e-8 * heats[0],
+        "1 vs 2 ranks: {heats:?}"
+    );
+}

@@ -57,6 +57,8 @@ pub struct PenaltyResult {
     pub normal_force: f64,
     /// Power dissipated by damping and friction (W), ≥ 0.
     pub dissipation: f64,
+    /// The friction's share of it (W), ≥ 0.
+    pub friction_power: f64,
     /// Overlap volume V (m³).
     pub volume: f64,
     /// Contact normal, unit, from a into b (zero if undefined, e.g. for
@@ -247,6 +249,7 @@ pub fn penalty_forces(
             energy,
             normal_force: 0.0,
             dissipation: 0.0,
+            friction_power: 0.0,
             volume: v,
             normal: n,
             point: p,
@@ -301,7 +304,8 @@ pub fn penalty_forces(
         }
     }
     // Not in the seeds: dissipation −f_p·v_rel = (F_n − F_el) v_n + μ F_n |v_t|²/max(|v_t|, v_r) ≥ 0.
-    let dissipation = f_damp * v_n + scale * vt_len * vt_len;
+    let friction_power = scale * vt_len * vt_len;
+    let dissipation = f_damp * v_n + friction_power;
 
     PenaltyResult {
         forces_a,
@@ -309,6 +313,7 @@ pub fn penalty_forces(
         energy,
         normal_force: f_n,
         dissipation,
+        friction_power,
         volume: v,
         normal: n,
         point: p,

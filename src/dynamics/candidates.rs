@@ -191,6 +191,7 @@ impl ExplicitDomain {
     /// other ranks within the margin, the contact ghosts and the halo;
     /// reorder elements so those touching the halo come first.
     pub(super) fn detect(&mut self, comm: &SimpleCommunicator) -> Result<()> {
+        self.flush_friction();
         let clock = std::time::Instant::now();
         let linearized_before = self.linearized.len();
         self.release_pair_arrays();
@@ -644,6 +645,43 @@ impl ExplicitDomain {
         self.node_owner.push(owner);
         self.node_petsc.push(petsc);
         l
+    }
+
+    /// Issue 20, frictional heating (seed 001 sec 7.1.4, FHTG and FWGT):
+    /// hand each candidate pair's friction work since the last call, times
+    /// η, to the PETSc rows of its tets' boundary nodes, w to the searching
+    /// tet's and 1 − w to the other's, in equal shares.
+    fn flush_friction(&mut self) {
+        let Some((eta, w)) = self.friction_heating else {
+            return;
+        };
+        for (j, c) in self.candidates.iter().enumerate() {
+            let e = self.pair_friction.get(j).copied().unwrap_or(0.0) * eta;
+            if e == 0.0 {
+                continue;
+            }
+            for (t, share) in [(c.ta as usize, w), (c.tb as usize, 1.0 - w)] {
+                let (tet, bits) = (&self.pair_tets[t], self.pair_info[t].bits);
+                let bits = if bits == 0 { 0b1111 } else { bits };
+                let each = e * share / f64::from(bits.count_ones());
+                for (_, &l) in tet.iter().enumerate().filter(|(k, _)| bits & (1 << k) != 0) {
+                    *self
+                        .friction_rows
+                        .entry(self.node_petsc[l as usize])
+                        .or_default() += each;
+                }
+            }
+        }
+        self.pair_friction.iter_mut().for_each(|x| *x = 0.0);
+    }
+
+    /// The frictional heat (J) per PETSc row since the last call (issue 20;
+    /// empty without frictional heating), in row order.
+    pub fn take_friction_heat(&mut self) -> Vec<(u32, f64)> {
+        self.flush_friction();
+        std::mem::take(&mut self.friction_rows)
+            .into_iter()
+            .collect()
     }
 
     /// Collective. The thermal contact pairs this rank holds at the

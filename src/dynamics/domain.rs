@@ -164,6 +164,14 @@ pub struct ExplicitDomain {
     /// Work of the loads (tractions, gravity, prescribed velocities) on
     /// this rank's owned nodes since the run started (J).
     pub(super) external_work: f64,
+    /// Frictional heating (issue 20): η and w, when on; the friction work
+    /// of each candidate pair since it was last handed over (J); the heat
+    /// handed over per PETSc row, not yet taken by the thermal step; and
+    /// this rank's friction work so far (J).
+    pub(super) friction_heating: Option<(f64, f64)>,
+    pub(super) pair_friction: Vec<f64>,
+    pub(super) friction_rows: std::collections::BTreeMap<u32, f64>,
+    pub(super) friction_work: f64,
     pub(super) active_pairs: u64,
     pub(super) redetect: bool,
     /// Counters.
@@ -366,6 +374,14 @@ impl ExplicitDomain {
             contact_energy: 0.0,
             dissipated: 0.0,
             external_work: 0.0,
+            friction_heating: model
+                .contact
+                .as_ref()
+                .and_then(|c| c.friction_heating)
+                .map(|f| (f.fraction, f.weight)),
+            pair_friction: Vec::new(),
+            friction_rows: Default::default(),
+            friction_work: 0.0,
             active_pairs: 0,
             redetect: false,
             counters: MechanicsCounters::default(),

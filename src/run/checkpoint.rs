@@ -345,6 +345,7 @@ pub(super) fn restore_thermal(
         flux_in: h[3],
         convection_in: h[4],
         radiation_in: h[5],
+        friction_in: h[6],
     };
     match (ck.account, account) {
         (Some((b, steps)), Some((t0, t_sum, rad_sum))) => {
@@ -356,6 +357,7 @@ pub(super) fn restore_thermal(
                     flux_in: b[3],
                     convection_in: b[4],
                     radiation_in: b[5],
+                    friction_in: b[6],
                 },
                 t0,
                 t_sum,
@@ -502,6 +504,7 @@ pub(super) fn capture(
                 a.base.flux_in,
                 a.base.convection_in,
                 a.base.radiation_in,
+                a.base.friction_in,
             ],
             a.steps,
         ));
@@ -518,6 +521,7 @@ pub(super) fn capture(
             e.flux_in,
             e.convection_in,
             e.radiation_in,
+            e.friction_in,
         ];
     }
     head.has_positions = positions.is_some();

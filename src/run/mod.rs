@@ -448,6 +448,16 @@ impl Stages<'_, '_> {
                     m.set_temperatures(comm, &t, Some(span));
                 }
                 m.advance(comm, *n)?;
+                // Issue 20: the friction's heat, released over the next thermal step.
+                if let Some(s) = self.sys.as_mut() {
+                    if model
+                        .contact
+                        .as_ref()
+                        .is_some_and(|c| c.friction_heating.is_some())
+                    {
+                        s.add_heat(&m.take_friction_heat())?;
+                    }
+                }
                 self.times.mechanics += clock.elapsed().as_secs_f64();
             }
             step += 1;

@@ -104,6 +104,7 @@ impl Output {
                 "gap_area",
                 "contact_pressure",
                 "contact_conductance",
+                "friction_heat_in",
             ] {
                 header.push(h.into());
             }
@@ -123,6 +124,13 @@ impl Output {
                 "external_work",
             ] {
                 header.push(h.into());
+            }
+            if model
+                .contact
+                .as_ref()
+                .is_some_and(|c| c.friction_heating.is_some())
+            {
+                header.push("friction_work".into());
             }
             if model.has_joints() {
                 for h in [
@@ -325,7 +333,7 @@ impl Output {
             let mut all = [0.0; 3];
             comm.all_reduce_into(&mine[..], &mut all[..], SystemOperation::sum());
             let pressure = if all[1] > 0.0 { all[0] / all[1] } else { 0.0 };
-            row.extend_from_slice(&[pressure, all[2]]);
+            row.extend_from_slice(&[pressure, all[2], e.friction_in]);
         }
         if let Some(Mechanics {
             domain: m,
@@ -346,6 +354,13 @@ impl Output {
                 st.candidate_pairs as f64,
                 st.external_work,
             ]);
+            if model
+                .contact
+                .as_ref()
+                .is_some_and(|c| c.friction_heating.is_some())
+            {
+                row.push(st.friction_work);
+            }
             if model.has_joints() {
                 self.cracks.push((time, st.crack_area, st.fracture));
                 row.extend_from_slice(&[

@@ -67,6 +67,27 @@ pub struct ContactSpec {
     /// pair of materials, instead of `resistance` (issue 20).
     #[serde(default)]
     pub cmy: Option<crate::contact::conductance::Cmy>,
+    /// Frictional heating of the penalty contact (issue 20), with mechanics.
+    #[serde(default)]
+    pub friction_heating: Option<FrictionHeatingSpec>,
+}
+
+/// The penalty friction's dissipated power turned into heat at the nodes
+/// of the sliding tets (seed 001 sec 7.1.4: FHTG and FWGT).
+#[derive(Debug, Clone, Copy, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FrictionHeatingSpec {
+    /// Fraction η of the friction work that becomes heat (default 1).
+    #[serde(default = "one")]
+    pub fraction: f64,
+    /// Share w of the heat that goes to the searching body's tet, 1 − w
+    /// to the other's (default 0.5).
+    #[serde(default = "half")]
+    pub weight: f64,
+}
+
+fn half() -> f64 {
+    0.5
 }
 
 /// Heat across the gap between boundary faces of different bodies that

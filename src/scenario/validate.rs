@@ -415,6 +415,22 @@ impl Scenario {
                 }
             }
         }
+        if let Some(f) = self.contact.as_ref().and_then(|c| c.friction_heating) {
+            for (key, v) in [("fraction", f.fraction), ("weight", f.weight)] {
+                if !(0.0..=1.0).contains(&v) {
+                    return bad(
+                        &format!("contact.friction_heating.{key}"),
+                        format!("must be in [0, 1], got {v}"),
+                    );
+                }
+            }
+            if self.mechanics.as_ref().is_none_or(|m| m.contact.is_none()) {
+                return bad(
+                    "contact.friction_heating",
+                    "needs the penalty contact's friction ([mechanics.contact])".into(),
+                );
+            }
+        }
         let gap = self.contact.as_ref().and_then(|c| c.gap.as_ref());
         if let Some(g) = gap {
             if let Some(p) = g.pinball.filter(|p| !(p.is_finite() && *p > 0.0)) {

@@ -85,7 +85,12 @@ impl SolverChoice {
             SolverChoice {
                 ksp_type: "preonly".into(),
                 pc_type: factor.into(),
-                defaults: vec![opt("pc_factor_mat_solver_type", "mumps")],
+                // MUMPS's default 20 % workspace margin fails (DIVERGED_PC_FAILED)
+                // on contact-coupled packings: the 500-nut lattice on 2 ranks.
+                defaults: vec![
+                    opt("pc_factor_mat_solver_type", "mumps"),
+                    opt("mat_mumps_icntl_14", "200"),
+                ],
             }
         } else {
             SolverChoice {
@@ -121,12 +126,14 @@ pub struct EnergyAccount {
     pub convection_in: f64,
     /// Heat in by radiation from the ambient (negative when it cools).
     pub radiation_in: f64,
+    /// Heat made by friction (issue 20).
+    pub friction_in: f64,
 }
 
 impl EnergyAccount {
     /// Total heat in through the boundary (and sources).
     pub fn boundary_in(&self) -> f64 {
-        self.dirichlet_in + self.flux_in + self.convection_in + self.radiation_in
+        self.dirichlet_in + self.flux_in + self.convection_in + self.radiation_in + self.friction_in
     }
 }
 
@@ -234,6 +241,9 @@ pub struct ThermalSystem<'p> {
     ramp: Option<Ramp<'p>>,
     /// Free-surface radiation (issue 20).
     rad: Option<Radiating<'p>>,
+    /// Frictional heat handed over by the mechanics for the next step (J
+    /// per row), when frictional heating is on (issue 20).
+    friction: Option<Vector<'p>>,
     /// Total Newton iterations so far (radiating runs).
     pub newton_iterations: u64,
 }
@@ -511,6 +521,14 @@ impl<'p> ThermalSystem<'p> {
         t_sum.set(0.0)?;
         let t_next = t.duplicate()?;
         let work = t.duplicate()?;
+        let friction = match model.contact.as_ref().and_then(|c| c.friction_heating) {
+            Some(_) => {
+                let mut v = t.duplicate()?;
+                v.set(0.0)?;
+                Some(v)
+            }
+            None => None,
+        };
         Ok(ThermalSystem {
             ops,
             scheme,
@@ -531,6 +549,7 @@ impl<'p> ThermalSystem<'p> {
             solver_name,
             ramp,
             rad,
+            friction,
             newton_iterations: 0,
         })
     }
@@ -572,6 +591,20 @@ impl<'p> ThermalSystem<'p> {
             }
             _ => false,
         };
+        // Frictional heat handed over: a source over the step on free rows;
+        // on prescribed rows the reservoir takes it.
+        let mut friction = None;
+        if let Some(f) = self.friction.as_mut() {
+            let (total, on_d) = (f.sum()?, f.dot(&self.dmask)?);
+            self.base.friction_in += total;
+            self.base.dirichlet_in -= on_d;
+            if total != 0.0 {
+                f.scale(1.0 / self.dt)?;
+                self.work.pointwise_mult(f, &self.dmask)?;
+                f.axpy(-1.0, &self.work)?;
+                friction = Some(&*f);
+            }
+        }
         // Radiation at the step's start.
         if let Some(r) = self.rad.as_mut() {
             let x = &self.t;
@@ -593,6 +626,10 @@ impl<'p> ThermalSystem<'p> {
                     r.r1.pointwise_mult(&r.r0, dt_minv)?;
                     self.t_next.axpy(-1.0, &r.r1)?;
                 }
+                if let Some(q) = friction {
+                    self.work.pointwise_mult(q, dt_minv)?;
+                    self.t_next.axpy(1.0, &self.work)?;
+                }
                 if let (true, Some(r)) = (ramping, &self.ramp) {
                     self.t_next
                         .pointwise_mult(&self.t_next.duplicate_from()?, &r.free_mask)?;
@@ -605,6 +642,9 @@ impl<'p> ThermalSystem<'p> {
             }
             Scheme::Implicit { b, g, rhs, ksp, .. } => {
                 b.mult_add(&self.t, g, rhs)?;
+                if let Some(q) = friction {
+                    rhs.axpy(1.0, q)?;
+                }
                 if self.warm_start {
                     self.t_next.copy_from(&self.t)?;
                 }
@@ -623,6 +663,9 @@ impl<'p> ThermalSystem<'p> {
                 p.work.pointwise_mult(&r.r0, &self.dmask)?;
                 p.work.aypx(-1.0, &r.r0)?;
                 p.rhs.axpy(-(1.0 - theta), &p.work)?;
+                if let Some(q) = friction {
+                    p.rhs.axpy(1.0, q)?;
+                }
                 self.t_next.copy_from(&self.t)?;
                 let s = snes.solve(&mut self.t_next)?;
                 StepStats {
@@ -631,6 +674,10 @@ impl<'p> ThermalSystem<'p> {
                 }
             }
         };
+        // The handed-over heat is released.
+        if let Some(f) = self.friction.as_mut() {
+            f.set(0.0)?;
+        }
         // The radiated heat of the step: Δt (θ R(Tⁿ⁺¹) + (1 − θ) R(Tⁿ)).
         if let Some(r) = self.rad.as_mut() {
             if self.theta != 0.0 {
@@ -657,6 +704,19 @@ impl<'p> ThermalSystem<'p> {
         self.iterations += stats.iterations.max(0) as u64;
         self.newton_iterations += stats.newton.max(0) as u64;
         Ok(stats)
+    }
+
+    /// Collective. Add heat (J per PETSc row, any rank's rows) to be
+    /// released over the next step (frictional heating, issue 20). Every
+    /// rank calls it when frictional heating is on.
+    pub fn add_heat(&mut self, heat: &[(u32, f64)]) -> Result<()> {
+        let Some(f) = self.friction.as_mut() else {
+            return Ok(());
+        };
+        let rows: Vec<i32> = heat.iter().map(|&(r, _)| r as i32).collect();
+        let vals: Vec<f64> = heat.iter().map(|&(_, q)| q).collect();
+        f.set_values(&rows, &vals, true)?;
+        f.assemble()
     }
 
     /// The temperature of every owned node of `part` (part order).
@@ -709,6 +769,7 @@ impl<'p> ThermalSystem<'p> {
             flux_in: b.flux_in + flux_in,
             convection_in: b.convection_in + convection_in,
             radiation_in: b.radiation_in + radiation_in,
+            friction_in: b.friction_in,
         })
     }
 
@@ -735,6 +796,12 @@ impl<'p> ThermalSystem<'p> {
     fn replace(&mut self, mut next: ThermalSystem<'p>, t: &[f64]) -> crate::error::Result<()> {
         let account = self.energy()?;
         next.t.copy_from_slice(t)?;
+        // Heat handed over and not yet released stays pending (same rows).
+        if let (Some(a), Some(b)) = (self.friction.as_ref(), next.friction.as_mut()) {
+            if a.local_size() == b.local_size() {
+                b.copy_from(a)?;
+            }
+        }
         next.t0.copy_from(&next.t)?;
         next.base = account;
         next.iterations = self.iterations;

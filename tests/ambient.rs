@@ -137,9 +137,12 @@ fn closed_contacts_do_not_exchange_with_the_ambient() {
 }
 
 /// A radiating run restarted from its checkpoint continues the
-/// temperatures and the radiated-heat account exactly.
+/// temperatures and the radiated-heat account, to the solver's tolerance:
+/// the restart builds the Newton step's preconditioner afresh (the run
+/// kept the one of its first step), so the Krylov solves round off
+/// differently.
 #[test]
-fn a_radiating_run_restarts_exactly() {
+fn a_radiating_run_restarts_to_solver_tolerance() {
     let scen = root().join("scenarios/radiating-cube.toml");
     let full = out_dir("ambient/restart-full");
     run_ok(2, &scen, &full, &[]);
@@ -172,6 +175,12 @@ fn a_radiating_run_restarts_exactly() {
         "cube_mean_T",
     ] {
         let c = col(&h, name);
-        assert_eq!(ra[c], rb[c], "{name} after the restart");
+        let tol = 1e-11 * ra[c].abs().max(1.0);
+        assert!(
+            (ra[c] - rb[c]).abs() <= tol,
+            "{name} after the restart: {} vs {}",
+            ra[c],
+            rb[c]
+        );
     }
 }

@@ -647,7 +647,7 @@ impl ExplicitDomain {
         l
     }
 
-    /// Issue 20, frictional heating (seed 001 sec 7.1.4, FHTG and FWGT):
+    /// Issue 20, frictional heating (seed 001 sec 7.1.7, FHTG and FWGT):
     /// hand each candidate pair's friction work since the last call, times
     /// η, to the PETSc rows of its tets' boundary nodes, w to the searching
     /// tet's and 1 − w to the other's, in equal shares.

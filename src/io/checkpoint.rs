@@ -100,6 +100,13 @@ pub struct Checkpoint {
     pub settled: Option<f64>,
 }
 
+/// The heat account of the scalars (radiation and friction are 0 in
+/// checkpoints from before them).
+fn heat_of(sc: &[f64]) -> [f64; 7] {
+    let extra = |i: usize| sc.get(i).copied().unwrap_or(0.0);
+    [sc[3], sc[4], sc[5], sc[6], sc[7], extra(11), extra(12)]
+}
+
 /// The saved account base: 7 values, or 5 or 6 from before radiation and
 /// frictional heating (then 0).
 fn account_base(v: &[f64]) -> Option<[f64; 7]> {
@@ -196,15 +203,7 @@ impl Checkpoint {
             } else {
                 None
             },
-            heat: [
-                sc[3],
-                sc[4],
-                sc[5],
-                sc[6],
-                sc[7],
-                sc[11],
-                sc.get(12).copied().unwrap_or(0.0),
-            ],
+            heat: heat_of(&sc),
             dissipated: sc[8],
             peak_kinetic: sc[9],
             thermal_contacts: sc[10] as u64,
@@ -755,15 +754,7 @@ impl CheckpointFile {
             body_nodes: rows::<u32, 2>(get(&file, path, "bodies/nodes", 2)?),
             body_elems: rows::<u32, 2>(get(&file, path, "bodies/elems", 2)?),
             ksp_iterations: first("state/counters")?.unwrap_or(0),
-            heat: [
-                sc[3],
-                sc[4],
-                sc[5],
-                sc[6],
-                sc[7],
-                sc[11],
-                sc.get(12).copied().unwrap_or(0.0),
-            ],
+            heat: heat_of(&sc),
             dissipated: sc[8],
             peak_kinetic: sc[9],
             thermal_contacts: sc[10] as u64,

@@ -1,5 +1,5 @@
 //! The free surfaces' exchange with the surroundings (issue 20; seed 001
-//! sec 7.1: film convection and radiation to an ambient), resolved to bodies.
+//! secs 7.1.2, 7.1.5, 7.1.6: free-surface convection and radiation), resolved to bodies.
 
 use super::Body;
 use crate::scenario::AmbientSpec;

@@ -113,16 +113,8 @@ impl<'p> Ksp<'p> {
         if code < 0 {
             let mut name: *const std::os::raw::c_char = std::ptr::null();
             petsc_call!(KSPGetConvergedReasonString(self.raw, &mut name))?;
-            let reason = if name.is_null() {
-                format!("reason {code}")
-            } else {
-                // SAFETY: static NUL-terminated string from PETSc.
-                unsafe { CStr::from_ptr(name) }
-                    .to_string_lossy()
-                    .into_owned()
-            };
             return Err(PetscError::Diverged {
-                reason,
+                reason: super::reason_name(name, code),
                 code,
                 iterations: its,
             });

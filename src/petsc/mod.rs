@@ -235,6 +235,19 @@ impl Drop for Petsc {
     }
 }
 
+/// A converged reason's name from PETSc's string for it (`reason N` when
+/// PETSc has none).
+pub(crate) fn reason_name(name: *const c_char, code: i32) -> String {
+    if name.is_null() {
+        format!("reason {code}")
+    } else {
+        // SAFETY: PETSc's reason strings are static and NUL-terminated.
+        unsafe { CStr::from_ptr(name) }
+            .to_string_lossy()
+            .into_owned()
+    }
+}
+
 pub(crate) fn to_bool(b: bool) -> ffi::PetscBool {
     if b {
         ffi::PetscBool::PETSC_TRUE

@@ -133,6 +133,17 @@ impl<'p, P: Nonlinear> Snes<'p, P> {
         petsc_call!(KSPSetTolerances(ksp, rtol, atol, PETSC_DEFAULT, 10_000))
     }
 
+    /// Rebuild the preconditioner (a factorisation, an AMG hierarchy) only
+    /// every `lag` Jacobians, across solves: between rebuilds the Krylov
+    /// solver works with the last one.
+    pub fn set_lag_preconditioner(&mut self, lag: i32) -> Result<()> {
+        petsc_call!(SNESSetLagPreconditioner(self.raw, lag as PetscInt))?;
+        petsc_call!(SNESSetLagPreconditionerPersists(
+            self.raw,
+            super::to_bool(true)
+        ))
+    }
+
     /// Newton tolerances: absolute and relative residual, step, iteration cap.
     pub fn set_tolerances(&mut self, atol: f64, rtol: f64, stol: f64, max_it: i32) -> Result<()> {
         petsc_call!(SNESSetTolerances(
@@ -184,16 +195,8 @@ impl<'p, P: Nonlinear> Snes<'p, P> {
         if code < 0 {
             let mut name: *const std::os::raw::c_char = std::ptr::null();
             petsc_call!(SNESGetConvergedReasonString(self.raw, &mut name))?;
-            let reason = if name.is_null() {
-                format!("reason {code}")
-            } else {
-                // SAFETY: static NUL-terminated string from PETSc.
-                unsafe { CStr::from_ptr(name) }
-                    .to_string_lossy()
-                    .into_owned()
-            };
             return Err(PetscError::NonlinearDiverged {
-                reason,
+                reason: super::reason_name(name, code),
                 code,
                 iterations: newton,
             });

@@ -73,7 +73,7 @@ pub struct ContactSpec {
 }
 
 /// The penalty friction's dissipated power turned into heat at the nodes
-/// of the sliding tets (seed 001 sec 7.1.4: FHTG and FWGT).
+/// of the sliding tets (seed 001 sec 7.1.7: FHTG and FWGT).
 #[derive(Debug, Clone, Copy, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct FrictionHeatingSpec {
@@ -91,7 +91,7 @@ fn half() -> f64 {
 }
 
 /// Heat across the gap between boundary faces of different bodies that
-/// face each other closer than the pinball distance (seed 001 sec 7.1):
+/// face each other closer than the pinball distance (seed 001 secs 7.1.1, 7.1.4–7.1.6):
 /// gap conduction k/g, near-field convection h and grey-body radiation
 /// σ F (T_a⁴ − T_b⁴), F = view factor / (1/ε_a + 1/ε_b − 1).
 #[derive(Debug, Clone, Serialize, Deserialize)]

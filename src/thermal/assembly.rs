@@ -353,7 +353,7 @@ pub fn assemble<'p>(
         stiffness.add_values(&idx, &idx, &hm)?;
         load_convection.set_values(&idx, &hl, true)?;
     }
-    // Near-field gaps (seed 001 sec 7.1): conduction k/g and convection h
+    // Near-field gaps (seed 001 secs 7.1.4–7.1.5): conduction k/g and convection h
     // over the searching face's area, as links from its corners (a third
     // each) to the facing face's corners (the ray point's weights).
     let gap_spec = model.contact.as_ref().and_then(|c| c.gap.as_ref());
@@ -366,7 +366,7 @@ pub fn assemble<'p>(
         }
     }
     // Free surfaces: lumped convection h a (T − T_env) and the radiation
-    // coefficient ε σ a (seed 001 sec 7.1.4; issue 20).
+    // coefficient ε σ a (seed 001 secs 7.1.2, 7.1.5–7.1.6; issue 20).
     let mut radiation = None;
     if let Some(amb) = model.thermal.ambient.as_ref() {
         let (area, eps) = free_areas(petsc, model, part, contacts, amb)?;

@@ -1,4 +1,5 @@
-//! Time-step limits of the theta method (seed 000 eqs 22–23), pure.
+//! Time-step limits of the theta method (seed 000 eqs 22–23): the limits
+//! themselves (pure), and the run's checks of its step on PETSc below.
 //!
 //! - Stability: for θ < 1/2 the scheme (M/Δt + θK) Tⁿ⁺¹ = (M/Δt − (1−θ)K) Tⁿ
 //!   amplifies the mode of the largest eigenvalue λ_max of M⁻¹K unless
@@ -29,6 +30,120 @@ pub fn positivity_limit(theta: f64, m: &[f64], k_diag: &[f64]) -> Option<f64> {
 /// One node's share of [`positivity_limit`]: m / ((1 − θ) K_ii).
 pub fn node_positivity_limit(theta: f64, m: f64, k_ii: f64) -> Option<f64> {
     (theta < 1.0 && k_ii > 0.0).then(|| m / ((1.0 - theta) * k_ii))
+}
+
+// The distributed checks of a run's step (PETSc): the power iteration
+// for λ_max and the refusal of a step above either limit.
+use crate::error::Error;
+use crate::model::Model;
+use crate::petsc::{Ksp, Petsc, Result, Vector};
+use crate::scenario::{CapacityKind, ConductionKind};
+
+use super::assembly::Operators;
+
+/// Collective. λ_max of M⁻¹K over the free rows, by power iteration from a
+/// node-alternating start (the highest modes), as the Rayleigh quotient
+/// xᵀKx / xᵀMx: it converges from below, so a step refused with it is
+/// certainly unstable. Lumped M divides, a consistent M is solved (CG).
+fn largest_eigenvalue(petsc: &Petsc, model: &Model, ops: &Operators, free: &Vector) -> Result<f64> {
+    let mut x = free.duplicate()?;
+    {
+        let (lo, _) = x.ownership_range();
+        let f = free.view()?;
+        let mut v = x.view_mut()?;
+        for i in 0..v.len() {
+            let g = (lo + i) as f64;
+            let sign = if (lo + i) % 2 == 0 { 1.0 } else { -1.0 };
+            v[i] = f[i] * sign * (1.0 + 0.25 * (g * 0.618_033_988_75).fract());
+        }
+    }
+    let mut kx = x.duplicate()?;
+    let mut mx = x.duplicate()?;
+    let mut mass = None;
+    if model.thermal.capacity == CapacityKind::Consistent {
+        let mut ksp = Ksp::new(petsc)?;
+        ksp.set_operator(&ops.capacity)?;
+        ksp.set_types("cg", "jacobi")?;
+        ksp.set_tolerances(1e-10, 1e-300, 1000)?;
+        mass = Some(ksp);
+    }
+    let mut lambda = 0.0;
+    for k in 0..1000 {
+        let norm = x.norm2()?;
+        if norm == 0.0 {
+            return Ok(0.0);
+        }
+        x.scale(1.0 / norm)?;
+        ops.stiffness.mult(&x, &mut kx)?;
+        kx.pointwise_mult(&kx.duplicate_from()?, free)?;
+        ops.capacity.mult(&x, &mut mx)?;
+        let rq = x.dot(&kx)? / x.dot(&mx)?;
+        match mass.as_mut() {
+            Some(ksp) => {
+                ksp.solve(&kx, &mut x)?;
+            }
+            None => {
+                let m = ops.capacity_rowsum.view()?;
+                let y = kx.view()?;
+                let mut v = x.view_mut()?;
+                for i in 0..v.len() {
+                    v[i] = y[i] / m[i];
+                }
+            }
+        }
+        x.pointwise_mult(&x.duplicate_from()?, free)?;
+        if k > 10 && (rq - lambda).abs() <= 1e-6 * rq.abs() {
+            return Ok(rq);
+        }
+        lambda = rq;
+    }
+    Ok(lambda)
+}
+
+/// Collective. Refuse a time step above the theta method's stability limit
+/// (θ < 1/2) or, for the bounded scheme with θ < 1, above its positivity
+/// limit (`thermal::limits`), naming the limit.
+pub(super) fn check_time_step(
+    petsc: &Petsc,
+    model: &Model,
+    ops: &Operators,
+    free: &Vector,
+) -> crate::error::Result<()> {
+    let (theta, dt) = (model.thermal.theta, model.dt);
+    if theta < 0.5 {
+        let lambda = largest_eigenvalue(petsc, model, ops, free)?;
+        if let Some(limit) = super::limits::stability_limit(theta, lambda) {
+            if dt > limit {
+                return Err(Error::TimeStep(format!(
+                    "time.dt = {dt:e} s is above the stability limit of thermal.theta = {theta} \
+                     (dt <= 2/((1 - 2 theta) lambda_max) = {limit:.4e} s, with lambda_max = \
+                     {lambda:.4e} 1/s the largest eigenvalue of M^-1 K): use time.dt <= {limit:.3e} \
+                     or thermal.theta >= 0.5"
+                )));
+            }
+        }
+    }
+    if model.thermal.conduction == ConductionKind::Bounded && theta < 1.0 {
+        let mut ratio = free.duplicate()?;
+        ops.stiffness.diagonal(&mut ratio)?;
+        {
+            let (m, f) = (ops.capacity_rowsum.view()?, free.view()?);
+            let mut v = ratio.view_mut()?;
+            for i in 0..v.len() {
+                let node = super::limits::node_positivity_limit(theta, m[i], v[i]);
+                v[i] = node.filter(|_| f[i] > 0.0).unwrap_or(f64::MAX);
+            }
+        }
+        let limit = ratio.min()?;
+        if dt > limit {
+            return Err(Error::TimeStep(format!(
+                "time.dt = {dt:e} s is above the step that keeps the bounded scheme bounded at \
+                 thermal.theta = {theta} (dt <= m_i / ((1 - theta) K_ii) = {limit:.4e} s): use \
+                 time.dt <= {limit:.3e} or thermal.theta = 1"
+            )));
+        }
+    }
+    Ok(())
 }
 
 #[cfg(test)]

@@ -2,7 +2,7 @@
 //! new temperatures, solved by Newton (PETSc SNES) with the assembled
 //! Jacobian. With the constrained A and rhs of the linear step (seed 000
 //! eq 22) and the radiated power R(T) = c ∘ ((T + offset)⁴ − T_a⁴) of the
-//! free rows (seed 001 sec 7.1.4, lumped to the nodes),
+//! free rows (seed 001 sec 7.1.6, lumped to the nodes),
 //!   F(T) = A T − rhs + θ R(T),   J = A + θ diag(4 c (T + offset)³),
 //! where rhs = B Tⁿ + g − (1 − θ) R(Tⁿ). Prescribed rows have c = 0 here,
 //! so they keep T = T_d. Radiation across near-field gaps adds L u(T) to

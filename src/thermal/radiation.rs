@@ -1,11 +1,11 @@
-//! Radiation kernels (issue 20, seed 001 sec 7.1.4): the grey-body
+//! Radiation kernels (issue 20, seed 001 sec 7.1.6): the grey-body
 //! emission of a surface node to an ambient, lumped to the nodes, and the
 //! exchange factor of two grey surfaces. Pure: no MPI or PETSc.
 
 /// The Stefan–Boltzmann constant σ (W/m²/K⁴, CODATA 2018).
 pub const STEFAN_BOLTZMANN: f64 = 5.670_374_419e-8;
 
-/// Seed 001 sec 7.1.4: the net radiated power of a node whose free area
+/// Seed 001 sec 7.1.6: the net radiated power of a node whose free area
 /// times emissivity times σ is `coef` (W/K⁴), at temperature `t` (scenario
 /// unit) with `offset` making it absolute, to an ambient of absolute
 /// temperature⁴ `ambient4`: q = coef ((t + offset)⁴ − T_env⁴).
@@ -23,7 +23,7 @@ pub fn emitted_slope(coef: f64, t: f64, offset: f64) -> f64 {
 }
 
 /// The exchange factor of two parallel grey surfaces of emissivities
-/// `e1` and `e2` (seed 001 sec 7.1.4): 1 / (1/ε₁ + 1/ε₂ − 1).
+/// `e1` and `e2` (seed 001 sec 7.1.6): 1 / (1/ε₁ + 1/ε₂ − 1).
 pub fn grey_exchange(e1: f64, e2: f64) -> f64 {
     1.0 / (1.0 / e1 + 1.0 / e2 - 1.0)
 }

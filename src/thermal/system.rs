@@ -27,11 +27,10 @@
 //! explicit scheme sets its prescribed rows to them after the update.
 
 use crate::contact::{ContactSet, DeltaT};
-use crate::error::Error;
 use crate::model::Model;
 use crate::parallel::Part;
 use crate::petsc::{Ksp, Matrix, Petsc, Result, Snes, Vector};
-use crate::scenario::{CapacityKind, ConductionKind, SolverSpec};
+use crate::scenario::{CapacityKind, SolverSpec};
 use mpi::topology::SimpleCommunicator;
 
 use super::assembly::{assemble, Operators};
@@ -101,6 +100,11 @@ impl SolverChoice {
         }
     }
 }
+
+/// Krylov iterations per Newton iteration above which a radiating step's
+/// preconditioner is rebuilt at the next Jacobian (it is kept otherwise;
+/// `-snes_lag_preconditioner` sets a fixed lag instead).
+const REBUILD_ITERATIONS: i32 = 30;
 
 /// What one step did.
 #[derive(Debug, Clone, Copy, Default)]
@@ -211,6 +215,15 @@ struct Ramp<'p> {
     xd: Vector<'p>,
 }
 
+impl Radiating<'_> {
+    /// The radiated power R(x) into r0 (the step's start) or r1 (its end).
+    fn power(&mut self, x: &Vector, end: bool) -> Result<()> {
+        let out = if end { &mut self.r1 } else { &mut self.r0 };
+        let (c, g, o, a4) = (&self.coef, self.gap.as_ref(), self.offset, self.ambient4);
+        radiated(c, g, x, o, a4, &mut self.u, out)
+    }
+}
+
 /// The assembled thermal problem and its state.
 pub struct ThermalSystem<'p> {
     ops: Operators<'p>,
@@ -246,6 +259,8 @@ pub struct ThermalSystem<'p> {
     friction: Option<Vector<'p>>,
     /// Total Newton iterations so far (radiating runs).
     pub newton_iterations: u64,
+    /// Newton's absolute tolerance as a fraction of ‖rhs‖ (the linear rtol).
+    newton_rtol: f64,
 }
 
 impl<'p> ThermalSystem<'p> {
@@ -338,7 +353,7 @@ impl<'p> ThermalSystem<'p> {
         let mut f_free = t.duplicate()?;
         f_free.pointwise_mult(&ops.load, &free_mask)?;
 
-        check_time_step(petsc, model, &ops, &free_mask)?;
+        super::limits::check_time_step(petsc, model, &ops, &free_mask)?;
 
         let explicit = theta == 0.0 && model.thermal.capacity == CapacityKind::Lumped;
         let mut warm_start = false;
@@ -423,12 +438,24 @@ impl<'p> ThermalSystem<'p> {
                     symmetric,
                 };
                 let mut snes = Box::new(Snes::new(petsc, step, t.duplicate()?, j)?);
+                // The Jacobian changes with T at every Newton iteration, but
+                // little: its preconditioner (a factorisation by default) is
+                // kept, and a Krylov solver closes the gap, until the solves
+                // need more than REBUILD_ITERATIONS per Newton iteration;
+                // a direct solve would factorise at every iteration (7.3 s
+                // against 32 ms per step on the 500-nut lattice, measured).
+                let krylov = if symmetric { "cg" } else { "gmres" };
+                let kt = match choice.ksp_type.as_str() {
+                    "preonly" => krylov,
+                    other => other,
+                };
                 snes.set_linear(
-                    solver.ksp_type.as_deref().unwrap_or(&choice.ksp_type),
+                    solver.ksp_type.as_deref().unwrap_or(kt),
                     solver.pc_type.as_deref().unwrap_or(&choice.pc_type),
                     solver.rtol.unwrap_or(1e-10),
                     solver.atol.unwrap_or(1e-50),
                 )?;
+                snes.set_lag_preconditioner(-2)?;
                 // Newton to 1e-10 of the first residual, or a step below
                 // 1e-12 of the temperatures (round-off near a steady state).
                 snes.set_tolerances(1e-300, 1e-10, 1e-12, 50)?;
@@ -551,6 +578,7 @@ impl<'p> ThermalSystem<'p> {
             rad,
             friction,
             newton_iterations: 0,
+            newton_rtol: solver.rtol.unwrap_or(1e-10),
         })
     }
 
@@ -607,16 +635,7 @@ impl<'p> ThermalSystem<'p> {
         }
         // Radiation at the step's start.
         if let Some(r) = self.rad.as_mut() {
-            let x = &self.t;
-            radiated(
-                &r.coef,
-                r.gap.as_ref(),
-                x,
-                r.offset,
-                r.ambient4,
-                &mut r.u,
-                &mut r.r0,
-            )?;
+            r.power(&self.t, false)?;
         }
         let stats = match &mut self.scheme {
             Scheme::Explicit { e, g, dt_minv } => {
@@ -666,8 +685,17 @@ impl<'p> ThermalSystem<'p> {
                 if let Some(q) = friction {
                     p.rhs.axpy(1.0, q)?;
                 }
+                // Converged when ‖F‖ ≤ 1e-10 ‖rhs‖, as the linear step's
+                // KSP stops at 1e-10 of its right-hand side (or at 1e-10 of
+                // the first residual, or a step below 1e-12).
+                let atol = self.newton_rtol * p.rhs.norm2()?;
+                let keep = crate::petsc::PETSC_DEFAULT;
+                snes.set_tolerances(atol, keep, keep, keep as i32)?;
                 self.t_next.copy_from(&self.t)?;
                 let s = snes.solve(&mut self.t_next)?;
+                if s.linear > REBUILD_ITERATIONS * s.newton.max(1) {
+                    snes.set_lag_preconditioner(-2)?;
+                }
                 StepStats {
                     iterations: s.linear,
                     newton: s.newton,
@@ -681,16 +709,7 @@ impl<'p> ThermalSystem<'p> {
         // The radiated heat of the step: Δt (θ R(Tⁿ⁺¹) + (1 − θ) R(Tⁿ)).
         if let Some(r) = self.rad.as_mut() {
             if self.theta != 0.0 {
-                let x = &self.t_next;
-                radiated(
-                    &r.coef,
-                    r.gap.as_ref(),
-                    x,
-                    r.offset,
-                    r.ambient4,
-                    &mut r.u,
-                    &mut r.r1,
-                )?;
+                r.power(&self.t_next, true)?;
                 r.sum.axpy(self.dt * self.theta, &r.r1)?;
             }
             if self.theta != 1.0 {
@@ -895,109 +914,4 @@ impl<'p> ThermalSystem<'p> {
             v.iter().position(|x| !x.is_finite()).unwrap_or(usize::MAX),
         ))
     }
-}
-
-/// Collective. λ_max of M⁻¹K over the free rows, by power iteration from a
-/// node-alternating start (the highest modes), as the Rayleigh quotient
-/// xᵀKx / xᵀMx: it converges from below, so a step refused with it is
-/// certainly unstable. Lumped M divides, a consistent M is solved (CG).
-fn largest_eigenvalue(petsc: &Petsc, model: &Model, ops: &Operators, free: &Vector) -> Result<f64> {
-    let mut x = free.duplicate()?;
-    {
-        let (lo, _) = x.ownership_range();
-        let f = free.view()?;
-        let mut v = x.view_mut()?;
-        for i in 0..v.len() {
-            let g = (lo + i) as f64;
-            let sign = if (lo + i) % 2 == 0 { 1.0 } else { -1.0 };
-            v[i] = f[i] * sign * (1.0 + 0.25 * (g * 0.618_033_988_75).fract());
-        }
-    }
-    let mut kx = x.duplicate()?;
-    let mut mx = x.duplicate()?;
-    let mut mass = None;
-    if model.thermal.capacity == CapacityKind::Consistent {
-        let mut ksp = Ksp::new(petsc)?;
-        ksp.set_operator(&ops.capacity)?;
-        ksp.set_types("cg", "jacobi")?;
-        ksp.set_tolerances(1e-10, 1e-300, 1000)?;
-        mass = Some(ksp);
-    }
-    let mut lambda = 0.0;
-    for k in 0..1000 {
-        let norm = x.norm2()?;
-        if norm == 0.0 {
-            return Ok(0.0);
-        }
-        x.scale(1.0 / norm)?;
-        ops.stiffness.mult(&x, &mut kx)?;
-        kx.pointwise_mult(&kx.duplicate_from()?, free)?;
-        ops.capacity.mult(&x, &mut mx)?;
-        let rq = x.dot(&kx)? / x.dot(&mx)?;
-        match mass.as_mut() {
-            Some(ksp) => {
-                ksp.solve(&kx, &mut x)?;
-            }
-            None => {
-                let m = ops.capacity_rowsum.view()?;
-                let y = kx.view()?;
-                let mut v = x.view_mut()?;
-                for i in 0..v.len() {
-                    v[i] = y[i] / m[i];
-                }
-            }
-        }
-        x.pointwise_mult(&x.duplicate_from()?, free)?;
-        if k > 10 && (rq - lambda).abs() <= 1e-6 * rq.abs() {
-            return Ok(rq);
-        }
-        lambda = rq;
-    }
-    Ok(lambda)
-}
-
-/// Collective. Refuse a time step above the theta method's stability limit
-/// (θ < 1/2) or, for the bounded scheme with θ < 1, above its positivity
-/// limit (`thermal::limits`), naming the limit.
-fn check_time_step(
-    petsc: &Petsc,
-    model: &Model,
-    ops: &Operators,
-    free: &Vector,
-) -> crate::error::Result<()> {
-    let (theta, dt) = (model.thermal.theta, model.dt);
-    if theta < 0.5 {
-        let lambda = largest_eigenvalue(petsc, model, ops, free)?;
-        if let Some(limit) = super::limits::stability_limit(theta, lambda) {
-            if dt > limit {
-                return Err(Error::TimeStep(format!(
-                    "time.dt = {dt:e} s is above the stability limit of thermal.theta = {theta} \
-                     (dt <= 2/((1 - 2 theta) lambda_max) = {limit:.4e} s, with lambda_max = \
-                     {lambda:.4e} 1/s the largest eigenvalue of M^-1 K): use time.dt <= {limit:.3e} \
-                     or thermal.theta >= 0.5"
-                )));
-            }
-        }
-    }
-    if model.thermal.conduction == ConductionKind::Bounded && theta < 1.0 {
-        let mut ratio = free.duplicate()?;
-        ops.stiffness.diagonal(&mut ratio)?;
-        {
-            let (m, f) = (ops.capacity_rowsum.view()?, free.view()?);
-            let mut v = ratio.view_mut()?;
-            for i in 0..v.len() {
-                let node = super::limits::node_positivity_limit(theta, m[i], v[i]);
-                v[i] = node.filter(|_| f[i] > 0.0).unwrap_or(f64::MAX);
-            }
-        }
-        let limit = ratio.min()?;
-        if dt > limit {
-            return Err(Error::TimeStep(format!(
-                "time.dt = {dt:e} s is above the step that keeps the bounded scheme bounded at \
-                 thermal.theta = {theta} (dt <= m_i / ((1 - theta) K_ii) = {limit:.4e} s): use \
-                 time.dt <= {limit:.3e} or thermal.theta = 1"
-            )));
-        }
-    }
-    Ok(())
 }

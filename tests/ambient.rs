@@ -76,6 +76,11 @@ fn a_radiating_cube_follows_the_lumped_solution_on_one_and_two_ranks() {
             "Newton iterations per step: {its}"
         );
         assert_follows(&dir, "radiating-cube", "cube", exact, 0.005);
+        let png = std::fs::read(dir.join("radiating-cube_heat.png")).expect("the heat PNG");
+        assert!(
+            png.starts_with(b"\x89PNG") && png.len() > 10_000,
+            "a drawn PNG"
+        );
         results.push(read_results(&dir, "radiating-cube"));
     }
     assert_same_temperatures(
@@ -183,4 +188,46 @@ fn a_radiating_run_restarts_to_solver_tolerance() {
             rb[c]
         );
     }
+}
+
+/// In a packing: 50 nuts on a hot plate (the lattice heat-up at 5 × 5 × 2)
+/// with free-surface convection and radiation and the CMY conductance. The
+/// heat in through the held plate equals the stored heat plus the heat
+/// convected and radiated away, to 1e-6 of the radiated heat, and every
+/// temperature stays between the room's and the plate's.
+#[test]
+fn a_radiating_packing_keeps_its_heat_account() {
+    let scen = root().join("scenarios/nut-lattice-heatup-20k.toml");
+    let set = [
+        "bodies.nut.lattice.count=[5,5,2]",
+        "time.steps=20",
+        "output.every=5",
+        "materials.0.emissivity=0.8",
+        "thermal.temperature_offset=273.15",
+        "thermal.ambient={temperature=20.0, h=5.0, radiation=true}",
+        "contact.resistance=none",
+        "contact.cmy={roughness=1e-6, slope=0.1, hardness=1e9, pressure=8e8}",
+    ];
+    let args: Vec<&str> = set.iter().flat_map(|s| ["--set", s]).collect();
+    let mut runs = Vec::new();
+    for ranks in [1, 2] {
+        let dir = out_dir(&format!("ambient/packing-{ranks}"));
+        run_ok(ranks, &scen, &dir, &args);
+        let (h, rows) = history(&dir, "nut-lattice-heatup-20k");
+        let last = rows.last().unwrap();
+        let c = |name: &str| last[col(&h, name)];
+        let stored = c("stored_heat") - rows[0][col(&h, "stored_heat")];
+        let (conv, rad) = (c("convection_heat_in"), c("radiation_heat_in"));
+        let wall = c("boundary_heat_in") - conv - rad - c("friction_heat_in");
+        eprintln!("{ranks} rank(s): wall {wall:.4} J, stored {stored:.4}, convected {conv:.4}, radiated {rad:.4}");
+        assert!(rad < 0.0 && conv < 0.0 && wall > 0.0);
+        assert!(
+            (wall + conv + rad - stored).abs() < 1e-6 * rad.abs(),
+            "account"
+        );
+        let r = read_results(&dir, "nut-lattice-heatup-20k");
+        assert_within_bounds(&r, 0.0, 300.0, "radiating packing");
+        runs.push(r);
+    }
+    assert_same_temperatures(&runs[0], &runs[1], 1e-8, "radiating packing, 1 vs 2 ranks");
 }

@@ -32,3 +32,16 @@ impl Ambient {
         }
     }
 }
+
+impl super::Model {
+    /// Whether the run has any of issue 20's thermal contact physics: an
+    /// ambient, gaps, a pressure-dependent conductance or frictional heating.
+    pub fn has_contact_physics(&self) -> bool {
+        self.thermal.ambient.is_some()
+            || self.contact.as_ref().is_some_and(|c| {
+                c.gap.is_some()
+                    || c.friction_heating.is_some()
+                    || c.cmy.iter().flatten().any(Option::is_some)
+            })
+    }
+}

@@ -46,6 +46,10 @@ pub(super) struct Output {
     /// Jointed bodies: (time, crack area, fracture energy) at each output,
     /// for the crack plot.
     cracks: Vec<(f64, f64, f64)>,
+    /// Issue 20: per history row, the time and the heat in by each
+    /// mechanism so far (prescribed temperatures, fluxes, convection,
+    /// radiation, friction) and the stored heat's change.
+    heat: Vec<[f64; 7]>,
     /// The joint output grid, when the model has joints.
     pub joints: Option<super::joint_output::JointOutput>,
 }
@@ -203,6 +207,7 @@ impl Output {
                     .as_ref()
                     .is_some_and(|m| m.rebalance.every > 0),
             cracks: Vec::new(),
+            heat: Vec::new(),
             joints: None,
         })
     }
@@ -334,6 +339,17 @@ impl Output {
             comm.all_reduce_into(&mine[..], &mut all[..], SystemOperation::sum());
             let pressure = if all[1] > 0.0 { all[0] / all[1] } else { 0.0 };
             row.extend_from_slice(&[pressure, all[2], e.friction_in]);
+            if model.has_contact_physics() {
+                self.heat.push([
+                    time,
+                    e.dirichlet_in,
+                    e.flux_in,
+                    e.convection_in,
+                    e.radiation_in,
+                    e.friction_in,
+                    e.stored_change,
+                ]);
+            }
         }
         if let Some(Mechanics {
             domain: m,
@@ -444,6 +460,16 @@ impl Output {
             agree(comm, written)?;
             particle_files.push(path);
         }
+        if !self.heat.is_empty() {
+            let path = dir.join(format!("{stem}_heat.png"));
+            let written = if comm.rank() == 0 {
+                heat_plot(&self.heat, &path)
+            } else {
+                Ok(())
+            };
+            agree(comm, written)?;
+            particle_files.push(path);
+        }
         if model.thermal_active && model.contact.is_some() {
             let path = dir.join(format!("{stem}_body_contacts.csv"));
             let per = body_contacts(comm, contacts);
@@ -490,6 +516,42 @@ fn crack_plot(cracks: &[(f64, f64, f64)], path: &std::path::Path) -> Result<()> 
                 dashed: true,
             },
         ],
+    };
+    write_png(&plot, path, (1000, 700))
+        .map_err(|e| Error::Io(crate::io::IoError::invalid(path, e.to_string())))
+}
+
+/// `<stem>_heat.png` (issue 20): the heat in by each mechanism so far and
+/// the stored heat's change (J) against time; mechanisms that moved no
+/// heat are left out.
+fn heat_plot(rows: &[[f64; 7]], path: &std::path::Path) -> Result<()> {
+    use crate::io::plot::{write_png, LinePlot, Series};
+    let names = [
+        "prescribed temperatures",
+        "fluxes and sources",
+        "convection",
+        "radiation",
+        "friction",
+        "stored (change)",
+    ];
+    let curves: Vec<(&str, Vec<(f64, f64)>)> = names
+        .iter()
+        .enumerate()
+        .map(|(k, &n)| (n, rows.iter().map(|r| (r[0], r[k + 1])).collect::<Vec<_>>()))
+        .filter(|(_, p)| p.iter().any(|&(_, q)| q != 0.0))
+        .collect();
+    let plot = LinePlot {
+        title: "Heat in by mechanism",
+        x_label: "time [s]",
+        y_label: "heat in since the start [J]",
+        series: curves
+            .iter()
+            .map(|(label, points)| Series {
+                label,
+                points,
+                dashed: *label == "stored (change)",
+            })
+            .collect(),
     };
     write_png(&plot, path, (1000, 700))
         .map_err(|e| Error::Io(crate::io::IoError::invalid(path, e.to_string())))

@@ -326,49 +326,92 @@ fn blow_up_to_nan_is_reported_with_node() {
     h5dump_ok(&d.join("out").join("bad.h5"));
 }
 
+/// What a killed run left in `out` for the series `stem`: every file under
+/// its final name reads (h5dump), the XDMF file is whole, lists at least one
+/// step and no more than the step files hold, and every step it lists reads.
+/// `.part` and `.tmp` files are files being written: not checked.
+fn assert_series_readable(out: &Path, stem: &str, what: &str) {
+    let h5 = out.join(format!("{stem}.h5"));
+    h5dump_ok(&h5);
+    let steps = fdem::io::steps_dir(&h5);
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&steps)
+        .map(|d| d.flatten().map(|e| e.path()).collect())
+        .unwrap_or_default();
+    files.retain(|f| f.extension().is_some_and(|x| x == "h5"));
+    for f in &files {
+        h5dump_ok(f);
+    }
+    let xdmf = std::fs::read_to_string(out.join(format!("{stem}.xdmf"))).unwrap();
+    assert!(xdmf.ends_with("</Xdmf>\n"), "{what}: XDMF file not whole");
+    let listed = xdmf.matches("<Time ").count();
+    let times = fdem::io::read_times(&h5).unwrap();
+    assert!(
+        listed >= 1 && listed <= times.len() && times.len() == files.len(),
+        "{what}: xdmf lists {listed}, the series holds {} steps in {} step files",
+        times.len(),
+        files.len()
+    );
+    for (k, t) in times.iter().enumerate().take(listed) {
+        assert!(
+            xdmf.contains(&format!("<Time Value=\"{t:e}\"/>")),
+            "{what}: step {k} at t = {t} is not in the XDMF file"
+        );
+        let t = fdem::io::read_node_field_step(&h5, "temperature", k).unwrap();
+        assert!(t.iter().all(|v| v.is_finite()), "{what}: step {k}");
+    }
+}
+
 #[test]
 fn killed_run_leaves_readable_output() {
+    // Five kills, one in each fifth of 50..600 ms after the first output
+    // appeared, at a random moment within it; FDEM_KILL_SEED repeats them.
+    use rand::{Rng, SeedableRng};
+    let seed: u64 = std::env::var("FDEM_KILL_SEED")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or_else(|| {
+            let now = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH);
+            now.map_or(0, |d| d.as_nanos() as u64)
+        });
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
     let d = scenario_dir("killed");
-    let out = d.join("out");
-    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_fdem"))
-        .args([
-            "run",
-            root().join("scenarios/slab-1d.toml").to_str().unwrap(),
-            "--quiet",
-            "--output",
-        ])
-        .arg(&out)
-        .args([
-            "--set",
-            "output.every=20",
-            "--set",
-            "bodies.bar.mesh.element_size=0.05",
-        ])
-        .spawn()
-        .unwrap();
-    // Wait until the run has written its first outputs (at most 20 s),
-    // then let it write more and kill it mid-run.
-    let xdmf_path = out.join("slab-1d.xdmf");
-    let start = std::time::Instant::now();
-    while !xdmf_path.exists() && start.elapsed().as_secs() < 20 {
-        std::thread::sleep(std::time::Duration::from_millis(20));
+    for i in 0..5 {
+        let delay = 50 + 110 * i + rng.gen_range(0..110);
+        let what = format!("kill {i} at {delay} ms (FDEM_KILL_SEED={seed})");
+        let out = d.join(format!("out{i}"));
+        let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_fdem"))
+            .args([
+                "run",
+                root().join("scenarios/slab-1d.toml").to_str().unwrap(),
+                "--quiet",
+                "--output",
+            ])
+            .arg(&out)
+            .args([
+                "--set",
+                "output.every=20",
+                "--set",
+                "bodies.bar.mesh.element_size=0.05",
+            ])
+            .stdout(std::process::Stdio::null())
+            .spawn()
+            .unwrap();
+        // Wait until the run has written its first output (at most 20 s),
+        // then let it write more and kill it mid-run.
+        let xdmf_path = out.join("slab-1d.xdmf");
+        let start = std::time::Instant::now();
+        while !xdmf_path.exists() && start.elapsed().as_secs() < 20 {
+            std::thread::sleep(std::time::Duration::from_millis(5));
+        }
+        std::thread::sleep(std::time::Duration::from_millis(delay));
+        assert!(
+            child.try_wait().unwrap().is_none(),
+            "{what}: the run ended before it could be killed"
+        );
+        child.kill().unwrap(); // SIGKILL
+        let _ = child.wait();
+        assert_series_readable(&out, "slab-1d", &what);
     }
-    std::thread::sleep(std::time::Duration::from_millis(300));
-    assert!(
-        child.try_wait().unwrap().is_none(),
-        "the run ended before it could be killed"
-    );
-    child.kill().unwrap(); // SIGKILL
-    let _ = child.wait();
-    let h5 = out.join("slab-1d.h5");
-    h5dump_ok(&h5);
-    let xdmf = std::fs::read_to_string(out.join("slab-1d.xdmf")).unwrap();
-    let listed = xdmf.matches("<Time ").count();
-    let stored = fdem::io::read_times(&h5).unwrap().len();
-    assert!(
-        listed >= 1 && listed <= stored,
-        "xdmf lists {listed}, h5 holds {stored}"
-    );
 }
 
 const MECH: &str = r#"

@@ -1,7 +1,6 @@
 //! The few HDF5 C calls that `hdf5-metno` 0.15 does not wrap: collective data
 //! transfer (`H5Pset_dxpl_mpio`), writes with explicit (possibly empty) hyperslab
-//! selections, a global-scope `H5Fflush`, and groups with a preset local-heap size
-//! (`H5Pset_local_heap_size_hint`).
+//! selections and a global-scope `H5Fflush`.
 //!
 //! The symbols come from the libhdf5 that `hdf5-metno-sys` links; the declarations
 //! follow the C API of HDF5 >= 1.10 (`hid_t` is 64 bits). Every call is made while
@@ -9,23 +8,20 @@
 
 #![allow(non_camel_case_types, non_upper_case_globals)]
 
-use std::ffi::CString;
-use std::os::raw::{c_char, c_int, c_void};
+use std::os::raw::{c_int, c_void};
 
-use hdf5::{Dataset, Datatype, Group, H5Type};
+use hdf5::{Dataset, Datatype, H5Type};
 
 type hid_t = i64;
 type herr_t = c_int;
 type hsize_t = u64;
 
-const H5P_DEFAULT: hid_t = 0;
 const H5S_SELECT_SET: c_int = 0;
 const H5FD_MPIO_COLLECTIVE: c_int = 1;
 const H5F_SCOPE_GLOBAL: c_int = 1;
 
 extern "C" {
     static H5P_CLS_DATASET_XFER_ID_g: hid_t;
-    static H5P_CLS_GROUP_CREATE_ID_g: hid_t;
     fn H5open() -> herr_t;
     fn H5Pcreate(cls_id: hid_t) -> hid_t;
     fn H5Pset_dxpl_mpio(dxpl_id: hid_t, xfer_mode: c_int) -> herr_t;
@@ -51,15 +47,6 @@ extern "C" {
         buf: *const c_void,
     ) -> herr_t;
     fn H5Fflush(object_id: hid_t, scope: c_int) -> herr_t;
-    fn H5Pset_local_heap_size_hint(gcpl_id: hid_t, size_hint: usize) -> herr_t;
-    fn H5Gcreate2(
-        loc_id: hid_t,
-        name: *const c_char,
-        lcpl_id: hid_t,
-        gcpl_id: hid_t,
-        gapl_id: hid_t,
-    ) -> hid_t;
-    fn H5Gclose(group_id: hid_t) -> herr_t;
 }
 
 /// Name of the C call that failed.
@@ -197,34 +184,4 @@ pub(crate) fn write_block<T: H5Type>(
 pub(crate) fn flush_global(file: &hdf5::File) -> Result<(), CallError> {
     // SAFETY: `file.id()` is a valid, open file id.
     hdf5::sync::sync(|| unsafe { check(H5Fflush(file.id(), H5F_SCOPE_GLOBAL), "H5Fflush") })
-}
-
-/// Creates the (old-style) group `parent/name` whose local heap starts with room
-/// for `names` link names of up to 7 bytes (`000123`), so that adding links does not
-/// move the heap and free its old block. Collective for files opened with MPI-IO.
-pub(crate) fn create_group_reserving_names(
-    parent: &Group,
-    name: &str,
-    names: usize,
-) -> Result<(), CallError> {
-    let c_name = CString::new(name).map_err(|_| "H5Gcreate2")?;
-    hdf5::sync::sync(|| {
-        // SAFETY: plain HDF5 C calls on ids owned here; `c_name` outlives the call.
-        unsafe {
-            check(H5open(), "H5open")?;
-            let gcpl = check_id(H5Pcreate(H5P_CLS_GROUP_CREATE_ID_g), "H5Pcreate")?;
-            let result = check(
-                H5Pset_local_heap_size_hint(gcpl, 8 * (names + 1)),
-                "H5Pset_local_heap_size_hint",
-            )
-            .and_then(|()| {
-                check_id(
-                    H5Gcreate2(parent.id(), c_name.as_ptr(), H5P_DEFAULT, gcpl, H5P_DEFAULT),
-                    "H5Gcreate2",
-                )
-            });
-            H5Pclose(gcpl);
-            check(H5Gclose(result?), "H5Gclose")
-        }
-    })
 }

@@ -1,25 +1,17 @@
-//! Collective HDF5 time-series writer (MPI-IO driver) and its XDMF index.
+//! Collective HDF5 time-series writer (MPI-IO driver) and its XDMF index:
+//! the mesh file and one file per output step, each written under a
+//! `.part` name, closed, synced and then renamed; see the [module
+//! documentation](super) for the layout and the crash-safety argument.
 
 use std::path::{Path, PathBuf};
 
-use hdf5::plist::dataset_create::{AllocTime, FillTime};
-use hdf5::{Dataset, Extent, File, Group, H5Type, SimpleExtents};
-use mpi::collective::SystemOperation;
-use mpi::raw::AsRaw as _;
+use hdf5::{File, Group};
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::{Communicator, CommunicatorCollectives};
 
 use super::ffi::{self, CollectiveXfer};
 use super::xdmf::{self, Center, FieldDesc, XdmfModel};
-use super::{check_name, output_paths, remove_outputs, IoError};
-
-/// Initial local-heap size of a field's step group: room for the link names of
-/// this many steps before the heap has to be moved (and its old block freed).
-const STEP_NAMES_RESERVED: usize = 16_384;
-/// Half the capacity of a symbol-table leaf node (HDF5 default 4).
-const SYMBOL_LEAF_K: u32 = 256;
-/// Chunk length of `/time`.
-const TIME_CHUNK: usize = 512;
+use super::{check_name, output_paths, remove_outputs, step_path, steps_dir, IoError};
 
 /// This rank's part of a Tet4 mesh. Rows are distributed in contiguous blocks: the
 /// non-empty blocks of all ranks must tile `0..global_nodes` (resp. `0..global_cells`)
@@ -65,12 +57,20 @@ struct Rows {
 }
 
 mod checks;
-use checks::{agree, agree_signature, check_mesh_local, check_tiling, Fnv};
+mod files;
+mod reopen;
 
-/// A time-dependent field and the group holding its per-step datasets.
-struct FieldSlot {
-    desc: FieldDesc,
-    group: Group,
+use checks::{agree, agree_signature, check_mesh_local, check_tiling, Fnv};
+pub(crate) use files::part_path;
+use files::{create_file, fixed_dataset, publish, remove_if_present};
+
+/// The mesh file while it is written: open under `<stem>.h5.part` until the
+/// first step (or the close) seals it.
+struct OpenMesh {
+    // Declared before `file` so that they are closed first.
+    static_groups: [Group; 2],
+    file: File,
+    part: PathBuf,
 }
 
 /// The open state of a writer.
@@ -82,23 +82,19 @@ struct Inner {
     nodes: Rows,
     cells: Rows,
     xfer: CollectiveXfer,
-    // Datasets and groups are declared before `file` so they are closed first.
-    fields: Option<Vec<FieldSlot>>,
-    time_ds: Dataset,
-    static_groups: [Group; 2],
-    field_groups: [Group; 2],
-    file: File,
+    /// The mesh file, while it is still being written.
+    mesh: Option<OpenMesh>,
+    /// The time-dependent fields, fixed by the first step, in the
+    /// index's order ([`XdmfModel::sort`]).
+    fields: Option<Vec<FieldDesc>>,
     model: XdmfModel,
     usable: bool,
-    /// While the file is still `<stem>.h5.part`: it is renamed to
-    /// `<stem>.h5` by the first [`Inner::publish`] of a step (or by
-    /// [`Inner::finish`]), so that the first step's groups and heaps, the
-    /// largest metadata flush of the run, are written before the name exists.
-    pending: Option<PathBuf>,
 }
 
-/// Collective writer of a time series `<dir>/<stem>.h5` + `<dir>/<stem>.xdmf`; see
-/// the [module documentation](super) for the file layout and crash-safety scheme.
+/// Collective writer of a time series: the mesh file `<dir>/<stem>.h5`, one
+/// file per step `<dir>/<stem>_steps/<k:06>.h5` and the index
+/// `<dir>/<stem>.xdmf`; see the [module documentation](super) for the
+/// layout and crash-safety scheme.
 ///
 /// Dropping the writer closes it like [`TimeSeriesWriter::close`], ignoring errors
 /// (collectively, so every rank must drop it), except while panicking: then the
@@ -109,13 +105,14 @@ pub struct TimeSeriesWriter {
 }
 
 impl TimeSeriesWriter {
-    /// Collective. Creates `<dir>/<stem>.h5` (and `dir`, if missing) and writes the
-    /// mesh: `/mesh/coordinates` `[N, 3]` f64 and `/mesh/topology` `[E, 4]` u32.
-    /// Outputs of an earlier run with the same stem are removed first. The file is
-    /// written as `<stem>.h5.part` and renamed once the first step (or, if no
-    /// step is written, the closing flush) is on disk. The XDMF file is written
-    /// by the first [`write_step`](Self::write_step) (or by
-    /// [`close`](Self::close) if no step is written).
+    /// Collective. Starts the series `<dir>/<stem>` (creating `dir` if
+    /// missing; the outputs of an earlier run with the same stem are removed
+    /// first) and writes the mesh: `/mesh/coordinates` `[N, 3]` f64 and
+    /// `/mesh/topology` `[E, 4]` u32. The mesh file is written as
+    /// `<stem>.h5.part`, takes the static fields, and is closed and renamed
+    /// to `<stem>.h5` by the first [`write_step`](Self::write_step) (or by
+    /// [`close`](Self::close) if no step is written), which also writes the
+    /// XDMF file.
     ///
     /// The mesh distribution is validated on all ranks first; on any failure all
     /// ranks return an error and no output file is left behind.
@@ -173,7 +170,7 @@ impl TimeSeriesWriter {
         })
         .map_err(|what| IoError::invalid(&h5_path, what))?;
 
-        // Rank 0 prepares the directory and removes a stale index.
+        // Rank 0 prepares the directory and removes the old series.
         let prepared = if rank == 0 {
             std::fs::create_dir_all(dir)
                 .map_err(|e| IoError::io(dir, "creating output directory", e))
@@ -197,39 +194,47 @@ impl TimeSeriesWriter {
             offset: mesh.cell_offset,
             count: mesh.num_cells() as u64,
         };
-        let h5_name = format!("{stem}.h5");
-        // The file is built under `<stem>.h5.part` and renamed by the first
-        // step's publish, so `<stem>.h5` never names a file without a complete
-        // mesh and first step.
-        let part_path = part_path(&h5_path);
-        let created = Inner::create(&comm, &part_path, mesh, nodes, cells);
-        let created = agree(&comm, &h5_path, "creating the HDF5 file", created);
-        match created {
-            Ok((file, xfer, time_ds, static_groups, field_groups)) => Ok(Self {
-                inner: Some(Inner {
-                    rank,
-                    xdmf_path,
-                    nodes,
-                    cells,
-                    xfer,
-                    fields: None,
-                    time_ds,
-                    static_groups,
-                    field_groups,
-                    file,
-                    model: XdmfModel {
-                        h5_name,
-                        nodes: nodes.global,
-                        cells: cells.global,
-                        nodes_per_cell: mesh.nodes_per_cell,
-                        ..XdmfModel::default()
-                    },
-                    usable: true,
-                    pending: Some(part_path),
-                    h5_path,
-                    comm,
-                }),
-            }),
+        let part = part_path(&h5_path);
+        let created = CollectiveXfer::new()
+            .map_err(|call| IoError::Hdf5Call {
+                path: part.clone(),
+                call,
+                what: "creating a transfer property list".into(),
+            })
+            .and_then(|xfer| {
+                let open = Inner::create_mesh(&comm, &part, &xfer, mesh, nodes, cells)?;
+                Ok((xfer, open))
+            });
+        match agree(&comm, &h5_path, "creating the mesh file", created) {
+            Ok((xfer, open)) => {
+                let steps_name = steps_dir(&h5_path)
+                    .file_name()
+                    .unwrap_or_default()
+                    .to_string_lossy()
+                    .into_owned();
+                Ok(Self {
+                    inner: Some(Inner {
+                        rank,
+                        xdmf_path,
+                        nodes,
+                        cells,
+                        xfer,
+                        mesh: Some(open),
+                        fields: None,
+                        model: XdmfModel {
+                            h5_name: format!("{stem}.h5"),
+                            steps_name,
+                            nodes: nodes.global,
+                            cells: cells.global,
+                            nodes_per_cell: mesh.nodes_per_cell,
+                            ..XdmfModel::default()
+                        },
+                        usable: true,
+                        h5_path,
+                        comm,
+                    }),
+                })
+            }
             Err(e) => {
                 comm.barrier();
                 if rank == 0 {
@@ -238,190 +243,6 @@ impl TimeSeriesWriter {
                 Err(e)
             }
         }
-    }
-
-    /// Collective. Reopens the series `<dir>/<stem>.h5` of an earlier run to
-    /// continue it (a restart in place): keeps the steps with times up to
-    /// `keep_until` (the checkpoint's time), removes the later ones and
-    /// returns a writer that appends after them. The file must hold the same
-    /// mesh in the same row order (`mesh` and this rank's original node ids
-    /// `node_ids` are compared with the file's rows): a series written with
-    /// another partition, for example on another number of ranks, is an
-    /// error saying so. Static fields are kept as they are.
-    pub fn reopen(
-        comm: &SimpleCommunicator,
-        dir: &Path,
-        stem: &str,
-        mesh: &MeshPart,
-        node_ids: &[i32],
-        keep_until: f64,
-    ) -> Result<Self, IoError> {
-        let comm = comm.duplicate();
-        let rank = comm.rank();
-        let (h5_path, xdmf_path) = output_paths(dir, stem);
-        let nodes = Rows {
-            global: mesh.global_nodes,
-            offset: mesh.node_offset,
-            count: mesh.coords.len() as u64,
-        };
-        let cells = Rows {
-            global: mesh.global_cells,
-            offset: mesh.cell_offset,
-            count: mesh.num_cells() as u64,
-        };
-        let path = h5_path.clone();
-        let h5err = |what: &str| {
-            let what = what.to_string();
-            let path = path.clone();
-            move |e| IoError::hdf5(&path, what, e)
-        };
-        let opened = File::with_options()
-            .with_fapl(|p| p.mpio(comm.as_raw(), None))
-            .open_rw(&h5_path)
-            .map_err(h5err("reopening the series to continue it"));
-        let file = agree(&comm, &h5_path, "reopening the series", opened)?;
-        // Same mesh, same rows: this rank's block of node ids and cells.
-        let check = (|| -> Result<Option<String>, IoError> {
-            let coords = file
-                .dataset("mesh/coordinates")
-                .map_err(h5err("opening /mesh/coordinates"))?;
-            let topo = file
-                .dataset("mesh/topology")
-                .map_err(h5err("opening /mesh/topology"))?;
-            if coords.shape() != [nodes.global as usize, 3]
-                || topo.shape() != [cells.global as usize, mesh.nodes_per_cell]
-            {
-                return Ok(Some(format!(
-                    "it holds a mesh of {:?} nodes and {:?} cells, this run {} and {}",
-                    coords.shape(),
-                    topo.shape(),
-                    nodes.global,
-                    cells.global
-                )));
-            }
-            let ids = file
-                .dataset("static/node/node_id")
-                .and_then(|d| {
-                    d.read_slice_1d::<i32, _>(
-                        nodes.offset as usize..(nodes.offset + nodes.count) as usize,
-                    )
-                })
-                .map_err(h5err("reading /static/node/node_id"))?;
-            let t = topo
-                .read_slice_2d::<u32, _>((
-                    cells.offset as usize..(cells.offset + cells.count) as usize,
-                    ..,
-                ))
-                .map_err(h5err("reading /mesh/topology"))?;
-            let same_cells = t.as_slice().is_some_and(|v| v == mesh.cells);
-            if ids.as_slice() != Some(node_ids) || !same_cells {
-                return Ok(Some(
-                    "its rows are in another order (another partition, or another number of ranks)"
-                        .into(),
-                ));
-            }
-            Ok(None)
-        })();
-        let check = agree(&comm, &h5_path, "checking the series to continue", check)?;
-        let mismatch = i32::from(check.is_some());
-        let mut any = 0;
-        comm.all_reduce_into(&mismatch, &mut any, SystemOperation::max());
-        if any != 0 {
-            return Err(IoError::invalid(
-                &h5_path,
-                format!(
-                    "cannot continue this series in place: {}; restart into another output \
-                     directory (--output), or on the rank count that wrote it",
-                    check.unwrap_or_else(|| "another rank's rows differ".into())
-                ),
-            ));
-        }
-        let built = (|| -> Result<Inner, IoError> {
-            let time_ds = file.dataset("time").map_err(h5err("opening /time"))?;
-            let times: Vec<f64> = time_ds.read_raw().map_err(h5err("reading /time"))?;
-            let tol = 1e-9 * keep_until.abs().max(1.0);
-            let keep = times.iter().take_while(|&&t| t <= keep_until + tol).count();
-            let group = |name: &str| file.group(name).map_err(h5err(&format!("opening /{name}")));
-            let static_groups = [group("static/node")?, group("static/cell")?];
-            let field_groups = [group("fields/node")?, group("fields/cell")?];
-            let mut statics = Vec::new();
-            for (g, center) in static_groups.iter().zip([Center::Node, Center::Cell]) {
-                for name in g.member_names().map_err(h5err("listing static fields"))? {
-                    statics.push((name, center));
-                }
-            }
-            let mut slots = Vec::new();
-            for (g, center) in field_groups.iter().zip([Center::Node, Center::Cell]) {
-                for name in g.member_names().map_err(h5err("listing fields"))? {
-                    let fg = g
-                        .group(&name)
-                        .map_err(h5err(&format!("opening field {name}")))?;
-                    let first = fg
-                        .dataset(&xdmf::step_name(0))
-                        .map_err(h5err(&format!("opening field {name}, step 0")))?;
-                    let shape = first.shape();
-                    let components = if shape.len() == 1 { 1 } else { shape[1] };
-                    // Drop the steps after the checkpoint.
-                    for k in keep..times.len() {
-                        let step = xdmf::step_name(k);
-                        if fg.link_exists(&step) {
-                            fg.unlink(&step)
-                                .map_err(h5err(&format!("removing field {name} step {k}")))?;
-                        }
-                    }
-                    slots.push(FieldSlot {
-                        desc: FieldDesc {
-                            name,
-                            center,
-                            components,
-                        },
-                        group: fg,
-                    });
-                }
-            }
-            time_ds.resize(keep).map_err(h5err("truncating /time"))?;
-            let xfer = CollectiveXfer::new().map_err(|call| IoError::Hdf5Call {
-                path: h5_path.clone(),
-                call,
-                what: "creating a transfer property list".into(),
-            })?;
-            let fields = (!slots.is_empty()).then_some(slots);
-            Ok(Inner {
-                rank,
-                xdmf_path: xdmf_path.clone(),
-                nodes,
-                cells,
-                xfer,
-                model: XdmfModel {
-                    h5_name: format!("{stem}.h5"),
-                    nodes: nodes.global,
-                    cells: cells.global,
-                    nodes_per_cell: mesh.nodes_per_cell,
-                    statics,
-                    fields: fields.as_ref().map_or(Vec::new(), |f: &Vec<FieldSlot>| {
-                        f.iter().map(|s| s.desc.clone()).collect()
-                    }),
-                    times: times[..keep].to_vec(),
-                },
-                fields,
-                time_ds,
-                static_groups,
-                field_groups,
-                file: file.clone(),
-                usable: true,
-                pending: None,
-                h5_path: h5_path.clone(),
-                comm: comm.duplicate(),
-            })
-        })();
-        let mut inner = agree(
-            &comm,
-            &h5_path,
-            "truncating the series to the checkpoint",
-            built,
-        )?;
-        inner.publish("continuing the series")?;
-        Ok(Self { inner: Some(inner) })
     }
 
     fn inner(&mut self) -> Result<&mut Inner, IoError> {
@@ -437,8 +258,8 @@ impl TimeSeriesWriter {
     }
 
     /// Collective. Writes a static per-node i32 field `/static/node/<name>`
-    /// (`values` = this rank's owned node rows). It appears in every step of the
-    /// XDMF file.
+    /// (`values` = this rank's owned node rows) into the mesh file, before the
+    /// first step. It appears in every step of the XDMF file.
     pub fn write_static_node_field_i32(
         &mut self,
         name: &str,
@@ -448,7 +269,8 @@ impl TimeSeriesWriter {
     }
 
     /// Collective. Writes a static per-cell i32 field `/static/cell/<name>`
-    /// (`values` = this rank's cell rows). It appears in every step of the XDMF file.
+    /// (`values` = this rank's cell rows) into the mesh file, before the
+    /// first step. It appears in every step of the XDMF file.
     pub fn write_static_cell_field_i32(
         &mut self,
         name: &str,
@@ -458,7 +280,7 @@ impl TimeSeriesWriter {
     }
 
     /// Collective. Appends one output step at `time` (finite, larger than the
-    /// previous step's time).
+    /// previous step's time), as the step file `<stem>_steps/<k:06>.h5`.
     ///
     /// Each entry `(name, components, values)` gives this rank's owned rows, row
     /// major: `values.len() == rows * components`, `components` in {1, 3, 6, 9}
@@ -467,9 +289,9 @@ impl TimeSeriesWriter {
     /// The first call fixes the set of node and cell fields; later calls must pass
     /// the same names with the same component counts (in any order).
     ///
-    /// When this returns `Ok`, the step is flushed to disk and listed in the XDMF
-    /// file. After an HDF5 error the writer refuses further steps; the files keep
-    /// the state of the last completed step.
+    /// When this returns `Ok`, the step file is closed, synced and in place,
+    /// and listed in the XDMF file. After an HDF5 error the writer refuses
+    /// further steps; the files keep the state of the last completed step.
     pub fn write_step(
         &mut self,
         time: f64,
@@ -484,7 +306,7 @@ impl TimeSeriesWriter {
         self.inner.as_ref().map_or(0, |i| i.model.times.len())
     }
 
-    /// Path of the HDF5 file.
+    /// Path of the mesh file `<stem>.h5` (the series' name for the readers).
     pub fn h5_path(&self) -> &Path {
         self.inner.as_ref().map_or(Path::new(""), |i| &i.h5_path)
     }
@@ -494,8 +316,9 @@ impl TimeSeriesWriter {
         self.inner.as_ref().map_or(Path::new(""), |i| &i.xdmf_path)
     }
 
-    /// Collective. Flushes and closes the files. If no step was written, the XDMF
-    /// file lists the mesh and its static fields without time.
+    /// Collective. Seals the mesh file if no step did, and closes the writer.
+    /// If no step was written, the XDMF file lists the mesh and its static
+    /// fields without time.
     pub fn close(mut self) -> Result<(), IoError> {
         match self.inner.take() {
             Some(inner) => inner.finish(),
@@ -516,37 +339,29 @@ impl Drop for TimeSeriesWriter {
     }
 }
 
-type Created = (File, CollectiveXfer, Dataset, [Group; 2], [Group; 2]);
-
 impl Inner {
-    /// Creates the file, its groups, `/time` and the mesh datasets. Collective.
-    fn create(
+    /// Creates the mesh file `part`, its groups and the mesh datasets. Collective.
+    fn create_mesh(
         comm: &SimpleCommunicator,
-        path: &Path,
+        part: &Path,
+        xfer: &CollectiveXfer,
         mesh: &MeshPart,
         nodes: Rows,
         cells: Rows,
-    ) -> Result<Created, IoError> {
+    ) -> Result<OpenMesh, IoError> {
         let h5err = |what: &str| {
             let what = what.to_string();
-            move |e| IoError::hdf5(path, what, e)
+            move |e| IoError::hdf5(part, what, e)
         };
         let call = |what: &str| {
             let what = what.to_string();
             move |call| IoError::Hdf5Call {
-                path: path.to_path_buf(),
+                path: part.to_path_buf(),
                 call,
                 what,
             }
         };
-        let file = File::with_options()
-            .with_fapl(|p| p.mpio(comm.as_raw(), None))
-            // Symbol-table leaves of up to 2 * 256 links: a step group's leaf is
-            // split (new leaf + B-tree update) only every few hundred steps.
-            .with_fcpl(|p| p.sym_k(16, SYMBOL_LEAF_K))
-            .create(path)
-            .map_err(h5err("creating the file with the MPI-IO driver"))?;
-        let xfer = CollectiveXfer::new().map_err(call("creating a transfer property list"))?;
+        let file = create_file(comm, part)?;
         let group = |parent: &Group, name: &str| {
             parent
                 .create_group(name)
@@ -554,24 +369,12 @@ impl Inner {
         };
         let mesh_g = group(&file, "mesh")?;
         let static_g = group(&file, "static")?;
-        let fields_g = group(&file, "fields")?;
         let static_groups = [group(&static_g, "node")?, group(&static_g, "cell")?];
-        let field_groups = [group(&fields_g, "node")?, group(&fields_g, "cell")?];
-
-        let time_ds = file
-            .new_dataset::<f64>()
-            .shape(SimpleExtents::new([Extent::resizable(0)]))
-            .chunk([TIME_CHUNK])
-            .alloc_time(Some(AllocTime::Early))
-            .fill_time(FillTime::Never)
-            .create("time")
-            .map_err(h5err("creating /time"))?;
-
         let coords = fixed_dataset::<f64>(&mesh_g, "coordinates", &[nodes.global, 3])
             .map_err(h5err("creating /mesh/coordinates"))?;
         ffi::write_block(
             &coords,
-            &xfer,
+            xfer,
             &[nodes.offset, 0],
             &[nodes.count, 3],
             mesh.coords.as_flattened(),
@@ -582,15 +385,18 @@ impl Inner {
             .map_err(h5err("creating /mesh/topology"))?;
         ffi::write_block(
             &topo,
-            &xfer,
+            xfer,
             &[cells.offset, 0],
             &[cells.count, npc],
             mesh.cells,
         )
         .map_err(call("writing /mesh/topology"))?;
-        drop((coords, topo, mesh_g, static_g, fields_g));
-        ffi::flush_global(&file).map_err(call("flushing after writing the mesh"))?;
-        Ok((file, xfer, time_ds, static_groups, field_groups))
+        drop((coords, topo, mesh_g, static_g));
+        Ok(OpenMesh {
+            static_groups,
+            file,
+            part: part.to_path_buf(),
+        })
     }
 
     fn rows(&self, center: Center) -> Rows {
@@ -607,26 +413,17 @@ impl Inner {
         }
     }
 
-    fn call_err(&self, what: &str) -> impl Fn(ffi::CallError) -> IoError + '_ {
-        let what = what.to_string();
-        move |call| IoError::Hdf5Call {
-            path: self.h5_path.clone(),
-            call,
-            what: what.clone(),
-        }
-    }
-
-    fn h5_err(&self, what: &str) -> impl Fn(hdf5::Error) -> IoError + '_ {
-        let what = what.to_string();
-        move |e| IoError::hdf5(&self.h5_path, what.clone(), e)
-    }
-
     fn write_static(&mut self, center: Center, name: &str, values: &[i32]) -> Result<(), IoError> {
         let rows = self.rows(center);
         let what = format!("writing static {} field {name:?}", center.group());
         let local = check_name("static field", name)
             .and_then(|()| {
-                if self.model.statics.iter().any(|(n, c)| n == name && *c == center) {
+                if self.mesh.is_none() {
+                    Err(format!(
+                        "static {} field {name:?}: static fields are written before the first step",
+                        center.group()
+                    ))
+                } else if self.model.statics.iter().any(|(n, c)| n == name && *c == center) {
                     Err(format!("static {} field {name:?} was already written", center.group()))
                 } else if values.len() as u64 != rows.count {
                     Err(format!(
@@ -644,13 +441,26 @@ impl Inner {
         let sig = Fnv::new().str(name).u64(Self::group_index(center) as u64).0;
         agree_signature(&self.comm, &self.h5_path, &what, local, sig)?;
 
+        let open = self
+            .mesh
+            .as_ref()
+            .unwrap_or_else(|| unreachable!("checked above"));
         let result = (|| {
-            let group = &self.static_groups[Self::group_index(center)];
-            let ds = fixed_dataset::<i32>(group, name, &[rows.global])
-                .map_err(self.h5_err(&format!("creating /static/{}/{name}", center.group())))?;
-            ffi::write_block(&ds, &self.xfer, &[rows.offset], &[rows.count], values)
-                .map_err(self.call_err(&what))?;
-            Ok(())
+            let group = &open.static_groups[Self::group_index(center)];
+            let ds = fixed_dataset::<i32>(group, name, &[rows.global]).map_err(|e| {
+                IoError::hdf5(
+                    &open.part,
+                    format!("creating /static/{}/{name}", center.group()),
+                    e,
+                )
+            })?;
+            ffi::write_block(&ds, &self.xfer, &[rows.offset], &[rows.count], values).map_err(
+                |call| IoError::Hdf5Call {
+                    path: open.part.clone(),
+                    call,
+                    what: what.clone(),
+                },
+            )
         })();
         let result = agree(&self.comm, &self.h5_path, &what, result);
         if result.is_err() {
@@ -658,7 +468,8 @@ impl Inner {
             return result;
         }
         self.model.statics.push((name.to_string(), center));
-        self.publish(&what)
+        self.model.sort();
+        Ok(())
     }
 
     /// Local validation of a step's arguments.
@@ -696,11 +507,7 @@ impl Inner {
                 }
             }
             if let Some(fields) = &self.fields {
-                let known: Vec<&FieldDesc> = fields
-                    .iter()
-                    .map(|f| &f.desc)
-                    .filter(|d| d.center == center)
-                    .collect();
+                let known: Vec<&FieldDesc> = fields.iter().filter(|d| d.center == center).collect();
                 for d in &known {
                     match list.iter().find(|f| f.0 == d.name) {
                         None => {
@@ -752,104 +559,173 @@ impl Inner {
         }
         agree_signature(&self.comm, &self.h5_path, &what, local, sig.0)?;
 
-        let result = self.write_step_data(step, time, lists);
-        let result = agree(&self.comm, &self.h5_path, &what, result);
-        if result.is_err() {
+        // The mesh file is complete: seal it, and make room for the steps.
+        self.seal_mesh()?;
+        if step == 0 {
+            let dir = steps_dir(&self.h5_path);
+            let made = if self.rank == 0 {
+                std::fs::create_dir_all(&dir)
+                    .map_err(|e| IoError::io(&dir, "creating the step directory", e))
+            } else {
+                Ok(())
+            };
+            let made = agree(&self.comm, &dir, "creating the step directory", made);
+            if made.is_err() {
+                self.usable = false;
+                return made;
+            }
+        }
+        if self.fields.is_none() {
+            let mut model = XdmfModel {
+                fields: lists
+                    .iter()
+                    .flat_map(|&(center, list)| {
+                        list.iter().map(move |&(name, components, _)| FieldDesc {
+                            name: name.to_string(),
+                            center,
+                            components,
+                        })
+                    })
+                    .collect(),
+                ..XdmfModel::default()
+            };
+            model.sort();
+            self.model.fields.clone_from(&model.fields);
+            self.fields = Some(model.fields);
+        }
+
+        // The step file: written as `.part`, closed by every rank, then
+        // synced and renamed by rank 0.
+        let path = step_path(&self.h5_path, step);
+        let part = part_path(&path);
+        let written = self.write_step_file(&part, time, lists);
+        let written = agree(&self.comm, &path, &what, written);
+        let published = written.and_then(|()| {
+            let published = if self.rank == 0 {
+                publish(&part, &path)
+            } else {
+                Ok(())
+            };
+            agree(&self.comm, &path, &what, published)
+        });
+        if published.is_err() {
+            if self.rank == 0 {
+                let _ = remove_if_present(&part);
+            }
             self.usable = false;
-            return result;
+            return published;
         }
         self.model.times.push(time);
-        self.publish(&what)
+        self.write_index()
     }
 
-    /// Creates the field datasets (first step only) and writes one step. Collective.
-    fn write_step_data(
-        &mut self,
-        step: usize,
+    /// Writes every field of one step and its time into the new file `part`,
+    /// and closes it. Collective.
+    fn write_step_file(
+        &self,
+        part: &Path,
         time: f64,
         lists: FieldLists<'_, '_>,
     ) -> Result<(), IoError> {
-        if self.fields.is_none() {
-            let mut slots = Vec::new();
-            for (center, list) in lists {
-                for &(name, comps, _) in list {
-                    let parent = &self.field_groups[Self::group_index(center)];
-                    let what = format!("creating group /fields/{}/{name}", center.group());
-                    ffi::create_group_reserving_names(parent, name, STEP_NAMES_RESERVED)
-                        .map_err(self.call_err(&what))?;
-                    let group = parent.group(name).map_err(self.h5_err(&what))?;
-                    slots.push(FieldSlot {
-                        desc: FieldDesc {
-                            name: name.to_string(),
-                            center,
-                            components: comps,
-                        },
-                        group,
-                    });
-                }
+        let h5err = |what: String| move |e| IoError::hdf5(part, what, e);
+        let call = |what: String| {
+            move |call| IoError::Hdf5Call {
+                path: part.to_path_buf(),
+                call,
+                what,
             }
-            self.model.fields = slots.iter().map(|s| s.desc.clone()).collect();
-            self.fields = Some(slots);
-        }
-        let fields = self.fields.as_ref().unwrap_or_else(|| unreachable!());
-        let step_name = xdmf::step_name(step);
-        for slot in fields {
-            let d = &slot.desc;
-            let what = format!(
-                "writing /fields/{}/{}/{step_name}",
-                d.center.group(),
-                d.name
-            );
-            let rows = self.rows(d.center);
-            let list = lists[Self::group_index(d.center)].1;
-            let values = list
-                .iter()
-                .find(|f| f.0 == d.name)
-                .map(|f| f.2)
-                .unwrap_or_else(|| unreachable!("field set checked before"));
-            let comps = d.components as u64;
-            let (shape, start, count) = if comps == 1 {
-                (vec![rows.global], vec![rows.offset], vec![rows.count])
-            } else {
-                (
-                    vec![rows.global, comps],
-                    vec![rows.offset, 0],
-                    vec![rows.count, comps],
-                )
-            };
-            let ds = fixed_dataset::<f64>(&slot.group, &step_name, &shape)
-                .map_err(self.h5_err(&what))?;
-            ffi::write_block(&ds, &self.xfer, &start, &count, values)
-                .map_err(self.call_err(&what))?;
-        }
-        let what = format!("writing /time step {step}");
-        self.time_ds.resize(step + 1).map_err(self.h5_err(&what))?;
-        let (count, data): (u64, &[f64]) = if self.rank == 0 {
-            (1, &[time])
-        } else {
-            (0, &[])
         };
-        ffi::write_block(&self.time_ds, &self.xfer, &[step as u64], &[count], data)
-            .map_err(self.call_err(&what))?;
-        Ok(())
+        let file = create_file(&self.comm, part)?;
+        let written = (|| {
+            let fields_g = file
+                .create_group("fields")
+                .map_err(h5err("creating group /fields".into()))?;
+            let mut groups = Vec::new();
+            for center in [Center::Node, Center::Cell] {
+                let name = center.group();
+                groups.push(
+                    fields_g
+                        .create_group(name)
+                        .map_err(h5err(format!("creating group /fields/{name}")))?,
+                );
+            }
+            let fields = self.fields.as_deref().unwrap_or_default();
+            for d in fields {
+                let what = format!("writing /fields/{}/{}", d.center.group(), d.name);
+                let rows = self.rows(d.center);
+                let values = lists[Self::group_index(d.center)]
+                    .1
+                    .iter()
+                    .find(|f| f.0 == d.name)
+                    .map(|f| f.2)
+                    .unwrap_or_else(|| unreachable!("field set checked before"));
+                let comps = d.components as u64;
+                let (shape, start, count) = if comps == 1 {
+                    (vec![rows.global], vec![rows.offset], vec![rows.count])
+                } else {
+                    (
+                        vec![rows.global, comps],
+                        vec![rows.offset, 0],
+                        vec![rows.count, comps],
+                    )
+                };
+                let group = &groups[Self::group_index(d.center)];
+                let ds =
+                    fixed_dataset::<f64>(group, &d.name, &shape).map_err(h5err(what.clone()))?;
+                ffi::write_block(&ds, &self.xfer, &start, &count, values).map_err(call(what))?;
+            }
+            let time_ds = fixed_dataset::<f64>(&file, "time", &[1])
+                .map_err(h5err("creating /time".into()))?;
+            let (count, data): (u64, &[f64]) = if self.rank == 0 {
+                (1, &[time])
+            } else {
+                (0, &[])
+            };
+            ffi::write_block(&time_ds, &self.xfer, &[0], &[count], data)
+                .map_err(call("writing /time".into()))
+        })();
+        let closed = file.close().map_err(h5err("closing the step file".into()));
+        written.and(closed)
     }
 
-    /// Makes the current state durable and visible: global flush, barrier, then
-    /// rank 0 replaces the XDMF file (only if at least one step exists). Collective.
-    fn publish(&mut self, what: &str) -> Result<(), IoError> {
-        let flushed =
-            ffi::flush_global(&self.file).map_err(self.call_err(&format!("flushing after {what}")));
-        let flushed = agree(&self.comm, &self.h5_path, what, flushed);
-        if flushed.is_err() {
+    /// Collective. Closes the mesh file, if it is still open, and renames it
+    /// into place; then the step files and the index may refer to it.
+    fn seal_mesh(&mut self) -> Result<(), IoError> {
+        let Some(OpenMesh {
+            static_groups,
+            file,
+            part,
+        }) = self.mesh.take()
+        else {
+            return Ok(());
+        };
+        drop(static_groups);
+        let closed = file
+            .close()
+            .map_err(|e| IoError::hdf5(&part, "closing the mesh file", e));
+        let what = "sealing the mesh file";
+        let sealed = agree(&self.comm, &self.h5_path, what, closed).and_then(|()| {
+            let published = if self.rank == 0 {
+                publish(&part, &self.h5_path)
+            } else {
+                Ok(())
+            };
+            agree(&self.comm, &self.h5_path, what, published)
+        });
+        if sealed.is_err() {
+            if self.rank == 0 {
+                let _ = remove_if_present(&part);
+            }
             self.usable = false;
-            return flushed;
         }
-        // Every rank's data and metadata are on disk before the index names them.
-        self.comm.barrier();
-        if !self.model.times.is_empty() {
-            self.rename_into_place()?;
-        }
-        let indexed = if self.rank == 0 && !self.model.times.is_empty() {
+        sealed
+    }
+
+    /// Collective. Rank 0 replaces the XDMF file (`.tmp` and rename) by one
+    /// listing the steps completed so far (the mesh alone if there is none).
+    /// Every file it names is in place.
+    fn write_index(&self) -> Result<(), IoError> {
+        let indexed = if self.rank == 0 {
             xdmf::write_atomic(&self.xdmf_path, &self.model.render())
         } else {
             Ok(())
@@ -862,99 +738,210 @@ impl Inner {
         )
     }
 
-    /// Collective, after a flush and a barrier: renames `<stem>.h5.part` to
-    /// `<stem>.h5` if that is still to be done.
-    fn rename_into_place(&mut self) -> Result<(), IoError> {
-        let Some(part) = self.pending.take() else {
-            return Ok(());
-        };
-        let renamed = if self.rank == 0 {
-            std::fs::rename(&part, &self.h5_path)
-                .map_err(|e| IoError::io(&self.h5_path, "renaming the new HDF5 file into place", e))
-        } else {
-            Ok(())
-        };
-        let renamed = agree(
-            &self.comm,
-            &self.h5_path,
-            "renaming the new HDF5 file",
-            renamed,
-        );
-        if renamed.is_err() {
-            self.usable = false;
-        }
-        renamed
-    }
-
-    /// Final flush, the rename into place if no step did it, mesh-only XDMF
-    /// if no step was written, and close. Collective. A file that never
-    /// reached its place (an error before) is removed.
+    /// Collective. Seals the mesh file if no step did (and then writes the
+    /// mesh-only XDMF file), and closes. A mesh file left open by an error is
+    /// closed and its `.part` removed.
     fn finish(mut self) -> Result<(), IoError> {
         let mut result = Ok(());
         if self.usable {
-            let flushed = ffi::flush_global(&self.file).map_err(|call| IoError::Hdf5Call {
-                path: self.h5_path.clone(),
-                call,
-                what: "flushing before close".into(),
-            });
-            result = agree(&self.comm, &self.h5_path, "flushing before close", flushed);
-            if result.is_ok() {
-                self.comm.barrier();
-                result = self.rename_into_place();
-            }
-            if result.is_ok() && self.model.times.is_empty() {
-                let indexed = if self.rank == 0 {
-                    xdmf::write_atomic(&self.xdmf_path, &self.model.render())
-                } else {
-                    Ok(())
-                };
-                result = agree(
-                    &self.comm,
-                    &self.xdmf_path,
-                    "writing the XDMF file",
-                    indexed,
-                );
+            let first_seal = self.mesh.is_some();
+            result = self.seal_mesh();
+            if result.is_ok() && first_seal && self.model.times.is_empty() {
+                result = self.write_index();
             }
         }
-        let Self {
-            comm,
-            rank,
-            h5_path,
-            fields,
-            time_ds,
-            static_groups,
-            field_groups,
-            file,
-            xfer,
-            pending,
-            ..
-        } = self;
-        drop((fields, time_ds, static_groups, field_groups, xfer));
-        let closed = file
-            .close()
-            .map_err(|e| IoError::hdf5(&h5_path, "closing the file", e));
-        let closed = agree(&comm, &h5_path, "closing the file", closed);
-        if let (Some(part), 0) = (pending, rank) {
-            let _ = std::fs::remove_file(part);
+        if let Some(open) = self.mesh.take() {
+            drop(open.static_groups);
+            let _ = open.file.close();
+            if self.rank == 0 {
+                let _ = remove_if_present(&open.part);
+            }
         }
-        result.and(closed)
+        result
     }
 }
 
-/// `<stem>.h5.part`: the HDF5 file while its mesh is being written.
-pub(crate) fn part_path(h5: &Path) -> PathBuf {
-    let mut name = h5.as_os_str().to_owned();
-    name.push(".part");
-    PathBuf::from(name)
-}
+#[cfg(test)]
+mod tests {
+    use super::super::{read_cell_field_step, read_node_field_step, read_static_node_field_i32};
+    use super::super::{read_mesh, read_times};
+    use super::*;
+    use crate::testutil::on_one_rank;
 
-/// A contiguous, early-allocated dataset of fixed shape. Collective.
-fn fixed_dataset<T: H5Type>(group: &Group, name: &str, shape: &[u64]) -> hdf5::Result<Dataset> {
-    let shape: Vec<usize> = shape.iter().map(|&d| d as usize).collect();
-    group
-        .new_dataset::<T>()
-        .shape(shape)
-        .alloc_time(Some(AllocTime::Early))
-        .fill_time(FillTime::Never)
-        .create(name)
+    const COORDS: [[f64; 3]; 5] = [
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [0.0, 0.0, 1.0],
+        [1.0, 1.0, 1.0],
+    ];
+    const CELLS: [u32; 8] = [0, 1, 2, 3, 1, 2, 3, 4];
+
+    fn mesh() -> MeshPart<'static> {
+        MeshPart {
+            global_nodes: 5,
+            node_offset: 0,
+            coords: &COORDS,
+            global_cells: 2,
+            cell_offset: 0,
+            cells: &CELLS,
+            nodes_per_cell: 4,
+        }
+    }
+
+    /// Node temperature `t + row` and cell stress rows `t * (row + 1)` at time `t`.
+    fn step(w: &mut TimeSeriesWriter, t: f64) -> Result<(), IoError> {
+        let temp: Vec<f64> = (0..5).map(|r| t + f64::from(r)).collect();
+        let stress: Vec<f64> = (0..12).map(|i| t * f64::from(i / 6 + 1)).collect();
+        w.write_step(t, &[("temperature", 1, &temp)], &[("stress", 6, &stress)])
+    }
+
+    fn names(dir: &Path) -> Vec<String> {
+        let mut v: Vec<String> = std::fs::read_dir(dir)
+            .map(|d| {
+                d.flatten()
+                    .map(|e| e.file_name().to_string_lossy().into_owned())
+                    .collect()
+            })
+            .unwrap_or_default();
+        v.sort();
+        v
+    }
+
+    fn listed(xdmf: &Path) -> usize {
+        std::fs::read_to_string(xdmf)
+            .unwrap()
+            .matches("<Time ")
+            .count()
+    }
+
+    #[test]
+    fn each_file_appears_complete_under_its_final_name() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        on_one_rank(|comm| {
+            let mut w = TimeSeriesWriter::create(comm, d, "s", &mesh()).unwrap();
+            w.write_static_node_field_i32("node_id", &[0, 1, 2, 3, 4])
+                .unwrap();
+            // The mesh file is still being written: only its `.part` exists.
+            assert_eq!(names(d), ["s.h5.part"]);
+            for (k, t) in [0.0, 0.5, 1.0].into_iter().enumerate() {
+                step(&mut w, t).unwrap();
+                assert_eq!(names(d), ["s.h5", "s.xdmf", "s_steps"]);
+                let files: Vec<String> = (0..=k).map(xdmf::step_file_name).collect();
+                assert_eq!(names(&d.join("s_steps")), files);
+                assert_eq!(listed(&d.join("s.xdmf")), k + 1);
+            }
+            // Static fields belong to the mesh file, written before the steps.
+            let e = w
+                .write_static_cell_field_i32("late", &[1, 2])
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains("before the first step"), "{e}");
+            step(&mut w, 1.5).unwrap();
+            w.close().unwrap();
+        });
+        let h5 = d.join("s.h5");
+        assert_eq!(read_times(&h5).unwrap(), [0.0, 0.5, 1.0, 1.5]);
+        assert_eq!(read_mesh(&h5).unwrap().coords, COORDS);
+        assert_eq!(
+            read_static_node_field_i32(&h5, "node_id").unwrap(),
+            [0, 1, 2, 3, 4]
+        );
+        assert_eq!(
+            read_node_field_step(&h5, "temperature", 2).unwrap(),
+            [1.0, 2.0, 3.0, 4.0, 5.0]
+        );
+        let s = read_cell_field_step(&h5, "stress", 3).unwrap();
+        assert_eq!(s.len(), 12);
+        assert!(s[..6].iter().all(|&v| v == 1.5) && s[6..].iter().all(|&v| v == 3.0));
+        let e = read_node_field_step(&h5, "temperature", 4)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("the series has 4 steps"), "{e}");
+        let text = std::fs::read_to_string(d.join("s.xdmf")).unwrap();
+        assert!(text.contains(">s_steps/000003.h5:/fields/cell/stress</DataItem>"));
+        assert!(text.contains(">s.h5:/static/node/node_id</DataItem>"));
+    }
+
+    #[test]
+    fn a_series_without_steps_indexes_its_mesh() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        on_one_rank(|comm| {
+            let w = TimeSeriesWriter::create(comm, d, "m", &mesh()).unwrap();
+            w.close().unwrap();
+        });
+        assert_eq!(names(d), ["m.h5", "m.xdmf"]);
+        assert_eq!(listed(&d.join("m.xdmf")), 0);
+        assert!(read_times(&d.join("m.h5")).unwrap().is_empty());
+    }
+
+    #[test]
+    fn create_removes_an_old_series_and_its_leftovers() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        let steps = d.join("s_steps");
+        std::fs::create_dir_all(&steps).unwrap();
+        for f in ["000000.h5", "000007.h5", "000008.h5.part"] {
+            std::fs::write(steps.join(f), "old").unwrap();
+        }
+        for f in ["s.h5", "s.xdmf", "s.xdmf.tmp", "s.h5.part", "other.h5"] {
+            std::fs::write(d.join(f), "old").unwrap();
+        }
+        on_one_rank(|comm| {
+            let mut w = TimeSeriesWriter::create(comm, d, "s", &mesh()).unwrap();
+            assert_eq!(names(d), ["other.h5", "s.h5.part"]);
+            step(&mut w, 0.0).unwrap();
+            w.close().unwrap();
+        });
+        assert_eq!(names(&steps), ["000000.h5"]);
+        assert_eq!(read_times(&d.join("s.h5")).unwrap(), [0.0]);
+    }
+
+    #[test]
+    fn reopen_keeps_the_steps_up_to_the_checkpoint() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        let ids = [0, 1, 2, 3, 4];
+        on_one_rank(|comm| {
+            let mut w = TimeSeriesWriter::create(comm, d, "s", &mesh()).unwrap();
+            w.write_static_node_field_i32("node_id", &ids).unwrap();
+            w.write_static_cell_field_i32("body", &[0, 0]).unwrap();
+            for t in [0.0, 1.0, 2.0, 3.0] {
+                step(&mut w, t).unwrap();
+            }
+            w.close().unwrap();
+        });
+        let first = std::fs::read_to_string(d.join("s.xdmf")).unwrap();
+        // A killed run's leftover.
+        std::fs::write(d.join("s_steps/000004.h5.part"), "partial").unwrap();
+        on_one_rank(|comm| {
+            let mut w = TimeSeriesWriter::reopen(comm, d, "s", &mesh(), &ids, 1.0).unwrap();
+            assert_eq!(w.steps(), 2);
+            assert_eq!(listed(&d.join("s.xdmf")), 2);
+            assert_eq!(names(&d.join("s_steps")), ["000000.h5", "000001.h5"]);
+            // The field set is the series': another one is refused.
+            let e = w
+                .write_step(1.5, &[("other", 1, &[0.0; 5])], &[])
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains("missing"), "{e}");
+            for t in [2.0, 3.0] {
+                step(&mut w, t).unwrap();
+            }
+            w.close().unwrap();
+        });
+        // Continued, the series is the uninterrupted one, index included.
+        assert_eq!(read_times(&d.join("s.h5")).unwrap(), [0.0, 1.0, 2.0, 3.0]);
+        assert_eq!(std::fs::read_to_string(d.join("s.xdmf")).unwrap(), first);
+        // Other rows (another partition) are refused, naming the reason.
+        let e = on_one_rank(|comm| {
+            TimeSeriesWriter::reopen(comm, d, "s", &mesh(), &[1, 0, 2, 3, 4], 1.0)
+                .err()
+                .unwrap()
+                .to_string()
+        });
+        assert!(e.contains("another order"), "{e}");
+    }
 }

@@ -1,64 +1,81 @@
 //! Result output: parallel HDF5 time series with an XDMF index, CSV histories,
 //! and small serial readers used by tests.
 //!
-//! # Time series (`<dir>/<stem>.h5` + `<dir>/<stem>.xdmf`)
+//! # Time series (`<dir>/<stem>.h5`, `<dir>/<stem>_steps/`, `<dir>/<stem>.xdmf`)
 //!
-//! [`TimeSeriesWriter`] writes one HDF5 file through the MPI-IO driver. Every rank
-//! contributes the contiguous block of rows it owns (see [`MeshPart`]); rows are
-//! written with hyperslab selections and MPI-IO *collective* transfer. Ranks that
-//! own no rows take part with empty selections. The file layout is:
+//! [`TimeSeriesWriter`] writes a series as several HDF5 files through the MPI-IO
+//! driver: the *mesh file* `<stem>.h5` (mesh and static fields, written once) and
+//! one *step file* `<stem>_steps/<k:06>.h5` per output step `k` = 0, 1, ... Every
+//! rank contributes the contiguous block of rows it owns (see [`MeshPart`]); rows
+//! are written with hyperslab selections and MPI-IO *collective* transfer. Ranks
+//! that own no rows take part with empty selections. The run passes rows in global
+//! id order, so one and two ranks write the same datasets (the static `rank`
+//! field aside). The layout is:
 //!
-//! | path                          | shape    | type | content                                |
-//! |-------------------------------|----------|------|----------------------------------------|
-//! | `/mesh/coordinates`           | `[N, 3]` | f64  | node coordinates                       |
-//! | `/mesh/topology`              | `[E, 4]` | u32  | Tet4 connectivity, global node rows    |
-//! | `/static/node/<name>`         | `[N]`    | i32  | static per-node fields (body id, ...)  |
-//! | `/static/cell/<name>`         | `[E]`    | i32  | static per-cell fields                 |
-//! | `/time`                       | `[S]`    | f64  | output times, one per completed step   |
-//! | `/fields/node/<name>/<k:06>`  | `[N, c]` | f64  | node field at step `k` (`[N]` if c = 1) |
-//! | `/fields/cell/<name>/<k:06>`  | `[E, c]` | f64  | cell field at step `k` (`[E]` if c = 1) |
+//! | file                      | path                  | shape    | type | content                               |
+//! |---------------------------|-----------------------|----------|------|---------------------------------------|
+//! | `<stem>.h5`               | `/mesh/coordinates`   | `[N, 3]` | f64  | node coordinates                      |
+//! | `<stem>.h5`               | `/mesh/topology`      | `[E, 4]` | u32  | Tet4 connectivity, global node rows   |
+//! | `<stem>.h5`               | `/static/node/<name>` | `[N]`    | i32  | static per-node fields (body id, ...) |
+//! | `<stem>.h5`               | `/static/cell/<name>` | `[E]`    | i32  | static per-cell fields                |
+//! | `<stem>_steps/<k:06>.h5`  | `/time`               | `[1]`    | f64  | the time of step `k`                  |
+//! | `<stem>_steps/<k:06>.h5`  | `/fields/node/<name>` | `[N, c]` | f64  | node field (`[N]` if c = 1)           |
+//! | `<stem>_steps/<k:06>.h5`  | `/fields/cell/<name>` | `[E, c]` | f64  | cell field (`[E]` if c = 1)           |
 //!
 //! A field of 6 components is a symmetric tensor, its rows in XDMF `Tensor6`
 //! order xx, xy, xz, yy, yz, zz ([`TENSOR6_ORDER`], [`tensor6`]), which the
-//! XDMF file marks `AttributeType="Tensor6"`.
+//! XDMF file marks `AttributeType="Tensor6"`. (A triangle grid, the joint
+//! output, has `[E, 3]` topology.)
 //!
-//! `/time` is chunked and unlimited; every other dataset is contiguous and
-//! allocated when created. The set of time-dependent fields is fixed by the first
-//! [`TimeSeriesWriter::write_step`] call.
+//! Every dataset is contiguous and allocated when created. The static fields
+//! are written before the first step; the set of time-dependent fields is fixed
+//! by the first [`TimeSeriesWriter::write_step`] call. The readers ([`read_times`],
+//! [`read_node_field_step`], ...) take the mesh file's path and find the step
+//! files beside it ([`steps_dir`], [`step_path`]): the steps of a series are the
+//! step files present from `000000.h5` on, up to the first one missing.
 //!
 //! The XDMF file (XDMF 3 syntax) holds a temporal collection with one uniform grid
-//! per completed step; static fields are repeated in every step. It refers to the
-//! HDF5 file by its bare file name, so both files can be moved together. It uses
-//! plain HDF `DataItem`s only (no `HyperSlab`), because ParaView's default reader
-//! for `.xdmf` (Xdmf3ReaderS) drops hyperslab attributes; it was checked with
-//! ParaView 5.11's "XDMF Reader", Xdmf3ReaderS and Xdmf3ReaderT.
+//! per completed step; the mesh and static fields, from the mesh file, are repeated
+//! in every step, the fields come from the step's file. It refers to the files by
+//! names relative to itself (`<stem>.h5:/mesh/...`,
+//! `<stem>_steps/000012.h5:/fields/...`), so the index, the mesh file and the step
+//! directory can be moved together. It uses plain HDF `DataItem`s only (no
+//! `HyperSlab`), because ParaView's default reader for `.xdmf` (Xdmf3ReaderS)
+//! drops hyperslab attributes; it was checked with ParaView 5.11's "XDMF Reader",
+//! Xdmf3ReaderS and Xdmf3ReaderT.
 //!
 //! ## Crash safety
 //!
-//! After each step the HDF5 file is flushed (`H5Fflush`, global scope), all ranks
-//! synchronise, and only then rank 0 rewrites the XDMF file by writing
-//! `<stem>.xdmf.tmp` and renaming it over `<stem>.xdmf`. A process killed at any
-//! moment therefore leaves an XDMF file that lists only steps whose data were
-//! flushed. Between two flushes the HDF5 metadata changes only by in-place updates
-//! (group B-tree, symbol-table and local-heap blocks, the `/time` extent) and newly
-//! appended blocks; nothing is freed and reused, so the blocks of the last flushed
-//! state stay intact. (Each field's step group reserves local-heap room for 16384
-//! step names up front because a growing heap would be moved and its old block
-//! freed; symbol-table leaves hold 512 links so that they rarely split.) The file
-//! uses the default (earliest) format bounds on purpose: the 1.10
-//! "latest" superblock carries open-for-write flags that make an unclosed file
-//! unreadable without `h5clear`.
+//! No file is ever modified under its final name. Each HDF5 file is created
+//! under `<name>.part`, written, and closed by every rank (`H5Fclose`: all data
+//! and metadata written); after all ranks agree, rank 0 syncs it (`fsync`) and
+//! renames it to its final name. Only then does rank 0 rewrite the XDMF file, by
+//! writing and syncing `<stem>.xdmf.tmp` and renaming it over `<stem>.xdmf`. The
+//! order is: the mesh file (at the first step, or at the close if there is
+//! none), then for each step its step file, then the index. A rename replaces a
+//! name atomically, so after a kill (SIGKILL, at any moment, of any rank):
 //!
-//! The HDF5 file is built as `<stem>.h5.part` and renamed to `<stem>.h5` only once
-//! the first step is flushed (or, without steps, at the closing flush), so
-//! `<stem>.h5` always has a complete mesh, and the first step's metadata (its new
-//! groups and their reserved heaps, the run's largest flush) never change a file of
-//! that name. Later flushes are small (an object header per field, in-place symbol
-//! table and heap updates), but a kill in the middle of one is not covered by the
-//! scheme. A run that fails
-//! before its first step should call [`remove_outputs`] so that no half-written
-//! output is left behind; [`TimeSeriesWriter::create`] removes its own files when
-//! it fails.
+//! - every `<stem>.h5` and `<stem>_steps/<k:06>.h5` is a closed, complete HDF5
+//!   file (h5dump and ParaView read it); a file caught being written is only a
+//!   `.part`, which no reader and no index looks at;
+//! - `<stem>.xdmf` is whole, and it lists only steps whose files were in place
+//!   before it was written (at most one more step file than it lists may exist:
+//!   a kill between the step's rename and the index's);
+//! - the steps present from `000000.h5` on (what [`read_times`] returns) are a
+//!   prefix of the series.
+//!
+//! The syncs before the renames extend this to a crash of the machine, as far
+//! as the file system keeps the order of a sync and a later rename. A new series
+//! removes an old one of the same stem first: its index, then its step files,
+//! then its mesh file ([`remove_outputs`]), so no index names a removed file. A
+//! series continued in place after a restart ([`TimeSeriesWriter::reopen`])
+//! keeps its mesh file untouched, rewrites the index for the steps up to the
+//! checkpoint, and only then removes the later step files and any `.part`
+//! leftover, in step order. A run that fails before its first step should call
+//! [`remove_outputs`] so that no half-written output is left behind;
+//! [`TimeSeriesWriter::create`] removes its own files when it fails. Each step
+//! costs one small file created, closed and synced, whatever the number of steps
+//! before it; the index, rewritten per step, grows with the number of steps.
 //!
 //! # Histories
 //!
@@ -188,6 +205,7 @@ impl IoError {
 }
 
 /// Paths of the output files of a time series: `(<dir>/<stem>.h5, <dir>/<stem>.xdmf)`.
+/// The steps are in [`steps_dir`]`(<dir>/<stem>.h5)`.
 pub fn output_paths(dir: &Path, stem: &str) -> (PathBuf, PathBuf) {
     (
         dir.join(format!("{stem}.h5")),
@@ -195,8 +213,24 @@ pub fn output_paths(dir: &Path, stem: &str) -> (PathBuf, PathBuf) {
     )
 }
 
-/// Removes the time-series outputs `<stem>.h5`, `<stem>.xdmf` and leftovers
-/// `<stem>.h5.part`, `<stem>.xdmf.tmp` from `dir`; missing files are ignored.
+/// The directory of the step files of the series whose mesh file is `h5`:
+/// `<dir>/<stem>_steps` for `<dir>/<stem>.h5`.
+pub fn steps_dir(h5: &Path) -> PathBuf {
+    let stem = h5.file_stem().unwrap_or_default().to_string_lossy();
+    h5.with_file_name(format!("{stem}_steps"))
+}
+
+/// The file of output step `step` (0, 1, ...) of the series whose mesh file
+/// is `h5`: `<dir>/<stem>_steps/<step:06>.h5`.
+pub fn step_path(h5: &Path, step: usize) -> PathBuf {
+    steps_dir(h5).join(xdmf::step_file_name(step))
+}
+
+/// Removes the time series `<stem>` from `dir`: first the index
+/// `<stem>.xdmf` (and a leftover `<stem>.xdmf.tmp`), then the step directory
+/// `<stem>_steps` with its files, then the mesh file `<stem>.h5` (and a
+/// leftover `<stem>.h5.part`); missing files are ignored. In that order no
+/// index ever names a removed file.
 ///
 /// Not collective: call it on rank 0 (calling it on several ranks is harmless).
 /// Use it when a run fails before its first output step.
@@ -204,12 +238,19 @@ pub fn remove_outputs(dir: &Path, stem: &str) -> Result<(), IoError> {
     let (h5, xdmf) = output_paths(dir, stem);
     let tmp = xdmf::tmp_path(&xdmf);
     let part = hdf5_out::part_path(&h5);
-    for path in [&h5, &part, &xdmf, &tmp] {
-        match std::fs::remove_file(path) {
-            Ok(()) => {}
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
-            Err(e) => return Err(IoError::io(path, "removing output file", e)),
+    let ignore_missing = |path: &Path, r: std::io::Result<()>| match r {
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+            Err(IoError::io(path, "removing output file", e))
         }
+        _ => Ok(()),
+    };
+    for path in [&xdmf, &tmp] {
+        ignore_missing(path, std::fs::remove_file(path))?;
+    }
+    let steps = steps_dir(&h5);
+    ignore_missing(&steps, std::fs::remove_dir_all(&steps))?;
+    for path in [&h5, &part] {
+        ignore_missing(path, std::fs::remove_file(path))?;
     }
     Ok(())
 }

@@ -1,12 +1,15 @@
-//! Serial readers for time-series files (tests, post-processing). They open the
-//! file read-only with HDF5's default (POSIX) driver on the calling rank only.
+//! Serial readers for time series (tests, post-processing). They open the
+//! files read-only with HDF5's default (POSIX) driver on the calling rank only.
+//! A series is named by its mesh file `<dir>/<stem>.h5`; its steps are the
+//! step files `<dir>/<stem>_steps/000000.h5`, `000001.h5`, ... present under
+//! their final names, up to the first one missing.
 
 use std::path::Path;
 
 use hdf5::{Dataset, File, H5Type};
 
-use super::xdmf::{step_name, Center};
-use super::IoError;
+use super::xdmf::Center;
+use super::{step_path, IoError};
 
 fn open(path: &Path) -> Result<File, IoError> {
     File::open(path).map_err(|e| IoError::hdf5(path, "opening read-only", e))
@@ -24,44 +27,62 @@ fn read_all<T: H5Type>(path: &Path, name: &str) -> Result<Vec<T>, IoError> {
         .map_err(|e| IoError::hdf5(path, format!("reading {name}"), e))
 }
 
+/// The time of one step file: its `/time`, a single value.
+pub(crate) fn read_step_time(step_file: &Path) -> Result<f64, IoError> {
+    match read_all::<f64>(step_file, "/time")?[..] {
+        [t] => Ok(t),
+        ref other => Err(IoError::invalid(
+            step_file,
+            format!("/time holds {} values, expected 1", other.len()),
+        )),
+    }
+}
+
+/// Number of steps of the series of mesh file `h5`: step files present
+/// from `000000.h5` on, up to the first one missing.
+fn count_steps(h5: &Path) -> usize {
+    (0..).take_while(|&k| step_path(h5, k).is_file()).count()
+}
+
 fn read_field_step(
     path: &Path,
     center: Center,
     field: &str,
     step: usize,
 ) -> Result<Vec<f64>, IoError> {
-    let file = open(path)?;
-    // `/time` lists the completed steps; after a crash a later step may be partial.
-    let steps = dataset(&file, path, "/time")?.size();
-    if step >= steps {
+    let file = step_path(path, step);
+    if !file.is_file() {
         return Err(IoError::invalid(
             path,
             format!(
-                "{} field {field:?}: step {step} requested, the file has {steps} steps",
-                center.group()
+                "{} field {field:?}: step {step} requested, the series has {} steps",
+                center.group(),
+                count_steps(path)
             ),
         ));
     }
-    let name = format!("/fields/{}/{field}/{}", center.group(), step_name(step));
-    dataset(&file, path, &name)?
-        .read_raw::<f64>()
-        .map_err(|e| IoError::hdf5(path, format!("reading {name}"), e))
+    read_all(&file, &format!("/fields/{}/{field}", center.group()))
 }
 
 /// Reads step `step` of the node field `field` (all rows, row major: `N * components`
-/// values). Serial, rank-local.
+/// values) from the step file of the series of mesh file `path`. Serial, rank-local.
 pub fn read_node_field_step(path: &Path, field: &str, step: usize) -> Result<Vec<f64>, IoError> {
     read_field_step(path, Center::Node, field, step)
 }
 
-/// Reads step `step` of the cell field `field` (all rows, row major). Serial, rank-local.
+/// Reads step `step` of the cell field `field` (all rows, row major) from the
+/// step file of the series of mesh file `path`. Serial, rank-local.
 pub fn read_cell_field_step(path: &Path, field: &str, step: usize) -> Result<Vec<f64>, IoError> {
     read_field_step(path, Center::Cell, field, step)
 }
 
-/// Reads `/time`: the times of all steps stored in the file. Serial, rank-local.
+/// Reads the times of all steps of the series of mesh file `path` (the
+/// `/time` of each step file, in step order). Serial, rank-local.
 pub fn read_times(path: &Path) -> Result<Vec<f64>, IoError> {
-    read_all(path, "/time")
+    drop(open(path)?);
+    (0..count_steps(path))
+        .map(|k| read_step_time(&step_path(path, k)))
+        .collect()
 }
 
 /// Reads the static node field `/static/node/<name>`. Serial, rank-local.

@@ -1,4 +1,6 @@
 //! XDMF index of a time series, rewritten atomically after every completed step.
+//! The mesh and static fields come from the mesh file, each step's fields from
+//! that step's own file; both are referred to by names relative to the index.
 
 use std::fmt::Write as _;
 use std::io::Write as _;
@@ -52,15 +54,18 @@ pub(crate) struct FieldDesc {
 /// Everything needed to render the XDMF file.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct XdmfModel {
-    /// File name (no directory) of the HDF5 file, relative to the XDMF file.
+    /// File name (no directory) of the mesh file, relative to the XDMF file.
     pub h5_name: String,
+    /// Name of the directory of the step files, relative to the XDMF file.
+    pub steps_name: String,
     pub nodes: u64,
     pub cells: u64,
     /// 4 (Tet4) or 3 (triangles).
     pub nodes_per_cell: usize,
-    /// Static i32 fields: `(name, center)`.
+    /// Static i32 fields: `(name, center)`, in [`XdmfModel::sort`] order.
     pub statics: Vec<(String, Center)>,
-    /// Time-dependent fields, identical in every step.
+    /// Time-dependent fields, identical in every step, in
+    /// [`XdmfModel::sort`] order.
     pub fields: Vec<FieldDesc>,
     /// Times of the completed steps.
     pub times: Vec<f64>,
@@ -82,6 +87,17 @@ fn escape(s: &str) -> String {
 }
 
 impl XdmfModel {
+    /// Puts the static and time-dependent fields in one order, node fields
+    /// first, then by name, so that a series continued after a restart
+    /// (which finds its fields in the files) is indexed like the original.
+    pub(crate) fn sort(&mut self) {
+        let key = |c: Center| c != Center::Node;
+        self.statics
+            .sort_by(|a, b| (key(a.1), &a.0).cmp(&(key(b.1), &b.0)));
+        self.fields
+            .sort_by(|a, b| (key(a.center), &a.name).cmp(&(key(b.center), &b.name)));
+    }
+
     /// Topology, geometry and static attributes: identical for every step.
     fn mesh_block(&self, indent: &str) -> String {
         let h5 = escape(&self.h5_name);
@@ -130,7 +146,7 @@ impl XdmfModel {
             s.push_str("    </Grid>\n");
         } else {
             let mesh = self.mesh_block("        ");
-            let h5 = escape(&self.h5_name);
+            let steps = escape(&self.steps_name);
             s.push_str(
                 "    <Grid Name=\"TimeSeries\" GridType=\"Collection\" CollectionType=\"Temporal\">\n",
             );
@@ -156,11 +172,11 @@ impl XdmfModel {
                     let _ = writeln!(
                         s,
                         "        <Attribute Name=\"{name}\" AttributeType=\"{ty}\" Center=\"{center}\">\n\
-                         \x20         <DataItem Dimensions=\"{dims}\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">{h5}:/fields/{g}/{name}/{step}</DataItem>\n\
+                         \x20         <DataItem Dimensions=\"{dims}\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">{steps}/{file}:/fields/{g}/{name}</DataItem>\n\
                          \x20       </Attribute>",
                         center = f.center.xdmf(),
                         g = f.center.group(),
-                        step = step_name(k),
+                        file = step_file_name(k),
                     );
                 }
                 s.push_str("      </Grid>\n");
@@ -172,9 +188,19 @@ impl XdmfModel {
     }
 }
 
-/// Name of the dataset holding step `k` of a field: `000012`.
-pub(crate) fn step_name(k: usize) -> String {
-    format!("{k:06}")
+/// Name of the file holding step `k`, inside the steps directory: `000012.h5`.
+pub(crate) fn step_file_name(k: usize) -> String {
+    format!("{k:06}.h5")
+}
+
+/// The step number of a step file's name (`000012.h5` is 12), `None` for
+/// any other name (a `.part` file among them).
+pub(crate) fn step_of_file_name(name: &str) -> Option<usize> {
+    let digits = name.strip_suffix(".h5")?;
+    if digits.len() < 6 || !digits.bytes().all(|b| b.is_ascii_digit()) {
+        return None;
+    }
+    digits.parse().ok()
 }
 
 /// `<path>.tmp`: the temporary file renamed over the XDMF file.
@@ -206,6 +232,7 @@ mod tests {
     fn renders_steps() {
         let m = XdmfModel {
             h5_name: "out.h5".into(),
+            steps_name: "out_steps".into(),
             nodes: 5,
             cells: 2,
             nodes_per_cell: 4,
@@ -219,7 +246,8 @@ mod tests {
         };
         let s = m.render();
         assert_eq!(s.matches("<Grid Name=\"step_").count(), 2);
-        assert!(s.contains("out.h5:/fields/node/u/000001</DataItem>"));
+        assert!(s.contains(">out_steps/000001.h5:/fields/node/u</DataItem>"));
+        assert!(s.contains(">out.h5:/mesh/coordinates</DataItem>"));
         assert!(s.contains("Dimensions=\"5 3\""));
         assert!(s.contains("out.h5:/static/node/body"));
         assert!(s.contains("<Time Value=\"5e-1\"/>"));
@@ -230,5 +258,55 @@ mod tests {
         }
         .render();
         assert!(tri.contains("TopologyType=\"Triangle\"") && tri.contains("Dimensions=\"2 3\""));
+    }
+
+    #[test]
+    fn step_file_names_round_trip() {
+        assert_eq!(step_file_name(12), "000012.h5");
+        assert_eq!(step_of_file_name("000012.h5"), Some(12));
+        assert_eq!(step_of_file_name("1234567.h5"), Some(1_234_567));
+        for other in ["000012.h5.part", "12.h5", "00001a.h5", "000012.xdmf", ".h5"] {
+            assert_eq!(step_of_file_name(other), None, "{other}");
+        }
+    }
+
+    #[test]
+    fn sort_puts_node_fields_first_then_names() {
+        let field = |name: &str, center| FieldDesc {
+            name: name.into(),
+            center,
+            components: 1,
+        };
+        let mut m = XdmfModel {
+            statics: vec![
+                ("rank".into(), Center::Cell),
+                ("node_id".into(), Center::Node),
+                ("body".into(), Center::Cell),
+                ("body".into(), Center::Node),
+            ],
+            fields: vec![
+                field("stress", Center::Cell),
+                field("temperature", Center::Node),
+                field("displacement", Center::Node),
+                field("owner_rank", Center::Cell),
+            ],
+            ..XdmfModel::default()
+        };
+        m.sort();
+        let statics: Vec<_> = m.statics.iter().map(|(n, c)| (n.as_str(), *c)).collect();
+        assert_eq!(
+            statics,
+            [
+                ("body", Center::Node),
+                ("node_id", Center::Node),
+                ("body", Center::Cell),
+                ("rank", Center::Cell)
+            ]
+        );
+        let fields: Vec<_> = m.fields.iter().map(|f| f.name.as_str()).collect();
+        assert_eq!(
+            fields,
+            ["displacement", "temperature", "owner_rank", "stress"]
+        );
     }
 }

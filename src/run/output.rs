@@ -253,7 +253,7 @@ impl Output {
         if let Some(Mechanics { domain: m, .. }) = mech {
             node_fields.push(("displacement", 3, m.displacement()));
             node_fields.push(("velocity", 3, m.velocity()));
-            // Cell fields in name order (the order a continued series lists them).
+            // Cell fields in name order (the writer indexes fields by name anyway).
             if self.owners_move {
                 let rank = f64::from(comm.rank());
                 cell_fields.push(("owner_rank", 1, vec![rank; part.num_elements()]));

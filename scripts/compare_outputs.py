@@ -3,8 +3,9 @@
 
     compare_outputs.py REF_DIR NEW_DIR [--rtol 1e-10]
 
-For every case directory in REF_DIR, every HDF5 file (series and
-checkpoint) must hold the same datasets in NEW_DIR. Temperatures (datasets
+For every case directory in REF_DIR, every HDF5 file (a series' mesh file
+`<stem>.h5` and its step files `<stem>_steps/*.h5`, and the checkpoint)
+must hold the same datasets in NEW_DIR, and a series the same step files. Temperatures (datasets
 whose path names `temperature`, and the checkpoint's heat account) must
 agree to --rtol of their largest magnitude (solver tolerance and summation
 order), and so do all floating-point datasets of the cases named with
@@ -93,6 +94,45 @@ class Order:
         return out
 
 
+def compare_file(a, case, label, ra, na, oa, ob, tmp):
+    """Compares one HDF5 file of the reference and the new run (rows put in
+    global id order by `oa` and `ob`); returns (differences, exact, worst)."""
+    bad, exact, worst = 0, 0, 0.0
+    dr, dn = datasets(ra), datasets(na)
+    if dr != dn:
+        print("%s/%s: datasets differ: %s" % (case, label, sorted(set(dr) ^ set(dn))))
+        return 1, 0, 0.0
+    for ds in dr:
+        if ds in PARTITION:
+            continue
+        x, y = raw(ra, ds, tmp), raw(na, ds, tmp)
+        x, y = oa.rows(ds, x, 0), ob.rows(ds, y, 0)
+        if any(t in ds for t in SUMMED) and len(x) == len(y) and len(x) % 8 == 0:
+            su, sv = sum(array.array("d", x)), sum(array.array("d", y))
+            if abs(su - sv) > a.rtol * max(abs(su), 1e-300):
+                print("%s/%s %s: sums %.17g and %.17g differ" % (case, label, ds, su, sv))
+                bad += 1
+            else:
+                exact += 1
+        elif (any(t in ds for t in TOLERANT) or case in a.tolerant_case) and len(x) == len(
+            y
+        ) and len(x) % 8 == 0 and itemsize(na, ds) == 8:
+            u, v = array.array("d", x), array.array("d", y)
+            scale = max([abs(t) for t in u] + [1e-300])
+            diff = max([abs(p - q) for p, q in zip(u, v)] + [0.0]) / scale
+            worst = max(worst, diff)
+            rtol = a.rtol if any(t in ds for t in TOLERANT) else a.case_rtol
+            if diff > rtol:
+                print("%s/%s %s: relative difference %.3e > %.1e" % (case, label, ds, diff, rtol))
+                bad += 1
+        elif x != y:
+            print("%s/%s %s: not bitwise equal" % (case, label, ds))
+            bad += 1
+        else:
+            exact += 1
+    return bad, exact, worst
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("ref")
@@ -123,40 +163,22 @@ def main():
                     print("%s: %s missing" % (case, na))
                     bad += 1
                     continue
-                dr, dn = datasets(ra), datasets(na)
-                if dr != dn:
-                    print("%s/%s: datasets differ: %s" % (case, name, sorted(set(dr) ^ set(dn))))
-                    bad += 1
-                    continue
                 oa, ob = Order(ra, tmp), Order(na, tmp)
-                for ds in dr:
-                    if ds in PARTITION:
-                        continue
-                    x, y = raw(ra, ds, tmp), raw(na, ds, tmp)
-                    x, y = oa.rows(ds, x, 0), ob.rows(ds, y, 0)
-                    if any(t in ds for t in SUMMED) and len(x) == len(y) and len(x) % 8 == 0:
-                        su, sv = sum(array.array("d", x)), sum(array.array("d", y))
-                        if abs(su - sv) > a.rtol * max(abs(su), 1e-300):
-                            print("%s/%s %s: sums %.17g and %.17g differ" % (case, name, ds, su, sv))
-                            bad += 1
-                        else:
-                            exact += 1
-                    elif (any(t in ds for t in TOLERANT) or case in a.tolerant_case) and len(x) == len(
-                        y
-                    ) and len(x) % 8 == 0 and itemsize(na, ds) == 8:
-                        u, v = array.array("d", x), array.array("d", y)
-                        scale = max([abs(t) for t in u] + [1e-300])
-                        diff = max([abs(p - q) for p, q in zip(u, v)] + [0.0]) / scale
-                        worst = max(worst, diff)
-                        rtol = a.rtol if any(t in ds for t in TOLERANT) else a.case_rtol
-                        if diff > rtol:
-                            print("%s/%s %s: relative difference %.3e > %.1e" % (case, name, ds, diff, rtol))
-                            bad += 1
-                    elif x != y:
-                        print("%s/%s %s: not bitwise equal" % (case, name, ds))
+                # The file itself, then a series' step files in its row order.
+                files = [(name, ra, na)]
+                steps = name[: -len(".h5")] + "_steps"
+                rs, ns = os.path.join(rd, steps), os.path.join(nd, steps)
+                if os.path.isdir(rs):
+                    fr = sorted(f for f in os.listdir(rs) if f.endswith(".h5"))
+                    fn = sorted(f for f in os.listdir(ns) if f.endswith(".h5")) if os.path.isdir(ns) else []
+                    if fr != fn:
+                        print("%s/%s: step files differ: %s" % (case, steps, sorted(set(fr) ^ set(fn))[:6]))
                         bad += 1
-                    else:
-                        exact += 1
+                        continue
+                    files += [(steps + "/" + f, os.path.join(rs, f), os.path.join(ns, f)) for f in fr]
+                for label, x, y in files:
+                    b, e, w = compare_file(a, case, label, x, y, oa, ob, tmp)
+                    bad, exact, worst = bad + b, exact + e, max(worst, w)
             print("%-24s %4d datasets bitwise, temperatures within %.2e" % (case, exact, worst))
     if bad:
         print("compare-outputs: %d difference(s)" % bad)

@@ -9,14 +9,16 @@ both on 2 ranks):
 2. KILLS times: start the run (a fresh run, or `--restart` from the
    checkpoint the last killed run left, into the same output directory),
    wait a random time in (0, T), and SIGKILL one of the two ranks chosen at
-   random. After each kill the output must be readable: the HDF5 files open
-   (h5dump), every dataset the XDMF index lists reads, every history line is
-   whole. A run that finishes before its kill ends a chain: its final state
+   random. After each kill the output must be readable: the HDF5 files under
+   their final names open (h5dump: the mesh file, every step file, the
+   checkpoint), the XDMF index is whole, lists no more steps than there are
+   step files, and every dataset it names reads; every history line is whole. A run that finishes before its kill ends a chain: its final state
    must be bitwise the reference's, and the next kill starts a new chain in a
    fresh directory.
 3. The last chain is run to the end and compared the same way: every dataset
-   of the series and of the checkpoint bitwise (h5dump -b), the XDMF index
-   and the CSV files byte for byte.
+   of the series (mesh file and step files) and of the checkpoint bitwise
+   (h5dump -b), the same step files, the XDMF index and the CSV files byte
+   for byte.
 
 Standard library and h5dump only. Exit 1 with the first failure named.
 """
@@ -75,28 +77,42 @@ def dataset_bytes(h5, ds, tmp):
         return f.read()
 
 
+def step_files(d, stem):
+    """The step files of the series under their final names (not `.part`)."""
+    steps = os.path.join(d, stem + "_steps")
+    if not os.path.isdir(steps):
+        return []
+    return sorted(os.path.join(steps, f) for f in os.listdir(steps) if f.endswith(".h5"))
+
+
 def check_readable(d, stem, tmp):
     """The output a killed run leaves must be readable as it stands."""
     h5 = os.path.join(d, stem + ".h5")
     xdmf = os.path.join(d, stem + ".xdmf")
     ck = os.path.join(d, stem + "_checkpoint.h5")
     hist = os.path.join(d, stem + "_history.csv")
-    for f in (h5, ck):
+    steps = step_files(d, stem)
+    for f in [h5, ck] + steps:
         if os.path.exists(f):
             ok, err = h5dump_ok(["-H", f])
             if not ok:
                 raise Failure("%s does not open after the kill: %s" % (f, err))
-    steps = 0
+    listed = 0
     if os.path.exists(xdmf):
         if not os.path.exists(h5):
             raise Failure("%s lists steps of a missing %s" % (xdmf, h5))
         text = open(xdmf).read()
         if not text.rstrip().endswith("</Xdmf>"):
             raise Failure("%s is truncated" % xdmf)
-        steps = len(re.findall(r"<Time Value=", text))
-        refs = sorted(set(re.findall(r"\.h5:(/[^<\s]+)", text)))
-        for ds in refs:
-            dataset_bytes(h5, ds, tmp)
+        listed = len(re.findall(r"<Time Value=", text))
+        if listed > len(steps):
+            raise Failure("%s lists %d steps, there are %d step files" % (xdmf, listed, len(steps)))
+        refs = sorted(set(re.findall(r">([^<>:\s]+\.h5):(/[^<\s]+)<", text)))
+        for name, ds in refs:
+            f = os.path.join(d, name)
+            if not os.path.exists(f):
+                raise Failure("%s names the missing %s" % (xdmf, f))
+            dataset_bytes(f, ds, tmp)
     if os.path.exists(hist):
         lines = open(hist).read().split("\n")
         if lines and lines[-1] == "":
@@ -106,7 +122,19 @@ def check_readable(d, stem, tmp):
             for i, line in enumerate(lines[1:], 2):
                 if line.count(",") != n:
                     raise Failure("%s line %d is not whole: %r" % (hist, i, line[:80]))
-    return steps
+    return listed
+
+
+def compare_h5(a, b, tmp):
+    """Every dataset of `b` bitwise that of `a`, and no other."""
+    da, db = datasets(a), datasets(b)
+    if da != db:
+        raise Failure(
+            "%s holds datasets %s, the reference %s" % (b, sorted(set(db) ^ set(da))[:6], "other ones")
+        )
+    for ds in da:
+        if dataset_bytes(a, ds, tmp) != dataset_bytes(b, ds, tmp):
+            raise Failure("%s: dataset %s differs from the uninterrupted run's" % (b, ds))
 
 
 def compare(ref, got, stem, tmp):
@@ -115,16 +143,17 @@ def compare(ref, got, stem, tmp):
         a, b = os.path.join(ref, name), os.path.join(got, name)
         if not os.path.exists(b):
             raise Failure("%s is missing (the reference has it)" % b)
-        if name.endswith(".h5"):
-            da, db = datasets(a), datasets(b)
-            if da != db:
+        if os.path.isdir(a):
+            # A series' step files: the same files, each bitwise.
+            fa, fb = sorted(os.listdir(a)), sorted(os.listdir(b))
+            if fa != fb:
                 raise Failure(
-                    "%s holds datasets %s, the reference %s"
-                    % (b, sorted(set(db) ^ set(da))[:6], "other ones")
+                    "%s holds %s, the reference %s" % (b, sorted(set(fa) ^ set(fb))[:6], "other files")
                 )
-            for ds in da:
-                if dataset_bytes(a, ds, tmp) != dataset_bytes(b, ds, tmp):
-                    raise Failure("%s: dataset %s differs from the uninterrupted run's" % (b, ds))
+            for f in fa:
+                compare_h5(os.path.join(a, f), os.path.join(b, f), tmp)
+        elif name.endswith(".h5"):
+            compare_h5(a, b, tmp)
         elif not name.endswith(".png"):
             if open(a, "rb").read() != open(b, "rb").read():
                 raise Failure("%s differs from the uninterrupted run's" % b)
@@ -209,11 +238,11 @@ def run_case(name, fdem, root, kills, rng, tmp):
                         pass
                     finish(p, pids)
                     done += 1
-                    steps = check_readable(d, stem, tmp)
+                    listed = check_readable(d, stem, tmp)
                     how = "restart" if restart else "fresh run"
                     print(
                         "  kill %2d: %s, rank %d after %.2f s; output readable (%d steps listed)"
-                        % (done, how, victim, delay, steps)
+                        % (done, how, victim, delay, listed)
                     )
                     continue
                 # mpirun has not started both ranks yet: let it be this time.

@@ -2,7 +2,8 @@
 # under `xvfb-run -a pvbatch scripts/paraview_check.py OUT_DIR/STEM.xdmf ...`.
 #
 # For every XDMF file given, opens it with the Xdmf3 reader (Xdmf3ReaderS)
-# and the legacy reader (XDMFReader) and checks, against the HDF5 file read
+# and the legacy reader (XDMFReader) and checks, against the HDF5 files (the
+# mesh file STEM.h5 and the step files STEM_steps/NNNNNN.h5) read
 # independently of fdem and of ParaView (raw values exported by h5dump):
 #   - the point and cell array names (the fields and static fields the file
 #     holds), the numbers of points and cells;
@@ -79,31 +80,41 @@ def h5_read(h5, dataset, dtype):
 
 
 class H5:
+    """A series: the mesh file `<stem>.h5` and its step files
+    `<stem>_steps/000000.h5`, ... (present from 000000 on)."""
+
     def __init__(self, path):
         self.path = path
-        objects = h5_objects(path)
-        self.times = h5_read(path, "/time", "<f8")
+        steps_dir = os.path.splitext(path)[0] + "_steps"
+        self.steps = []
+        while os.path.isfile(os.path.join(steps_dir, "%06d.h5" % len(self.steps))):
+            self.steps.append(os.path.join(steps_dir, "%06d.h5" % len(self.steps)))
+        self.times = np.array(
+            [h5_read(f, "/time", "<f8")[0] for f in self.steps], dtype=float
+        )
         self.coords = h5_read(path, "/mesh/coordinates", "<f8").reshape(-1, 3)
         self.topology = h5_read(path, "/mesh/topology", "<u4").reshape(-1, 4)
         self.nodes, self.cells = len(self.coords), len(self.topology)
-        # {center: {name: [dataset per step]}}
+        # {center: {name: [file per step]}}
         self.fields = {"node": {}, "cell": {}}
         self.statics = {"node": [], "cell": []}
-        for o in objects:
+        for o in h5_objects(path):
             parts = o.strip("/").split("/")
-            if parts[0] == "fields" and len(parts) == 4:
-                self.fields[parts[1]].setdefault(parts[2], []).append(o)
-            elif parts[0] == "static" and len(parts) == 3:
+            if parts[0] == "static" and len(parts) == 3:
                 self.statics[parts[1]].append(parts[2])
-        for c in self.fields.values():
-            for steps in c.values():
-                steps.sort()
+        for f in self.steps:
+            for o in h5_objects(f):
+                parts = o.strip("/").split("/")
+                if parts[0] == "fields" and len(parts) == 3:
+                    self.fields[parts[1]].setdefault(parts[2], []).append(f)
 
     def rows(self, center):
         return self.nodes if center == "node" else self.cells
 
     def field(self, center, name, k):
-        v = h5_read(self.path, self.fields[center][name][k], "<f8")
+        v = h5_read(
+            self.fields[center][name][k], "/fields/%s/%s" % (center, name), "<f8"
+        )
         rows = self.rows(center)
         return v.reshape(rows, -1) if v.size != rows else v
 
@@ -160,7 +171,7 @@ def read_all(reader_name, xdmf, h5):
     check(
         len(times) == len(h5.times)
         and np.allclose(times, h5.times, rtol=1e-14, atol=0.0),
-        "%s %s: time values %s differ from /time %s"
+        "%s %s: time values %s differ from the step files' /time %s"
         % (reader_name, xdmf, times[:5], h5.times[:5]),
     )
     print("    %d time steps, t = %g .. %g" % (len(times), times[0], times[-1]))

@@ -1373,19 +1373,33 @@ fn run_with_limit(
 /// first step leaves nothing (or an empty directory); a run that failed
 /// later keeps the steps it completed, readable, and no temporary files.
 fn check_outputs(out: &Path, failed: bool) -> Vec<String> {
-    let files: Vec<String> = std::fs::read_dir(out)
-        .map(|d| {
-            d.flatten()
-                .map(|e| e.file_name().to_string_lossy().into_owned())
-                .collect()
-        })
-        .unwrap_or_default();
+    let list = |dir: &Path| -> Vec<String> {
+        std::fs::read_dir(dir)
+            .map(|d| {
+                d.flatten()
+                    .map(|e| e.file_name().to_string_lossy().into_owned())
+                    .collect()
+            })
+            .unwrap_or_default()
+    };
+    let files = list(out);
     let mut problems = Vec::new();
     if failed && files.is_empty() {
         return problems;
     }
+    // The series' step files are in `<stem>_steps/`.
+    let step_files = files
+        .iter()
+        .filter(|f| f.ends_with("_steps"))
+        .flat_map(|d| {
+            list(&out.join(d))
+                .into_iter()
+                .map(move |f| format!("{d}/{f}"))
+        });
     if let Some(t) = files
         .iter()
+        .cloned()
+        .chain(step_files)
         .find(|f| f.ends_with(".part") || f.ends_with(".tmp"))
     {
         problems.push(format!("temporary file {t} left behind"));

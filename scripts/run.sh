@@ -13,4 +13,4 @@ stem="$(basename "$scenario" .toml)"
 out="output/$stem"
 mpirun -n 2 --oversubscribe target/release/fdem run "$scenario" --output "$out" "$@"
 echo
-echo "Output: $out/$stem.xdmf (open in ParaView), $out/$stem.h5, $out/${stem}_history.csv"
+echo "Output: $out/$stem.xdmf (open in ParaView), $out/$stem.h5 + $out/${stem}_steps/, $out/${stem}_history.csv"

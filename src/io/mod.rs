@@ -59,8 +59,8 @@
 //!   file (h5dump and ParaView read it); a file caught being written is only a
 //!   `.part`, which no reader and no index looks at;
 //! - `<stem>.xdmf` is whole, and it lists only steps whose files were in place
-//!   before it was written (at most one more step file than it lists may exist:
-//!   a kill between the step's rename and the index's);
+//!   before it was written (a step file it does not list yet may exist: a kill
+//!   between the step's rename and the index's);
 //! - the steps present from `000000.h5` on (what [`read_times`] returns) are a
 //!   prefix of the series.
 //!

@@ -295,3 +295,120 @@ fn friction_heats_the_sliding_bodies() {
         "1 vs 2 ranks: {heats:?}"
     );
 }
+
+/// The table of table-plates.toml: h = 2000 + 40 T + 1e-4 P + 1e8 g.
+fn table_h(t: f64, p: f64, g: f64) -> f64 {
+    2000.0 + 40.0 * t + 1e-4 * p + 1e8 * g
+}
+
+/// Steady series circuit of table-plates.toml: 100 °C through plate 1
+/// (k1), the interface h(T̄) and plate 2 (k2) to 0 °C, T̄ the mean of the
+/// two faces' temperatures; solved by fixed-point iteration.
+fn series_flux(k1: f64, k2: f64, h: impl Fn(f64) -> f64) -> f64 {
+    let mut q = 0.0;
+    let mut tbar = 50.0;
+    for _ in 0..200 {
+        q = 100.0 / (T_PLATE / k1 + 1.0 / h(tbar) + T_PLATE / k2);
+        tbar = 0.5 * ((100.0 - q * T_PLATE / k1) + q * T_PLATE / k2);
+    }
+    q
+}
+
+/// Seed 001 sec 7.1.4: a tabular h(T, P, gap) at the pair's mean face
+/// temperature, the prescribed pressure and its penetration (10 µm); the
+/// temperature makes the step nonlinear (Newton), and the steady flux is
+/// the series circuit's.
+#[test]
+fn a_tabular_conductance_follows_temperature_pressure_and_penetration() {
+    let scen = root().join("scenarios/table-plates.toml");
+    let mut fluxes = Vec::new();
+    for ranks in [1, 2] {
+        let dir = out_dir(&format!("thermal-contact/table-{ranks}"));
+        let out = run_ok(ranks, &scen, &dir, &[]);
+        assert!(out.contains("newtonls"), "{out}");
+        let (h, r) = last_row(&dir, "table-plates");
+        let (th, tc) = (r[col(&h, "hot_min_T")], r[col(&h, "cold_max_T")]);
+        let q = 50.0 * (100.0 - th) / T_PLATE;
+        let q_cold = 20.0 * tc / T_PLATE;
+        assert!((q - q_cold).abs() < 1e-3 * q, "{q} vs {q_cold}");
+        let measured = q / (th - tc);
+        let want = table_h(0.5 * (th + tc), 1e7, 1e-5);
+        let series = series_flux(50.0, 20.0, |t| table_h(t, 1e7, 1e-5));
+        eprintln!(
+            "{ranks} rank(s): h = {measured:.1} vs {want:.1} W/m^2/K at {:.3} C; q = {q:.1} vs {series:.1}",
+            0.5 * (th + tc)
+        );
+        assert!(
+            (measured - want).abs() < 0.01 * want,
+            "{measured} vs {want}"
+        );
+        assert!((q - series).abs() < 0.01 * series, "{q} vs {series}");
+        assert!(r[col(&h, "newton_iterations")] > 0.0);
+        // Bounds: between the held temperatures.
+        assert!(r[col(&h, "hot_max_T")] <= 100.0 + 1e-9 && r[col(&h, "cold_min_T")] >= -1e-9);
+        fluxes.push(q);
+    }
+    assert!((fluxes[0] - fluxes[1]).abs() < 1e-8 * fluxes[0]);
+    // Without the temperature axis the table is linear: the KSP path, h(P, g).
+    let dir = out_dir("thermal-contact/table-linear");
+    let set = [
+        "--set",
+        "contact.table.temperature=[]",
+        "--set",
+        "contact.table.h=[4000.0, 6000.0, 6000.0, 8000.0]",
+    ];
+    let out = run_ok(2, &scen, &dir, &set);
+    assert!(!out.contains("newtonls"), "{out}");
+    let (h, r) = last_row(&dir, "table-plates");
+    let (th, tc) = (r[col(&h, "hot_min_T")], r[col(&h, "cold_max_T")]);
+    let measured = 50.0 * (100.0 - th) / T_PLATE / (th - tc);
+    let want = table_h(0.0, 1e7, 1e-5) + 2000.0;
+    assert!(
+        (measured - want).abs() < 0.01 * want,
+        "{measured} vs {want}"
+    );
+}
+
+/// Seed 001 sec 7.1.5: gap conduction with k_gap(T) at the gap's mean
+/// temperature (symmetric plates: 950 K, k = 1.4 W/m/K), and a table
+/// h(gap) read at the open gap −1 mm.
+#[test]
+fn gap_conduction_follows_k_of_t_and_a_table_in_the_gap() {
+    let scen = root().join("scenarios/gap-plates.toml");
+    let base = [
+        "--set",
+        "contact.gap.radiation=false",
+        "--set",
+        "thermal.bc.1.value=900.0",
+        "--set",
+        "materials.0.conductivity=1e5",
+    ];
+    let k_of_t = |t: f64| 0.5 + (t - 500.0) / 500.0;
+    let dir = out_dir("thermal-contact/gap-k-of-t");
+    let mut set = base.to_vec();
+    set.extend([
+        "--set",
+        "contact.gap.conductivity_table={ temperature = [500.0, 1000.0], k = [0.5, 1.5] }",
+    ]);
+    let out = run_ok(2, &scen, &dir, &set);
+    assert!(out.contains("newtonls"), "{out}");
+    let (q, q_cold, th, tc) = plate_fluxes(&dir, 1e5, 900.0);
+    assert!((q - q_cold).abs() < 1e-6 * q);
+    let want = k_of_t(0.5 * (th + tc)) * (th - tc) / 1e-3;
+    eprintln!("k(T): q = {q:.2} vs {want:.2} W/m^2, faces {th:.4} / {tc:.4} K");
+    assert!((q - want).abs() < 5e-3 * want, "{q} vs {want}");
+    assert!((0.5 * (th + tc) - 950.0).abs() < 0.1);
+
+    // h(gap) = 500 at −2 mm, 1500 at 0: 1000 W/m²/K across the 1 mm gap.
+    let dir = out_dir("thermal-contact/gap-table");
+    let mut set = base.to_vec();
+    set.extend([
+        "--set",
+        "contact.table={ gap = [-2e-3, 0.0], h = [500.0, 1500.0] }",
+    ]);
+    run_ok(1, &scen, &dir, &set);
+    let (q, _, th, tc) = plate_fluxes(&dir, 1e5, 900.0);
+    let measured = q / (th - tc);
+    eprintln!("h(gap): {measured:.2} W/m^2/K");
+    assert!((measured - 1000.0).abs() < 5.0, "{measured}");
+}

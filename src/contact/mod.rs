@@ -12,6 +12,7 @@ pub mod gap;
 pub mod penalty;
 pub mod search;
 mod surface;
+pub mod table;
 mod tets;
 
 pub use detect::{
@@ -56,6 +57,19 @@ pub struct PairDofs {
     /// Contact pressure (Pa): the penalty's normal force over the pair's
     /// surface in a run with mechanics (when a conductance needs it), else 0.
     pub pressure: f64,
+    /// Mean penetration (m): the two tets' overlap volume over the pair's
+    /// surface, when a conductance table depends on it, else 0.
+    pub penetration: f64,
+}
+
+/// The mean penetration of two overlapping tets with contact surface
+/// `area`: their intersection's volume over it (m).
+pub fn penetration(a: &[[f64; 3]; 4], b: &[[f64; 3]; 4], area: f64) -> f64 {
+    if area > 0.0 {
+        crate::geometry::overlap::tet_tet_intersection(a, b).volume / area
+    } else {
+        0.0
+    }
 }
 
 /// The contact pairs an operator is assembled with: this rank's, and the

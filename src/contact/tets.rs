@@ -152,16 +152,23 @@ impl OwnAndGhosts<'_> {
     }
 
     /// The thermal contact pairs among `candidates` (handles) at the
-    /// current corners, each with its dofs, sorted by (target, contactor).
-    pub fn contact_pairs(&self, candidates: &[Candidate]) -> Vec<(ContactPair, PairDofs)> {
+    /// current corners, each with its dofs, sorted by (target, contactor);
+    /// with `penetration`, each pair's mean penetration too.
+    pub fn contact_pairs(
+        &self,
+        candidates: &[Candidate],
+        penetration: bool,
+    ) -> Vec<(ContactPair, PairDofs)> {
         let mut out: Vec<(ContactPair, PairDofs)> = candidates
             .iter()
             .filter_map(|c| {
-                let p = tet_pair_contact(
-                    (self.faces(c.a), &self.corners(c.a)),
-                    (self.faces(c.b), &self.corners(c.b)),
-                )?;
-                Some((p, self.dofs(c.a, c.b)))
+                let (ca, cb) = (self.corners(c.a), self.corners(c.b));
+                let p = tet_pair_contact((self.faces(c.a), &ca), (self.faces(c.b), &cb))?;
+                let mut d = self.dofs(c.a, c.b);
+                if penetration {
+                    d.penetration = super::penetration(&ca, &cb, p.area());
+                }
+                Some((p, d))
             })
             .collect();
         out.sort_by_key(|(p, _)| (p.target, p.contactor));

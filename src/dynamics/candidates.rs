@@ -760,6 +760,11 @@ impl ExplicitDomain {
                     );
                     d.pressure = r.map_or(0.0, |r| r.normal_force / p.area());
                 }
+                if self.penetration {
+                    let (la, lb) = (&self.pair_tets[a], &self.pair_tets[b]);
+                    d.penetration =
+                        crate::contact::penetration(&corners(la), &corners(lb), p.area());
+                }
                 Some((p, d))
             })
             .chain(self.thermal_only.iter().filter_map(|&(a, b)| {

@@ -330,7 +330,7 @@ impl Output {
             // Area-weighted mean pressure and Σ S/Rc of the thermal pairs.
             let mut mine = [0.0; 3];
             for (p, d) in contacts.local.iter().zip(&contacts.dofs) {
-                let rc = crate::thermal::assembly::pair_resistance(model, d);
+                let rc = crate::thermal::assembly::pair_resistance(model, d, 0.0);
                 mine[0] += p.area() * d.pressure;
                 mine[1] += p.area();
                 mine[2] += if rc.is_finite() { p.area() / rc } else { 0.0 };

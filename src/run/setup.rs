@@ -295,7 +295,11 @@ impl Contacts {
                 if let Some(p) = ts.pinball {
                     gaps = og.gap_links(&candidates, p);
                 }
-                og.contact_pairs(&candidates)
+                let depth = model
+                    .contact
+                    .as_ref()
+                    .is_some_and(|c| c.needs_penetration());
+                og.contact_pairs(&candidates, depth)
             }
         };
         let set = contact_set(comm, local, gaps);

@@ -3,6 +3,7 @@
 
 pub mod assembly;
 pub mod element;
+pub mod exchange;
 pub mod limits;
 pub mod monotone;
 pub mod nonlinear;

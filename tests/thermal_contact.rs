@@ -103,21 +103,41 @@ fn a_lifted_block_goes_from_closed_to_near_field_to_free() {
         run_ok(ranks, &scen, &dir, &[]);
         let (h, rows) = history(&dir, "lift-off");
         let c = |name: &str| col(&h, name);
+        // The boundary faces by status (seed 001 sec 7.1.1): 96 of the
+        // plate (0.1 × 0.1 × 0.02 m at h = 0.025: 32 triangles on top, 32
+        // below, 8 on each side) and 6 × 8 of the block.
+        let status = |r: &[f64]| {
+            [
+                "faces_free",
+                "faces_near_field",
+                "faces_closed",
+                "faces_sliding",
+            ]
+            .map(|n| r[c(n)])
+        };
         for r in &rows {
             let (t, pairs, gap) = (r[c("time")], r[c("contacts")], r[c("gap_area")]);
+            let [free, near, closed, sliding] = status(r);
+            assert_eq!(free + near + closed + sliding, 144.0, "t = {t}");
+            assert_eq!(sliding, 0.0, "nothing slides in a thermal run");
             if t <= 4.0 {
                 assert!(
                     pairs > 0.0 && gap == 0.0,
                     "t = {t}: closed ({pairs} pairs, gap {gap})"
                 );
+                // The block's 8 bottom faces and 8 of the plate's top, and the
+                // block's side faces whose lower edge dips into the plate.
+                assert!(closed >= 16.0 && near == 0.0, "t = {t}: {:?}", status(r));
             } else if (6.0..=29.0).contains(&t) {
                 assert!(pairs == 0.0, "t = {t}: no overlap");
                 assert!(
                     (gap - 0.0025).abs() < 1e-12,
                     "t = {t}: near field over the block's face, {gap}"
                 );
+                assert!(closed == 0.0 && near == 16.0, "t = {t}: {:?}", status(r));
             } else if t >= 31.0 {
                 assert!(pairs == 0.0 && gap == 0.0, "t = {t}: free");
+                assert_eq!(free, 144.0, "t = {t}");
             }
         }
         // The block's heating rate (K/s) in each phase.
@@ -245,6 +265,17 @@ fn friction_heats_the_sliding_bodies() {
                 .find(|r| (r[c("time")] - t).abs() < 1e-9)
                 .unwrap()
         };
+        // Closed at rest, sliding once the block is dragged (seed 001 sec 7.1.1).
+        assert!(rows[0][c("faces_closed")] > 0.0 && rows[0][c("faces_sliding")] == 0.0);
+        for r in rows.iter().filter(|r| r[c("time")] >= 0.1) {
+            assert!(
+                r[c("faces_sliding")] > 0.0 && r[c("faces_closed")] == 0.0,
+                "t = {}: sliding {}, closed {}",
+                r[c("time")],
+                r[c("faces_sliding")],
+                r[c("faces_closed")]
+            );
+        }
         let rate = (at(0.5)[c("friction_work")] - at(0.2)[c("friction_work")]) / 0.3;
         eprintln!(
             "{ranks} rank(s): friction power {rate:.5} W, mu N v = {:.5} W",

@@ -24,6 +24,10 @@ pub struct GapLink {
     pub gap: f64,
     /// Materials of the two faces.
     pub materials: [u32; 2],
+    /// Global element ids of the searching and the facing tet.
+    pub tets: [u32; 2],
+    /// Their local faces (opposite that node).
+    pub faces: [u8; 2],
 }
 
 /// Corners and outward unit normal of face `f` (opposite node f) of a tet.

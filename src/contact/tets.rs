@@ -214,6 +214,8 @@ impl OwnAndGhosts<'_> {
                             area,
                             gap,
                             materials: [sa.material[ia], sb.material[ib]],
+                            tets: [sa.gid[ia], sb.gid[ib]],
+                            faces: [fa as u8, fb as u8],
                         },
                     );
                 }

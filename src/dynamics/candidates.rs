@@ -728,6 +728,12 @@ impl ExplicitDomain {
                 d.petsc[j] = petsc[tt[j] as usize];
                 d.petsc[4 + j] = petsc[tc[j] as usize];
             }
+            d.slip = crate::contact::slip_speed(
+                &corners(tt),
+                p.surface.faces_target,
+                &tt.map(|l| self.v[l as usize].into()),
+                &tc.map(|l| self.v[l as usize].into()),
+            );
             Some((p, d))
         };
         let mut pairs: Vec<(ContactPair, PairDofs)> = self

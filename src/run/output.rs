@@ -52,6 +52,8 @@ pub(super) struct Output {
     heat: Vec<[f64; 7]>,
     /// The joint output grid, when the model has joints.
     pub joints: Option<super::joint_output::JointOutput>,
+    /// The boundary faces' contact status, in runs with thermal contact.
+    status: Option<super::status_output::StatusOutput>,
 }
 
 impl Output {
@@ -113,6 +115,23 @@ impl Output {
                 header.push(h.into());
             }
         }
+        // Seed 001 sec 7.1.1: the boundary faces by contact status.
+        let status = if heat && model.contact.is_some() {
+            for h in [
+                "faces_free",
+                "faces_near_field",
+                "faces_closed",
+                "faces_sliding",
+            ] {
+                header.push(h.into());
+            }
+            let after = continues.then_some(keep_until);
+            Some(super::status_output::StatusOutput::open(
+                comm, model, part, &dir, &stem, after,
+            )?)
+        } else {
+            None
+        };
         if mechanics {
             for h in [
                 "mech_time",
@@ -209,6 +228,7 @@ impl Output {
             cracks: Vec::new(),
             heat: Vec::new(),
             joints: None,
+            status,
         })
     }
 
@@ -293,6 +313,22 @@ impl Output {
         if let (Some(j), Some(m)) = (self.joints.as_mut(), mech) {
             j.write(comm, time, m)?;
         }
+        if let Some(st) = self.status.as_mut() {
+            let positions = match mech {
+                Some(Mechanics { domain: m, .. }) => m.part_positions(),
+                None => part
+                    .node_gid
+                    .iter()
+                    .zip(&part.mesh.nodes)
+                    .map(|(&n, x)| {
+                        let v = model.bodies[model.body_of_node(n)].velocity;
+                        [0, 1, 2].map(|d| x[d] + v[d] * time)
+                    })
+                    .collect(),
+            };
+            let sliding = model.contact.as_ref().map_or(0.0, |c| c.sliding_speed);
+            st.write(comm, part, &positions, contacts, sliding, time)?;
+        }
         self.history_row(comm, model, part, sys, mech, contacts, step)
     }
 
@@ -339,6 +375,10 @@ impl Output {
             comm.all_reduce_into(&mine[..], &mut all[..], SystemOperation::sum());
             let pressure = if all[1] > 0.0 { all[0] / all[1] } else { 0.0 };
             row.extend_from_slice(&[pressure, all[2], e.friction_in]);
+            if let Some(st) = self.status.as_ref() {
+                let sliding = model.contact.as_ref().map_or(0.0, |c| c.sliding_speed);
+                row.extend(st.counts(comm, contacts, sliding).map(|c| c as f64));
+            }
             if model.has_contact_physics() {
                 self.heat.push([
                     time,
@@ -450,6 +490,9 @@ impl Output {
         if let Some(j) = &self.joints {
             particle_files.push(j.xdmf.clone());
         }
+        if let Some(st) = &self.status {
+            particle_files.push(st.xdmf.clone());
+        }
         if model.has_joints() && !self.cracks.is_empty() {
             let path = dir.join(format!("{stem}_cracks.png"));
             let written = if comm.rank() == 0 {
@@ -489,6 +532,9 @@ impl Output {
         self.writer.close()?;
         if let Some(j) = self.joints {
             j.close()?;
+        }
+        if let Some(st) = self.status {
+            st.close()?;
         }
         Ok(())
     }

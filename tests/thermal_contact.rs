@@ -61,6 +61,11 @@ fn radiation_across_a_gap_matches_grey_parallel_plates() {
         let area = r[col(&h, "gap_area")];
         assert!((area - 0.01).abs() < 1e-12, "gap area {area}");
         assert_eq!(r[col(&h, "contacts")], 0.0);
+        let flow = r[col(&h, "gap_heat_flow")];
+        assert!(
+            (flow - q_hot * 0.01).abs() < 1e-3 * flow,
+            "{flow} vs {q_hot}"
+        );
         fluxes.push(q_hot);
     }
     assert!((fluxes[0] - fluxes[1]).abs() < 1e-8 * fluxes[0]);
@@ -118,6 +123,11 @@ fn a_lifted_block_goes_from_closed_to_near_field_to_free() {
         for r in &rows {
             let (t, pairs, gap) = (r[c("time")], r[c("contacts")], r[c("gap_area")]);
             let [free, near, closed, sliding] = status(r);
+            let (through, across) = (r[c("contact_heat_flow")], r[c("gap_heat_flow")]);
+            assert!(
+                (through > 0.0) == (pairs > 0.0) && (across > 0.0) == (gap > 0.0),
+                "t = {t}: heat through contacts {through} W, across the gap {across} W"
+            );
             assert_eq!(free + near + closed + sliding, 144.0, "t = {t}");
             assert_eq!(sliding, 0.0, "nothing slides in a thermal run");
             if t <= 4.0 {
@@ -375,6 +385,15 @@ fn a_tabular_conductance_follows_temperature_pressure_and_penetration() {
         );
         assert!((q - series).abs() < 0.01 * series, "{q} vs {series}");
         assert!(r[col(&h, "newton_iterations")] > 0.0);
+        // The history's flow through the contact and S h(T̄) now.
+        let flow = r[col(&h, "contact_heat_flow")];
+        assert!(
+            (flow - q * 0.01).abs() < 1e-3 * flow,
+            "{flow} vs {}",
+            q * 0.01
+        );
+        let g = r[col(&h, "contact_conductance")];
+        assert!((g - want * 0.01).abs() < 0.01 * g, "{g} vs {}", want * 0.01);
         // Bounds: between the held temperatures.
         assert!(r[col(&h, "hot_max_T")] <= 100.0 + 1e-9 && r[col(&h, "cold_min_T")] >= -1e-9);
         fluxes.push(q);

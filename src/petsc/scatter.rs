@@ -18,11 +18,17 @@ pub struct Gather<'p> {
 
 impl<'p> Gather<'p> {
     /// Collective. Set up the gathering of `rows` from vectors like `from`.
-    pub fn new(petsc: &'p Petsc, from: &Vector<'p>, rows: &[PetscInt]) -> Result<Self> {
-        let out = Vector::new(petsc, rows.len())?;
+    pub fn new(from: &Vector<'p>, rows: &[PetscInt]) -> Result<Self> {
+        let out = Vector::new_like(from, rows.len())?;
+        // SAFETY: a handle (a pointer) that PetscObjectGetComm overwrites.
+        let mut comm: ffi::MPI_Comm = unsafe { std::mem::zeroed() };
+        petsc_call!(PetscObjectGetComm(
+            from.as_raw() as ffi::PetscObject,
+            &mut comm
+        ))?;
         let mut is: ffi::IS = std::ptr::null_mut();
         petsc_call!(ISCreateGeneral(
-            petsc.comm(),
+            comm,
             rows.len() as PetscInt,
             rows.as_ptr(),
             ffi::PetscCopyMode::PETSC_COPY_VALUES,

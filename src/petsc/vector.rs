@@ -30,6 +30,25 @@ impl<'p> Vector<'p> {
         })
     }
 
+    /// Collective over `like`'s communicator. A vector with `owned` entries
+    /// on this rank.
+    pub fn new_like(like: &Vector<'p>, owned: usize) -> Result<Self> {
+        // SAFETY: a handle (a pointer) that PetscObjectGetComm overwrites.
+        let mut comm: ffi::MPI_Comm = unsafe { std::mem::zeroed() };
+        petsc_call!(PetscObjectGetComm(like.raw as ffi::PetscObject, &mut comm))?;
+        let mut raw: ffi::Vec = std::ptr::null_mut();
+        petsc_call!(VecCreateMPI(
+            comm,
+            owned as PetscInt,
+            PETSC_DECIDE,
+            &mut raw
+        ))?;
+        Ok(Vector {
+            raw,
+            _petsc: PhantomData,
+        })
+    }
+
     /// Collective. A new vector with the same layout (values not copied).
     pub fn duplicate(&self) -> Result<Self> {
         let mut raw: ffi::Vec = std::ptr::null_mut();

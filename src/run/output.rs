@@ -48,8 +48,9 @@ pub(super) struct Output {
     cracks: Vec<(f64, f64, f64)>,
     /// Issue 20: per history row, the time and the heat in by each
     /// mechanism so far (prescribed temperatures, fluxes, convection,
-    /// radiation, friction) and the stored heat's change.
-    heat: Vec<[f64; 7]>,
+    /// radiation, friction), the stored heat's change, the heat moved
+    /// through contacts and across gaps so far, and those two flows now.
+    heat: Vec<[f64; 11]>,
     /// The joint output grid, when the model has joints.
     pub joints: Option<super::joint_output::JointOutput>,
     /// The boundary faces' contact status, in runs with thermal contact.
@@ -111,6 +112,8 @@ impl Output {
                 "contact_pressure",
                 "contact_conductance",
                 "friction_heat_in",
+                "contact_heat_flow",
+                "gap_heat_flow",
             ] {
                 header.push(h.into());
             }
@@ -363,23 +366,36 @@ impl Output {
                 s.newton_iterations as f64,
                 contacts.total_gap_area,
             ]);
-            // Area-weighted mean pressure and Σ S/Rc of the thermal pairs.
-            let mut mine = [0.0; 3];
+            // Area-weighted mean pressure, Σ S/Rc of the thermal pairs at
+            // the current temperatures, and the heat through contacts and
+            // across gaps now.
+            let f = s.contact_flows(model, contacts)?;
+            let mut mine = [0.0, 0.0, f.conductance, f.contact, f.gap];
             for (p, d) in contacts.local.iter().zip(&contacts.dofs) {
-                let rc = crate::thermal::assembly::pair_resistance(model, d, 0.0);
                 mine[0] += p.area() * d.pressure;
                 mine[1] += p.area();
-                mine[2] += if rc.is_finite() { p.area() / rc } else { 0.0 };
             }
-            let mut all = [0.0; 3];
+            let mut all = [0.0; 5];
             comm.all_reduce_into(&mine[..], &mut all[..], SystemOperation::sum());
             let pressure = if all[1] > 0.0 { all[0] / all[1] } else { 0.0 };
-            row.extend_from_slice(&[pressure, all[2], e.friction_in]);
+            row.extend_from_slice(&[pressure, all[2], e.friction_in, all[3], all[4]]);
             if let Some(st) = self.status.as_ref() {
                 let sliding = model.contact.as_ref().map_or(0.0, |c| c.sliding_speed);
                 row.extend(st.counts(comm, contacts, sliding).map(|c| c as f64));
             }
             if model.has_contact_physics() {
+                // Heat moved between bodies: Σ|q| integrated by the
+                // trapezoid rule over the history rows.
+                let (through, across) = match self.heat.last() {
+                    Some(p) => {
+                        let dt = time - p[0];
+                        (
+                            p[7] + 0.5 * dt * (p[9] + all[3]),
+                            p[8] + 0.5 * dt * (p[10] + all[4]),
+                        )
+                    }
+                    None => (0.0, 0.0),
+                };
                 self.heat.push([
                     time,
                     e.dirichlet_in,
@@ -388,6 +404,10 @@ impl Output {
                     e.radiation_in,
                     e.friction_in,
                     e.stored_change,
+                    through,
+                    across,
+                    all[3],
+                    all[4],
                 ]);
             }
         }
@@ -567,10 +587,11 @@ fn crack_plot(cracks: &[(f64, f64, f64)], path: &std::path::Path) -> Result<()> 
         .map_err(|e| Error::Io(crate::io::IoError::invalid(path, e.to_string())))
 }
 
-/// `<stem>_heat.png` (issue 20): the heat in by each mechanism so far and
-/// the stored heat's change (J) against time; mechanisms that moved no
-/// heat are left out.
-fn heat_plot(rows: &[[f64; 7]], path: &std::path::Path) -> Result<()> {
+/// `<stem>_heat.png` (issue 20): the heat in by each mechanism so far, the
+/// stored heat's change and the heat moved between bodies through
+/// contacts and across gaps (dashed; Σ|q| integrated over the history
+/// rows) (J) against time; mechanisms that moved no heat are left out.
+fn heat_plot(rows: &[[f64; 11]], path: &std::path::Path) -> Result<()> {
     use crate::io::plot::{write_png, LinePlot, Series};
     let names = [
         "prescribed temperatures",
@@ -579,6 +600,8 @@ fn heat_plot(rows: &[[f64; 7]], path: &std::path::Path) -> Result<()> {
         "radiation",
         "friction",
         "stored (change)",
+        "moved through contacts",
+        "moved across gaps",
     ];
     let curves: Vec<(&str, Vec<(f64, f64)>)> = names
         .iter()
@@ -595,7 +618,7 @@ fn heat_plot(rows: &[[f64; 7]], path: &std::path::Path) -> Result<()> {
             .map(|(label, points)| Series {
                 label,
                 points,
-                dashed: *label == "stored (change)",
+                dashed: label.starts_with("stored") || label.starts_with("moved"),
             })
             .collect(),
     };

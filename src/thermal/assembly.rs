@@ -81,7 +81,7 @@ pub fn pair_resistance(model: &Model, d: &crate::contact::PairDofs, t: f64) -> f
 }
 
 /// The law of a pair whose table depends on temperature, if it has one.
-fn pair_law(model: &Model, d: &crate::contact::PairDofs) -> Option<Law> {
+pub fn pair_law(model: &Model, d: &crate::contact::PairDofs) -> Option<Law> {
     let c = model.contact.as_ref()?;
     let [a, b] = d.materials;
     let i = c.table[a as usize][b as usize]?;
@@ -95,7 +95,7 @@ fn pair_law(model: &Model, d: &crate::contact::PairDofs) -> Option<Law> {
 
 /// The law of gap link `l`: its material pair's table at gap −g (open),
 /// else the medium's k(T)/g + h_nf.
-fn gap_law(model: &Model, gs: &crate::scenario::GapSpec, l: &GapLink) -> Law {
+pub fn gap_law(model: &Model, gs: &crate::scenario::GapSpec, l: &GapLink) -> Law {
     let c = model.contact.as_ref().expect("gaps come with [contact]");
     let [a, b] = l.materials;
     match c.table[a as usize][b as usize] {
@@ -133,7 +133,7 @@ pub fn laws(model: &Model) -> Laws {
 
 /// A pair's unit (Λ at unit conductance: the block at Rc = 1; T̄ the mean
 /// of the two sides' face temperatures, eq 26's weights).
-fn pair_unit(
+pub fn pair_unit(
     p: &crate::contact::ContactPair,
     d: &crate::contact::PairDofs,
     law: Law,
@@ -160,7 +160,7 @@ fn pair_unit(
 
 /// A gap link's unit: Λ of [`add_links`] at conductance area A; T̄ the
 /// mean of the searching face's corners and the point met.
-fn gap_unit(l: &GapLink, law: Law) -> Unit {
+pub fn gap_unit(l: &GapLink, law: Law) -> Unit {
     let mut rows = [0; 8];
     rows[..3].copy_from_slice(&l.rows_a);
     rows[3..6].copy_from_slice(&l.rows_b);

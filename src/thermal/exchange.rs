@@ -9,7 +9,7 @@
 //! kernel is pure; [`Exchange`] gathers the units' temperatures from PETSc.
 
 use crate::contact::table::{ConductanceTable, Table1};
-use crate::petsc::{Gather, Matrix, Petsc, Result, Vector};
+use crate::petsc::{Gather, Matrix, Result, Vector};
 
 /// How a unit's conductance follows its mean temperature.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -116,7 +116,6 @@ impl<'p> Exchange<'p> {
     /// Collective. Units over vectors laid out like `like`, Jacobians in
     /// the pattern of `pattern` (which holds every unit's block).
     pub fn new(
-        petsc: &'p Petsc,
         units: Vec<Unit>,
         laws: Laws,
         like: &Vector<'p>,
@@ -126,7 +125,7 @@ impl<'p> Exchange<'p> {
             .iter()
             .flat_map(|u| u.rows[..u.n].iter().map(|&r| r as i32))
             .collect();
-        let gather = Gather::new(petsc, like, &rows)?;
+        let gather = Gather::new(like, &rows)?;
         let mut jac = pattern.duplicate()?;
         jac.zero_entries()?;
         Ok(Exchange {

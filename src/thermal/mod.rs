@@ -4,6 +4,7 @@
 pub mod assembly;
 pub mod element;
 pub mod exchange;
+pub mod flows;
 pub mod limits;
 pub mod monotone;
 pub mod nonlinear;

@@ -452,7 +452,7 @@ impl<'p> ThermalSystem<'p> {
                 let ex = match exchange.as_ref() {
                     None => None,
                     Some((units, laws)) => Some((
-                        Exchange::new(petsc, units.clone(), laws.clone(), &t, &ops.capacity)?,
+                        Exchange::new(units.clone(), laws.clone(), &t, &ops.capacity)?,
                         free_mask.duplicate_from()?,
                     )),
                 };
@@ -534,9 +534,7 @@ impl<'p> ThermalSystem<'p> {
                 sum.set(0.0)?;
                 let exchange = match exchange {
                     None => None,
-                    Some((units, laws)) => {
-                        Some(Exchange::new(petsc, units, laws, &t, &ops.capacity)?)
-                    }
+                    Some((units, laws)) => Some(Exchange::new(units, laws, &t, &ops.capacity)?),
                 };
                 Some(Radiating {
                     exchange,
@@ -779,6 +777,19 @@ impl<'p> ThermalSystem<'p> {
     /// The temperature of every owned node of `part` (part order).
     pub fn node_temperatures(&self, part: &Part) -> Result<Vec<f64>> {
         Ok(part.rows_to_nodes(&self.t.to_local_vec()?))
+    }
+
+    /// Collective. This rank's share of the heat flowing through contacts
+    /// and across gaps now ([`super::flows`]).
+    pub fn contact_flows(
+        &self,
+        model: &Model,
+        contacts: &crate::contact::ContactSet,
+    ) -> Result<super::flows::Flows> {
+        let rows = super::flows::flow_rows(contacts);
+        let mut g = crate::petsc::Gather::new(&self.t, &rows)?;
+        let t = g.gather(&self.t)?.to_vec();
+        Ok(super::flows::flows(model, contacts, &t))
     }
 
     /// Steps taken.

@@ -462,3 +462,66 @@ fn gap_conduction_follows_k_of_t_and_a_table_in_the_gap() {
     eprintln!("h(gap): {measured:.2} W/m^2/K");
     assert!((measured - 1000.0).abs() < 5.0, "{measured}");
 }
+
+/// Near-field gaps in a coupled run: the hot block of
+/// hot-block-on-floor.toml starts 2 cm above the floor and falls; across
+/// the gap it exchanges k/g A ΔT (k = 0.5 W/m/K, g = 2 cm, A = 0.01 m²,
+/// ΔT = 100 K: 25 W at the start), then the contact closes.
+#[test]
+fn a_falling_block_exchanges_heat_across_the_gap_then_touches() {
+    let scen = root().join("scenarios/hot-block-on-floor.toml");
+    let set = [
+        "--set",
+        "bodies.1.mesh.origin=[0.0, 0.0, 0.02]",
+        "--set",
+        "contact.gap={ pinball = 0.03, conductivity = 0.5 }",
+        "--set",
+        "output.every=1",
+    ];
+    let mut runs = Vec::new();
+    for ranks in [1, 2] {
+        let dir = out_dir(&format!("thermal-contact/falling-gap-{ranks}"));
+        run_ok(ranks, &scen, &dir, &set);
+        let (h, rows) = history(&dir, "hot-block-on-floor");
+        let c = |n: &str| col(&h, n);
+        let first = &rows[0];
+        assert!(
+            (first[c("gap_area")] - 0.01).abs() < 1e-12,
+            "{}",
+            first[c("gap_area")]
+        );
+        assert_eq!(first[c("contacts")], 0.0);
+        assert!(first[c("faces_near_field")] > 0.0 && first[c("faces_closed")] == 0.0);
+        let q0 = first[c("gap_heat_flow")];
+        let want = 0.5 / 0.02 * 0.01 * 100.0;
+        assert!(
+            (q0 - want).abs() < 1e-9 * want,
+            "gap heat at the start {q0} W"
+        );
+        // Falling 2 cm takes 0.064 s; after some bounces, from 0.24 s the
+        // block stays on the floor (its faces closed or sliding).
+        for r in rows.iter().filter(|r| r[c("time")] >= 0.24) {
+            let touching = r[c("faces_closed")] + r[c("faces_sliding")];
+            assert!(
+                r[c("contacts")] > 0.0 && touching > 0.0,
+                "t = {}",
+                r[c("time")]
+            );
+            assert!(r[c("contact_heat_flow")] > 0.0);
+        }
+        // The gap's heat stays bounded as it closes: k / min_gap (min_gap =
+        // 1 % of the pinball) over the block's face.
+        let bound = 0.5 / (0.01 * 0.03) * 0.01 * 100.0;
+        for r in &rows {
+            assert!(r[c("gap_heat_flow")] <= bound, "t = {}", r[c("time")]);
+        }
+        let last = rows.last().unwrap();
+        let stored = last[c("stored_heat")] - first[c("stored_heat")];
+        assert!(
+            stored.abs() < 1e-9 * first[c("stored_heat")],
+            "heat is exchanged, not made: {stored}"
+        );
+        runs.push(read_results(&dir, "hot-block-on-floor"));
+    }
+    assert_same_temperatures(&runs[0], &runs[1], 1e-8, "falling gap, 1 vs 2 ranks");
+}

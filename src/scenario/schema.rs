@@ -109,6 +109,10 @@ pub struct GapSpec {
     /// half the largest tet extent.
     #[serde(default)]
     pub pinball: Option<f64>,
+    /// Gaps below it (m) exchange heat as if this far apart, so k/g stays
+    /// bounded as faces close. Default: 1 % of the pinball distance.
+    #[serde(default)]
+    pub min_gap: Option<f64>,
     /// Conductivity of the gap's medium k_gap (W/m/K), default 0.
     #[serde(default)]
     pub conductivity: f64,

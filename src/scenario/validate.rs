@@ -493,6 +493,12 @@ impl Scenario {
                     );
                 }
             }
+            if let Some(m) = g.min_gap.filter(|m| !(m.is_finite() && *m > 0.0)) {
+                return bad(
+                    "contact.gap.min_gap",
+                    format!("must be positive (m), got {m}"),
+                );
+            }
             if let Some(k) = &g.conductivity_table {
                 k.check("contact.gap.conductivity_table")
                     .map_err(|e| ("contact.gap.conductivity_table".to_string(), e))?;
@@ -508,14 +514,6 @@ impl Scenario {
                 return bad(
                     "contact.gap.view_factor",
                     format!("must be in (0, 1], got {}", g.view_factor),
-                );
-            }
-            if self.mechanics.is_some() {
-                return bad(
-                    "contact.gap",
-                    "near-field gap heat is computed in thermal runs only so far (a run \
-                     with [mechanics] finds no gaps)"
-                        .into(),
                 );
             }
         }

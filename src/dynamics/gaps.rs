@@ -45,6 +45,16 @@ fn unpack(r: &[f64]) -> (GapLink, u32) {
 }
 
 impl ExplicitDomain {
+    /// Set this rank's share of the friction's work so far (J).
+    pub fn set_friction_work(&mut self, w: f64) {
+        self.friction_work = w;
+    }
+
+    /// This rank's share of the friction's work so far (J).
+    pub fn friction_work_share(&self) -> f64 {
+        self.friction_work
+    }
+
     /// Make the candidate search margin at least `m` (renewing the
     /// candidates at the next detection).
     pub fn widen_margin(&mut self, m: f64) {

@@ -774,6 +774,27 @@ impl<'p> ThermalSystem<'p> {
         f.assemble()
     }
 
+    /// The frictional heat handed over and not yet released, per owned
+    /// node of `part` (J; the copies of a node sharing a row split it),
+    /// when frictional heating is on.
+    pub fn pending_heat(&self, part: &Part) -> Result<Option<Vec<f64>>> {
+        let Some(f) = self.friction.as_ref() else {
+            return Ok(None);
+        };
+        let lo = part.starts[part.rank];
+        let rows = f.to_local_vec()?;
+        let mut copies = vec![0u32; rows.len()];
+        for &p in &part.petsc[..part.n_owned] {
+            copies[p as usize - lo] += 1;
+        }
+        Ok(Some(
+            part.petsc[..part.n_owned]
+                .iter()
+                .map(|&p| rows[p as usize - lo] / f64::from(copies[p as usize - lo]))
+                .collect(),
+        ))
+    }
+
     /// The temperature of every owned node of `part` (part order).
     pub fn node_temperatures(&self, part: &Part) -> Result<Vec<f64>> {
         Ok(part.rows_to_nodes(&self.t.to_local_vec()?))

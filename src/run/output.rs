@@ -114,6 +114,7 @@ impl Output {
                 "friction_heat_in",
                 "contact_heat_flow",
                 "gap_heat_flow",
+                "gap_radiation_flow",
             ] {
                 header.push(h.into());
             }
@@ -370,15 +371,15 @@ impl Output {
             // the current temperatures, and the heat through contacts and
             // across gaps now.
             let f = s.contact_flows(model, contacts)?;
-            let mut mine = [0.0, 0.0, f.conductance, f.contact, f.gap];
+            let mut mine = [0.0, 0.0, f.conductance, f.contact, f.gap, f.gap_radiation];
             for (p, d) in contacts.local.iter().zip(&contacts.dofs) {
                 mine[0] += p.area() * d.pressure;
                 mine[1] += p.area();
             }
-            let mut all = [0.0; 5];
+            let mut all = [0.0; 6];
             comm.all_reduce_into(&mine[..], &mut all[..], SystemOperation::sum());
             let pressure = if all[1] > 0.0 { all[0] / all[1] } else { 0.0 };
-            row.extend_from_slice(&[pressure, all[2], e.friction_in, all[3], all[4]]);
+            row.extend_from_slice(&[pressure, all[2], e.friction_in, all[3], all[4], all[5]]);
             if let Some(st) = self.status.as_ref() {
                 let sliding = model.contact.as_ref().map_or(0.0, |c| c.sliding_speed);
                 row.extend(st.counts(comm, contacts, sliding).map(|c| c as f64));
@@ -391,7 +392,7 @@ impl Output {
                         let dt = time - p[0];
                         (
                             p[7] + 0.5 * dt * (p[9] + all[3]),
-                            p[8] + 0.5 * dt * (p[10] + all[4]),
+                            p[8] + 0.5 * dt * (p[10] + all[4] + all[5]),
                         )
                     }
                     None => (0.0, 0.0),
@@ -407,7 +408,7 @@ impl Output {
                     through,
                     across,
                     all[3],
-                    all[4],
+                    all[4] + all[5],
                 ]);
             }
         }

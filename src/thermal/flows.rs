@@ -19,8 +19,10 @@ pub struct Flows {
     pub conductance: f64,
     /// Σ |heat| through the pairs, from one body into the other (W).
     pub contact: f64,
-    /// Σ |heat| across the gap links (W).
+    /// Σ |heat| conducted and convected across the gap links (W).
     pub gap: f64,
+    /// Σ |heat| radiated across the gap links (W).
+    pub gap_radiation: f64,
 }
 
 /// The PETSc rows whose temperatures [`flows`] reads, in its order: each
@@ -84,7 +86,8 @@ pub fn flows(model: &Model, contacts: &ContactSet, t: &[f64]) -> Flows {
     for (k, l) in contacts.gaps.iter().enumerate() {
         let tl = &t[at + 6 * k..at + 6 * k + 6];
         let u = gap_unit(l, gap_law(model, gs, l));
-        let mut q: f64 = unit_heat(&u, &laws, tl).0[..3].iter().sum();
+        let q: f64 = unit_heat(&u, &laws, tl).0[..3].iter().sum();
+        out.gap += q.abs();
         if gs.radiation {
             let [ea, eb] = l.materials.map(|m| model.materials[m as usize].emissivity);
             let vf = gs
@@ -94,11 +97,11 @@ pub fn flows(model: &Model, contacts: &ContactSet, t: &[f64]) -> Flows {
             let g = STEFAN_BOLTZMANN * vf * grey_exchange(ea, eb);
             let off = model.thermal.offset;
             let u4: Vec<f64> = tl.iter().map(|x| (x + off).powi(4)).collect();
-            for i in 0..3 {
-                q += g * (0..6).map(|j| u.lap[8 * i + j] * u4[j]).sum::<f64>();
-            }
+            let r: f64 = (0..3)
+                .map(|i| g * (0..6).map(|j| u.lap[8 * i + j] * u4[j]).sum::<f64>())
+                .sum();
+            out.gap_radiation += r.abs();
         }
-        out.gap += q.abs();
     }
     out
 }

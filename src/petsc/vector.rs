@@ -17,9 +17,13 @@ pub struct Vector<'p> {
 impl<'p> Vector<'p> {
     /// Collective. A vector with `owned` entries on this rank (global size summed).
     pub fn new(petsc: &'p Petsc, owned: usize) -> Result<Self> {
+        Self::on(petsc.comm(), owned)
+    }
+
+    fn on(comm: ffi::MPI_Comm, owned: usize) -> Result<Self> {
         let mut raw: ffi::Vec = std::ptr::null_mut();
         petsc_call!(VecCreateMPI(
-            petsc.comm(),
+            comm,
             owned as PetscInt,
             PETSC_DECIDE,
             &mut raw
@@ -36,17 +40,7 @@ impl<'p> Vector<'p> {
         // SAFETY: a handle (a pointer) that PetscObjectGetComm overwrites.
         let mut comm: ffi::MPI_Comm = unsafe { std::mem::zeroed() };
         petsc_call!(PetscObjectGetComm(like.raw as ffi::PetscObject, &mut comm))?;
-        let mut raw: ffi::Vec = std::ptr::null_mut();
-        petsc_call!(VecCreateMPI(
-            comm,
-            owned as PetscInt,
-            PETSC_DECIDE,
-            &mut raw
-        ))?;
-        Ok(Vector {
-            raw,
-            _petsc: PhantomData,
-        })
+        Self::on(comm, owned)
     }
 
     /// Collective. A new vector with the same layout (values not copied).

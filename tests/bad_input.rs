@@ -792,7 +792,37 @@ fn bad_ambient_keys_are_named() {
             "contact.friction_heating",
         ),
     ];
-    for (name, text, key) in cases.into_iter().chain(gap_cases) {
+    let table = |t: &str| BASE.to_string() + "\n[contact]\ntable = " + t + "\n";
+    let table_cases = [
+        (
+            "table-count",
+            table("{ temperature = [0.0, 1.0], h = [1.0, 2.0, 3.0] }"),
+            "contact.table.h",
+        ),
+        (
+            "table-order",
+            table("{ gap = [1.0, 0.0], h = [1.0, 2.0] }"),
+            "contact.table.gap",
+        ),
+        (
+            "table-pressure",
+            table("{ pressure = [0.0, 1e6], h = [1.0, 2.0] }"),
+            "contact.table.prescribed_pressure",
+        ),
+        ("table-negative", table("{ h = [-1.0] }"), "contact.table.h"),
+        (
+            "gap-k-table",
+            BASE.to_string()
+                + "\n[contact]\ngap = { conductivity_table = { temperature = [0.0], k = [] } }\n",
+            "contact.gap.conductivity_table",
+        ),
+        (
+            "sliding-speed",
+            BASE.to_string() + "\n[contact]\nsliding_speed = -1.0\n",
+            "contact.sliding_speed",
+        ),
+    ];
+    for (name, text, key) in cases.into_iter().chain(gap_cases).chain(table_cases) {
         let d = scenario_dir(&format!("ambient-{name}"));
         let s = write(&d, "bad.toml", &text);
         for ranks in [1, 2] {

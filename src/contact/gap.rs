@@ -24,6 +24,10 @@ pub struct GapLink {
     pub gap: f64,
     /// Materials of the two faces.
     pub materials: [u32; 2],
+    /// Global element ids of the searching and the facing tet.
+    pub tets: [u32; 2],
+    /// Their local faces (opposite that node).
+    pub faces: [u8; 2],
 }
 
 /// Corners and outward unit normal of face `f` (opposite node f) of a tet.
@@ -76,6 +80,61 @@ pub fn face_gap(
         let sum = w[0] + w[1] + w[2];
         (s, w.map(|v| v / sum))
     })
+}
+
+/// The pinball distance and the smallest gap of the links: faces closer
+/// than `min_gap` exchange heat as if `min_gap` apart (k/g stays bounded
+/// as a gap closes).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GapRange {
+    /// Faces farther apart are not linked (m).
+    pub pinball: f64,
+    /// Gaps below it count as it (m).
+    pub min_gap: f64,
+}
+
+impl GapRange {
+    /// The range of scenario key `contact.gap` with its pinball resolved:
+    /// `min_gap` defaults to 1 % of the pinball distance.
+    pub fn new(pinball: f64, min_gap: Option<f64>) -> GapRange {
+        GapRange {
+            pinball,
+            min_gap: min_gap.unwrap_or(0.01 * pinball),
+        }
+    }
+}
+
+/// The links from the boundary faces of tet a (corners `ca`, boundary
+/// faces `mask_a`) to those of tet b: per face of a, each face of b its
+/// centroid's normal ray meets within the pinball ([`face_gap`]), as (face
+/// of a, face of b, gap (at least the range's smallest), weights, area of
+/// a's face).
+pub fn tet_links(
+    ca: &[[f64; 3]; 4],
+    mask_a: u8,
+    cb: &[[f64; 3]; 4],
+    mask_b: u8,
+    range: GapRange,
+) -> Vec<(u8, u8, f64, [f64; 3], f64)> {
+    let pinball = range.pinball;
+    let mut out = Vec::new();
+    for fa in (0..4).filter(|f| mask_a & (1 << f) != 0) {
+        let (xa, na, area) = outward_face(ca, fa);
+        for fb in (0..4).filter(|f| mask_b & (1 << f) != 0) {
+            let (xb, nb, _) = outward_face(cb, fb);
+            if let Some((gap, beta)) = face_gap(&xa, na, &xb, nb, pinball) {
+                out.push((fa as u8, fb as u8, gap.max(range.min_gap), beta, area));
+            }
+        }
+    }
+    out
+}
+
+/// Whether `l` replaces `best` as a face's link to a body: the smaller
+/// gap, ties to the lower (tet, face) met, so the choice does not depend
+/// on the order links are found in.
+pub fn better(l: &GapLink, best: &GapLink) -> bool {
+    (l.gap, l.tets[1], l.faces[1]) < (best.gap, best.tets[1], best.faces[1])
 }
 
 #[cfg(test)]

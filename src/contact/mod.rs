@@ -12,6 +12,7 @@ pub mod gap;
 pub mod penalty;
 pub mod search;
 mod surface;
+pub mod table;
 mod tets;
 
 pub use detect::{
@@ -56,6 +57,42 @@ pub struct PairDofs {
     /// Contact pressure (Pa): the penalty's normal force over the pair's
     /// surface in a run with mechanics (when a conductance needs it), else 0.
     pub pressure: f64,
+    /// Mean penetration (m): the two tets' overlap volume over the pair's
+    /// surface, when a conductance table depends on it, else 0.
+    pub penetration: f64,
+    /// Tangential slip speed (m/s) of the contactor on the target (runs
+    /// with mechanics; 0 otherwise): the contact status is *sliding* above
+    /// the scenario's threshold.
+    pub slip: f64,
+}
+
+/// The tangential speed of tet c's mean velocity relative to tet t's
+/// along t's first clipped face (`faces`: bit f, face opposite node f),
+/// with `x` t's corners (0 without a clipped face).
+pub fn slip_speed(x: &[[f64; 3]; 4], faces: u8, vt: &[[f64; 3]; 4], vc: &[[f64; 3]; 4]) -> f64 {
+    let Some(f) = (0..4).find(|f| faces & (1 << f) != 0) else {
+        return 0.0;
+    };
+    let (_, n, _) = gap::outward_face(x, f);
+    let mut v = [0.0; 3];
+    for k in 0..4 {
+        for d in 0..3 {
+            v[d] += 0.25 * (vc[k][d] - vt[k][d]);
+        }
+    }
+    let vn = crate::geometry::dot(v, n);
+    let t = [0, 1, 2].map(|d| v[d] - vn * n[d]);
+    crate::geometry::dot(t, t).sqrt()
+}
+
+/// The mean penetration of two overlapping tets with contact surface
+/// `area`: their intersection's volume over it (m).
+pub fn penetration(a: &[[f64; 3]; 4], b: &[[f64; 3]; 4], area: f64) -> f64 {
+    if area > 0.0 {
+        crate::geometry::overlap::tet_tet_intersection(a, b).volume / area
+    } else {
+        0.0
+    }
 }
 
 /// The contact pairs an operator is assembled with: this rank's, and the
@@ -199,6 +236,7 @@ mod tests {
             w_contactor: [0.0, 1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0],
             v_target: [0.25; 4],
             v_contactor: [0.1, 0.2, 0.3, 0.4],
+            ..Default::default()
         };
         let pair = ContactPair {
             target: 1,

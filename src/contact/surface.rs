@@ -21,6 +21,11 @@ pub struct ContactSurface {
     pub v_target: [f64; 4],
     /// The contactor's temperature where the target's clipped faces lie.
     pub v_contactor: [f64; 4],
+    /// Bit f set: the target's local face f (opposite node f) has clipped
+    /// area (the face's contact status is closed).
+    pub faces_target: u8,
+    /// Same for the contactor's faces.
+    pub faces_contactor: u8,
 }
 
 impl ContactSurface {
@@ -51,6 +56,8 @@ impl ContactSurface {
             w_contactor: third(face_contactor),
             v_target: third(face_target),
             v_contactor: third(face_contactor),
+            faces_target: 1 << face_target,
+            faces_contactor: 1 << face_contactor,
         }
     }
 }
@@ -72,8 +79,9 @@ fn side(
     faces_a: &[u8],
     b: &[[f64; 3]; 4],
     faces_b: &[u8],
-) -> (f64, [f64; 4], [f64; 3]) {
+) -> (f64, [f64; 4], [f64; 3], u8) {
     let mask_b = face_mask(faces_b);
+    let mut touched = 0u8;
     let mut s = 0.0;
     let mut w = [0.0; 4];
     let mut centroid = [0.0; 3];
@@ -88,6 +96,7 @@ fn side(
         let poly = face_tet_clip(&tri, n, b, mask_b);
         let area = polygon_area(&poly);
         if area > 0.0 {
+            touched |= 1 << f;
             s += area;
             for &k in &fl {
                 w[k] += area / 3.0;
@@ -106,7 +115,7 @@ fn side(
             *c /= s;
         }
     }
-    (s, w, centroid)
+    (s, w, centroid, touched)
 }
 
 /// Area centroid of a planar convex polygon (fan of triangles).
@@ -157,8 +166,8 @@ pub type TetSide<'a> = (&'a [[f64; 3]; 4], &'a [u8], u8);
 /// [`super::local_conductance_block`] such a node would conduct straight
 /// across the contact).
 pub fn tet_tet_contact_surface(t: TetSide, c: TetSide) -> ContactSurface {
-    let (s_target, w_target, cen_t) = side(t.0, t.1, c.0, c.1);
-    let (s_contactor, w_contactor, cen_c) = side(c.0, c.1, t.0, t.1);
+    let (s_target, w_target, cen_t, faces_target) = side(t.0, t.1, c.0, c.1);
+    let (s_contactor, w_contactor, cen_c, faces_contactor) = side(c.0, c.1, t.0, t.1);
     // Each side's temperature at the other side's clipped faces; exact for
     // the integral of a linear temperature over them (centroid rule).
     let v_target = if s_contactor > 0.0 {
@@ -184,6 +193,8 @@ pub fn tet_tet_contact_surface(t: TetSide, c: TetSide) -> ContactSurface {
         },
         v_target,
         v_contactor,
+        faces_target,
+        faces_contactor,
     }
 }
 

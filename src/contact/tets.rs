@@ -152,16 +152,23 @@ impl OwnAndGhosts<'_> {
     }
 
     /// The thermal contact pairs among `candidates` (handles) at the
-    /// current corners, each with its dofs, sorted by (target, contactor).
-    pub fn contact_pairs(&self, candidates: &[Candidate]) -> Vec<(ContactPair, PairDofs)> {
+    /// current corners, each with its dofs, sorted by (target, contactor);
+    /// with `penetration`, each pair's mean penetration too.
+    pub fn contact_pairs(
+        &self,
+        candidates: &[Candidate],
+        penetration: bool,
+    ) -> Vec<(ContactPair, PairDofs)> {
         let mut out: Vec<(ContactPair, PairDofs)> = candidates
             .iter()
             .filter_map(|c| {
-                let p = tet_pair_contact(
-                    (self.faces(c.a), &self.corners(c.a)),
-                    (self.faces(c.b), &self.corners(c.b)),
-                )?;
-                Some((p, self.dofs(c.a, c.b)))
+                let (ca, cb) = (self.corners(c.a), self.corners(c.b));
+                let p = tet_pair_contact((self.faces(c.a), &ca), (self.faces(c.b), &cb))?;
+                let mut d = self.dofs(c.a, c.b);
+                if penetration {
+                    d.penetration = super::penetration(&ca, &cb, p.area());
+                }
+                Some((p, d))
             })
             .collect();
         out.sort_by_key(|(p, _)| (p.target, p.contactor));
@@ -175,40 +182,36 @@ impl OwnAndGhosts<'_> {
     /// search finds every pair of two bodies from one side, on the rank
     /// that owns the searching tet, so each face is linked once over the
     /// ranks. Sorted by (tet, face, body).
-    pub fn gap_links(&self, candidates: &[Candidate], pinball: f64) -> Vec<super::gap::GapLink> {
-        use super::gap::{face_gap, outward_face, GapLink};
-        let mut best: std::collections::BTreeMap<(u32, usize, u32), GapLink> = Default::default();
+    pub fn gap_links(
+        &self,
+        candidates: &[Candidate],
+        range: super::gap::GapRange,
+    ) -> Vec<super::gap::GapLink> {
+        use super::gap::{better, tet_links, GapLink};
+        let mut best: std::collections::BTreeMap<(u32, u8, u32), GapLink> = Default::default();
         for c in candidates.iter().filter(|c| c.b_boundary) {
             let ((sa, ia), (sb, ib)) = (self.at(c.a), self.at(c.b));
             if sa.body[ia] == sb.body[ib] {
                 continue;
             }
-            let (ca, cb) = (sa.corners(ia), sb.corners(ib));
-            let rows = |s: &ContactTets, i: usize, f: usize| {
-                crate::mesh::LOCAL_FACES[f].map(|k| s.node_petsc[s.tets[i][k] as usize])
+            let rows = |s: &ContactTets, i: usize, f: u8| {
+                crate::mesh::LOCAL_FACES[f as usize].map(|k| s.node_petsc[s.tets[i][k] as usize])
             };
-            for fa in (0..4).filter(|f| sa.mask[ia] & (1 << f) != 0) {
-                let (xa, na, area) = outward_face(&ca, fa);
-                for fb in (0..4).filter(|f| sb.mask[ib] & (1 << f) != 0) {
-                    let (xb, nb, _) = outward_face(&cb, fb);
-                    let Some((gap, beta)) = face_gap(&xa, na, &xb, nb, pinball) else {
-                        continue;
-                    };
-                    let key = (sa.gid[ia], fa, sb.body[ib]);
-                    if best.get(&key).is_some_and(|l| l.gap <= gap) {
-                        continue;
-                    }
-                    best.insert(
-                        key,
-                        GapLink {
-                            rows_a: rows(sa, ia, fa),
-                            rows_b: rows(sb, ib, fb),
-                            beta,
-                            area,
-                            gap,
-                            materials: [sa.material[ia], sb.material[ib]],
-                        },
-                    );
+            let (ca, cb) = (sa.corners(ia), sb.corners(ib));
+            for (fa, fb, gap, beta, area) in tet_links(&ca, sa.mask[ia], &cb, sb.mask[ib], range) {
+                let l = GapLink {
+                    rows_a: rows(sa, ia, fa),
+                    rows_b: rows(sb, ib, fb),
+                    beta,
+                    area,
+                    gap,
+                    materials: [sa.material[ia], sb.material[ib]],
+                    tets: [sa.gid[ia], sb.gid[ib]],
+                    faces: [fa, fb],
+                };
+                let key = (sa.gid[ia], fa, sb.body[ib]);
+                if best.get(&key).is_none_or(|b| better(&l, b)) {
+                    best.insert(key, l);
                 }
             }
         }

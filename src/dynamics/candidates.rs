@@ -728,6 +728,12 @@ impl ExplicitDomain {
                 d.petsc[j] = petsc[tt[j] as usize];
                 d.petsc[4 + j] = petsc[tc[j] as usize];
             }
+            d.slip = crate::contact::slip_speed(
+                &corners(tt),
+                p.surface.faces_target,
+                &tt.map(|l| self.v[l as usize].into()),
+                &tc.map(|l| self.v[l as usize].into()),
+            );
             Some((p, d))
         };
         let mut pairs: Vec<(ContactPair, PairDofs)> = self
@@ -759,6 +765,11 @@ impl ExplicitDomain {
                         &pp,
                     );
                     d.pressure = r.map_or(0.0, |r| r.normal_force / p.area());
+                }
+                if self.penetration {
+                    let (la, lb) = (&self.pair_tets[a], &self.pair_tets[b]);
+                    d.penetration =
+                        crate::contact::penetration(&corners(la), &corners(lb), p.area());
                 }
                 Some((p, d))
             })

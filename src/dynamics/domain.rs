@@ -93,6 +93,9 @@ pub struct ExplicitDomain {
     /// Give each thermal contact pair its penalty pressure (a conductance
     /// that follows it, issue 20).
     pub contact_pressure: bool,
+    /// Give each thermal contact pair its mean penetration (a conductance
+    /// table depends on it).
+    pub penetration: bool,
     /// Search margin (m) of the current candidates, between `margin_min`
     /// and [`MARGIN_GROWTH`] × `margin_min`, chosen at each detection.
     pub(super) margin: f64,
@@ -328,7 +331,14 @@ impl ExplicitDomain {
                     .iter()
                     .flatten()
                     .any(|m| m.is_some_and(|m| m.pressure.is_none()))
+                    || c.tables
+                        .iter()
+                        .any(|t| t.depends_on_pressure() && t.prescribed_pressure.is_none())
             }),
+            penetration: model
+                .contact
+                .as_ref()
+                .is_some_and(|c| c.needs_penetration()),
             margin,
             margin_min: margin,
             candidates: Vec::new(),

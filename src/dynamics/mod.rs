@@ -49,6 +49,7 @@ mod balance;
 mod candidates;
 mod domain;
 mod force_sum;
+mod gaps;
 mod joints;
 mod state;
 mod substep;

@@ -198,6 +198,14 @@ impl ExplicitDomain {
             .collect()
     }
 
+    /// Positions of the part's nodes, owned and ghost (part order).
+    pub fn part_positions(&self) -> Vec<[f64; 3]> {
+        self.x[..self.n_part_nodes]
+            .iter()
+            .map(|p| [p.x, p.y, p.z])
+            .collect()
+    }
+
     /// Velocities of the owned nodes (part order).
     pub fn owned_velocities(&self) -> Vec<[f64; 3]> {
         self.v[..self.n_owned]

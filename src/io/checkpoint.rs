@@ -25,7 +25,7 @@ use super::IoError;
 
 const FORMAT: &str = "fdem-checkpoint";
 const VERSION: u32 = 1;
-const SCALARS: usize = 13;
+const SCALARS: usize = 14;
 
 /// The heat account's running state as saved.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -83,6 +83,8 @@ pub struct Checkpoint {
     pub heat: [f64; 7],
     /// Energy dissipated by contact damping and friction (J).
     pub dissipated: f64,
+    /// The friction's share of it (J; issue 20's frictional heating).
+    pub friction_work: f64,
     /// Largest kinetic energy seen (J), for the settling test.
     pub peak_kinetic: f64,
     /// Thermal contact pairs at the checkpoint (information).
@@ -173,7 +175,7 @@ impl Checkpoint {
             }
         };
         let sc = get::<f64>(&file, path, "state/scalars", 1)?;
-        if !(sc.len() == SCALARS || sc.len() + 1 == SCALARS) {
+        if !(SCALARS - 2..=SCALARS).contains(&sc.len()) {
             return Err(IoError::invalid(path, "state/scalars has the wrong length"));
         }
         let c = Checkpoint {
@@ -205,6 +207,7 @@ impl Checkpoint {
             },
             heat: heat_of(&sc),
             dissipated: sc[8],
+            friction_work: sc.get(13).copied().unwrap_or(0.0),
             peak_kinetic: sc[9],
             thermal_contacts: sc[10] as u64,
             dissipated_per_rank: if file.link_exists("state/dissipated_per_rank") {
@@ -340,6 +343,8 @@ pub struct CheckpointHead {
     pub heat: [f64; 7],
     /// Energy dissipated by contact damping and friction (J).
     pub dissipated: f64,
+    /// The friction's share of it (J; issue 20's frictional heating).
+    pub friction_work: f64,
     /// Largest kinetic energy seen (J).
     pub peak_kinetic: f64,
     /// Thermal contact pairs at the checkpoint (information).
@@ -651,6 +656,7 @@ fn write_parallel_to(
     sc[10] = head.thermal_contacts as f64;
     sc[11] = head.heat[5];
     sc[12] = head.heat[6];
+    sc[13] = head.friction_work;
     small("state/scalars", &sc, 1)?;
     super::ffi::flush_global(&file).map_err(call("flushing the checkpoint"))
 }
@@ -710,7 +716,7 @@ impl CheckpointFile {
         let file = open_checked(path)?;
         let text = |name: &str| text_lines(&file, path, name);
         let sc = get::<f64>(&file, path, "state/scalars", 1)?;
-        if !(sc.len() == SCALARS || sc.len() + 1 == SCALARS) {
+        if !(SCALARS - 2..=SCALARS).contains(&sc.len()) {
             return Err(IoError::invalid(path, "state/scalars has the wrong length"));
         }
         let rows_of = |name: &str| -> Result<u64, IoError> {
@@ -756,6 +762,7 @@ impl CheckpointFile {
             ksp_iterations: first("state/counters")?.unwrap_or(0),
             heat: heat_of(&sc),
             dissipated: sc[8],
+            friction_work: sc.get(13).copied().unwrap_or(0.0),
             peak_kinetic: sc[9],
             thermal_contacts: sc[10] as u64,
             dissipated_per_rank: if file.link_exists("state/dissipated_per_rank") {
@@ -989,6 +996,7 @@ mod tests {
             temperature: Some(vec![1.0, 2.0, 3.0, f64::MIN_POSITIVE]),
             heat: [1.0, 2.0, 3.0, 4.0, 5.0, -6.0, 7.0],
             dissipated: 0.5,
+            friction_work: 0.125,
             peak_kinetic: 2.5,
             settled: Some(1e-3),
             dissipated_per_rank: Some(vec![0.25, 0.5]),
@@ -1018,6 +1026,7 @@ mod tests {
             ksp_iterations: c.ksp_iterations,
             heat: c.heat,
             dissipated: c.dissipated,
+            friction_work: c.friction_work,
             peak_kinetic: c.peak_kinetic,
             thermal_contacts: c.thermal_contacts,
             dissipated_per_rank: c.dissipated_per_rank.clone(),

@@ -8,18 +8,19 @@
 pub mod ambient;
 mod bcs;
 mod bodies;
+mod contact;
 
 pub use bcs::{body_bcs, BodyBcs, MechanicsKind, SetTarget, ThermalKind};
 pub use bodies::{BodyMesh, BodySource, Motion, SourceJoints, SourceMesh};
+pub use contact::ContactModel;
 
-use crate::contact::DeltaT;
 use crate::error::{Error, Result};
 use crate::geometry::transform::{rotate_points, rotation_xyz_degrees, translate_points};
 use crate::mechanics::ElasticMaterial;
 use crate::mesh::{self, TetMesh};
 use crate::scenario::{
-    contact_resistance, CapacityKind, LoadedScenario, MechanicsBcSpec, MeshSpec,
-    ParticleOutputSpec, PenaltySpec, SolverSpec, ThermalBcSpec,
+    CapacityKind, LoadedScenario, MechanicsBcSpec, MeshSpec, ParticleOutputSpec, PenaltySpec,
+    SolverSpec, ThermalBcSpec,
 };
 
 /// A material's constants (thermal ones are 0 in a purely mechanical run).
@@ -122,25 +123,6 @@ pub struct ThermalProblem {
     pub offset: f64,
     /// Free-surface convection and radiation (issue 20).
     pub ambient: Option<ambient::Ambient>,
-}
-
-/// Contact heat transfer settings resolved to material indices.
-#[derive(Debug, Clone)]
-pub struct ContactModel {
-    /// Rc between materials i and j (symmetric; infinite: no heat).
-    pub resistance: Vec<Vec<f64>>,
-    /// How ΔT is taken.
-    pub delta_t: DeltaT,
-    /// The local-ΔT block form.
-    pub operator: crate::contact::ContactOperator,
-    /// Detection cadence in steps (0: once).
-    pub every: u64,
-    /// Near-field gap heat (issue 20).
-    pub gap: Option<crate::scenario::GapSpec>,
-    /// Pressure-dependent conductance between materials i and j, if any.
-    pub cmy: Vec<Vec<Option<crate::contact::conductance::Cmy>>>,
-    /// Frictional heating (η, w), when on.
-    pub friction_heating: Option<crate::scenario::FrictionHeatingSpec>,
 }
 
 /// What a run writes, and where.
@@ -725,33 +707,7 @@ impl Model {
 
         let contact = match &s.contact {
             None => None,
-            Some(c) => {
-                let default = contact_resistance(c.resistance, c.conductance).unwrap_or_default();
-                let default = default.unwrap_or(f64::INFINITY);
-                let nm = materials.len();
-                let mut rc = vec![vec![default; nm]; nm];
-                let mut cmy = vec![vec![c.cmy; nm]; nm];
-                for p in &c.pair {
-                    let r = contact_resistance(p.resistance, p.conductance)
-                        .map_err(|m| model_err(format!("contact.pair: {m}")))?
-                        .unwrap_or(f64::INFINITY);
-                    let idx = |n: &str| materials.iter().position(|m| m.name == n).unwrap();
-                    let (a, b) = (idx(&p.materials[0]), idx(&p.materials[1]));
-                    (rc[a][b], rc[b][a]) = (r, r);
-                    if p.cmy.is_some() {
-                        (cmy[a][b], cmy[b][a]) = (p.cmy, p.cmy);
-                    }
-                }
-                Some(ContactModel {
-                    resistance: rc,
-                    delta_t: c.delta_t,
-                    operator: c.operator,
-                    every: c.every,
-                    gap: c.gap.clone(),
-                    cmy,
-                    friction_heating: c.friction_heating,
-                })
-            }
+            Some(c) => Some(contact::contact_model(c, &materials).map_err(model_err)?),
         };
 
         let mechanics = match &s.mechanics {

@@ -13,6 +13,7 @@
 pub mod error;
 mod ksp;
 mod matrix;
+mod scatter;
 mod snes;
 mod vector;
 
@@ -26,6 +27,7 @@ use petsc_sys as ffi;
 pub use error::PetscError;
 pub use ksp::{Ksp, SolveStats};
 pub use matrix::{Matrix, Pattern};
+pub use scatter::Gather;
 pub use snes::{Nonlinear, NonlinearStats, Snes};
 pub use vector::{Vector, VectorView, VectorViewMut};
 

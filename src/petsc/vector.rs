@@ -17,9 +17,13 @@ pub struct Vector<'p> {
 impl<'p> Vector<'p> {
     /// Collective. A vector with `owned` entries on this rank (global size summed).
     pub fn new(petsc: &'p Petsc, owned: usize) -> Result<Self> {
+        Self::on(petsc.comm(), owned)
+    }
+
+    fn on(comm: ffi::MPI_Comm, owned: usize) -> Result<Self> {
         let mut raw: ffi::Vec = std::ptr::null_mut();
         petsc_call!(VecCreateMPI(
-            petsc.comm(),
+            comm,
             owned as PetscInt,
             PETSC_DECIDE,
             &mut raw
@@ -28,6 +32,15 @@ impl<'p> Vector<'p> {
             raw,
             _petsc: PhantomData,
         })
+    }
+
+    /// Collective over `like`'s communicator. A vector with `owned` entries
+    /// on this rank.
+    pub fn new_like(like: &Vector<'p>, owned: usize) -> Result<Self> {
+        // SAFETY: a handle (a pointer) that PetscObjectGetComm overwrites.
+        let mut comm: ffi::MPI_Comm = unsafe { std::mem::zeroed() };
+        petsc_call!(PetscObjectGetComm(like.raw as ffi::PetscObject, &mut comm))?;
+        Self::on(comm, owned)
     }
 
     /// Collective. A new vector with the same layout (values not copied).

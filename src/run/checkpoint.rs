@@ -266,6 +266,12 @@ pub(super) fn restore_mechanics(
     };
     m.restore(comm, saved)?;
     m.counters.substeps = ck.substeps;
+    // The friction's work so far, summed on rank 0.
+    m.set_friction_work(if comm.rank() == 0 {
+        ck.friction_work
+    } else {
+        0.0
+    });
     Ok(())
 }
 
@@ -475,7 +481,9 @@ pub(super) fn capture(
         positions = Some(m.owned_positions());
         velocities = Some(m.owned_velocities());
         velocities_prev = m.owned_velocities_prev(comm);
-        head.dissipated = m.state(comm).dissipated;
+        let st = m.state(comm);
+        head.dissipated = st.dissipated;
+        head.friction_work = st.friction_work;
         head.substeps = m.counters.substeps;
         head.dissipated_per_rank = Some(m.gather_dissipated(comm));
         head.external_work_per_rank = Some(m.gather_external_work(comm));

@@ -17,6 +17,7 @@ mod rebalance;
 mod schedule;
 mod settle;
 mod setup;
+mod status_output;
 mod summary;
 
 use std::path::{Path, PathBuf};

@@ -48,10 +48,13 @@ pub(super) struct Output {
     cracks: Vec<(f64, f64, f64)>,
     /// Issue 20: per history row, the time and the heat in by each
     /// mechanism so far (prescribed temperatures, fluxes, convection,
-    /// radiation, friction) and the stored heat's change.
-    heat: Vec<[f64; 7]>,
+    /// radiation, friction), the stored heat's change, the heat moved
+    /// through contacts and across gaps so far, and those two flows now.
+    heat: Vec<[f64; 11]>,
     /// The joint output grid, when the model has joints.
     pub joints: Option<super::joint_output::JointOutput>,
+    /// The boundary faces' contact status, in runs with thermal contact.
+    status: Option<super::status_output::StatusOutput>,
 }
 
 impl Output {
@@ -109,10 +112,30 @@ impl Output {
                 "contact_pressure",
                 "contact_conductance",
                 "friction_heat_in",
+                "contact_heat_flow",
+                "gap_heat_flow",
+                "gap_radiation_flow",
             ] {
                 header.push(h.into());
             }
         }
+        // Seed 001 sec 7.1.1: the boundary faces by contact status.
+        let status = if heat && model.contact.is_some() {
+            for h in [
+                "faces_free",
+                "faces_near_field",
+                "faces_closed",
+                "faces_sliding",
+            ] {
+                header.push(h.into());
+            }
+            let after = continues.then_some(keep_until);
+            Some(super::status_output::StatusOutput::open(
+                comm, model, part, &dir, &stem, after,
+            )?)
+        } else {
+            None
+        };
         if mechanics {
             for h in [
                 "mech_time",
@@ -209,6 +232,7 @@ impl Output {
             cracks: Vec::new(),
             heat: Vec::new(),
             joints: None,
+            status,
         })
     }
 
@@ -293,6 +317,22 @@ impl Output {
         if let (Some(j), Some(m)) = (self.joints.as_mut(), mech) {
             j.write(comm, time, m)?;
         }
+        if let Some(st) = self.status.as_mut() {
+            let positions = match mech {
+                Some(Mechanics { domain: m, .. }) => m.part_positions(),
+                None => part
+                    .node_gid
+                    .iter()
+                    .zip(&part.mesh.nodes)
+                    .map(|(&n, x)| {
+                        let v = model.bodies[model.body_of_node(n)].velocity;
+                        [0, 1, 2].map(|d| x[d] + v[d] * time)
+                    })
+                    .collect(),
+            };
+            let sliding = model.contact.as_ref().map_or(0.0, |c| c.sliding_speed);
+            st.write(comm, part, &positions, contacts, sliding, time)?;
+        }
         self.history_row(comm, model, part, sys, mech, contacts, step)
     }
 
@@ -327,19 +367,36 @@ impl Output {
                 s.newton_iterations as f64,
                 contacts.total_gap_area,
             ]);
-            // Area-weighted mean pressure and Σ S/Rc of the thermal pairs.
-            let mut mine = [0.0; 3];
+            // Area-weighted mean pressure, Σ S/Rc of the thermal pairs at
+            // the current temperatures, and the heat through contacts and
+            // across gaps now.
+            let f = s.contact_flows(model, contacts)?;
+            let mut mine = [0.0, 0.0, f.conductance, f.contact, f.gap, f.gap_radiation];
             for (p, d) in contacts.local.iter().zip(&contacts.dofs) {
-                let rc = crate::thermal::assembly::pair_resistance(model, d);
                 mine[0] += p.area() * d.pressure;
                 mine[1] += p.area();
-                mine[2] += if rc.is_finite() { p.area() / rc } else { 0.0 };
             }
-            let mut all = [0.0; 3];
+            let mut all = [0.0; 6];
             comm.all_reduce_into(&mine[..], &mut all[..], SystemOperation::sum());
             let pressure = if all[1] > 0.0 { all[0] / all[1] } else { 0.0 };
-            row.extend_from_slice(&[pressure, all[2], e.friction_in]);
+            row.extend_from_slice(&[pressure, all[2], e.friction_in, all[3], all[4], all[5]]);
+            if let Some(st) = self.status.as_ref() {
+                let sliding = model.contact.as_ref().map_or(0.0, |c| c.sliding_speed);
+                row.extend(st.counts(comm, contacts, sliding).map(|c| c as f64));
+            }
             if model.has_contact_physics() {
+                // Heat moved between bodies: Σ|q| integrated by the
+                // trapezoid rule over the history rows.
+                let (through, across) = match self.heat.last() {
+                    Some(p) => {
+                        let dt = time - p[0];
+                        (
+                            p[7] + 0.5 * dt * (p[9] + all[3]),
+                            p[8] + 0.5 * dt * (p[10] + all[4] + all[5]),
+                        )
+                    }
+                    None => (0.0, 0.0),
+                };
                 self.heat.push([
                     time,
                     e.dirichlet_in,
@@ -348,6 +405,10 @@ impl Output {
                     e.radiation_in,
                     e.friction_in,
                     e.stored_change,
+                    through,
+                    across,
+                    all[3],
+                    all[4] + all[5],
                 ]);
             }
         }
@@ -450,6 +511,9 @@ impl Output {
         if let Some(j) = &self.joints {
             particle_files.push(j.xdmf.clone());
         }
+        if let Some(st) = &self.status {
+            particle_files.push(st.xdmf.clone());
+        }
         if model.has_joints() && !self.cracks.is_empty() {
             let path = dir.join(format!("{stem}_cracks.png"));
             let written = if comm.rank() == 0 {
@@ -490,6 +554,9 @@ impl Output {
         if let Some(j) = self.joints {
             j.close()?;
         }
+        if let Some(st) = self.status {
+            st.close()?;
+        }
         Ok(())
     }
 }
@@ -521,10 +588,11 @@ fn crack_plot(cracks: &[(f64, f64, f64)], path: &std::path::Path) -> Result<()> 
         .map_err(|e| Error::Io(crate::io::IoError::invalid(path, e.to_string())))
 }
 
-/// `<stem>_heat.png` (issue 20): the heat in by each mechanism so far and
-/// the stored heat's change (J) against time; mechanisms that moved no
-/// heat are left out.
-fn heat_plot(rows: &[[f64; 7]], path: &std::path::Path) -> Result<()> {
+/// `<stem>_heat.png` (issue 20): the heat in by each mechanism so far, the
+/// stored heat's change and the heat moved between bodies through
+/// contacts and across gaps (dashed; Σ|q| integrated over the history
+/// rows) (J) against time; mechanisms that moved no heat are left out.
+fn heat_plot(rows: &[[f64; 11]], path: &std::path::Path) -> Result<()> {
     use crate::io::plot::{write_png, LinePlot, Series};
     let names = [
         "prescribed temperatures",
@@ -533,6 +601,8 @@ fn heat_plot(rows: &[[f64; 7]], path: &std::path::Path) -> Result<()> {
         "radiation",
         "friction",
         "stored (change)",
+        "moved through contacts",
+        "moved across gaps",
     ];
     let curves: Vec<(&str, Vec<(f64, f64)>)> = names
         .iter()
@@ -549,7 +619,7 @@ fn heat_plot(rows: &[[f64; 7]], path: &std::path::Path) -> Result<()> {
             .map(|(label, points)| Series {
                 label,
                 points,
-                dashed: *label == "stored (change)",
+                dashed: label.starts_with("stored") || label.starts_with("moved"),
             })
             .collect(),
     };

@@ -377,8 +377,19 @@ impl Stages<'_, '_> {
         // What the old stages counted goes on with the new ones.
         let old = self.mech.take().expect("mechanics");
         let (counters, substeps_per_step) = (old.domain.counters, old.substeps_per_step);
+        let friction_work = old.domain.friction_work_share();
         drop(old);
         let old_sys = self.sys.take();
+        // Frictional heat handed over and not yet released travels with
+        // its nodes (by node id, through blocks of ids).
+        let total_nodes = model.totals().0;
+        let pending = match old_sys.as_ref() {
+            Some(s) => s.pending_heat(&self.part)?,
+            None => None,
+        };
+        let pending = pending.map(|v| {
+            crate::parallel::exchange::to_blocks(comm, self.part.owned_gids(), &v, 1, total_nodes)
+        });
         let (iterations, assemblies) = old_sys
             .as_ref()
             .map_or((0, 0), |s| (s.iterations, s.assemblies));
@@ -406,6 +417,7 @@ impl Stages<'_, '_> {
         mech.domain.counters = counters;
         mech.domain.counters.detections += fresh.detections;
         mech.domain.counters.detect_time += fresh.detect_time;
+        mech.domain.set_friction_work(friction_work);
         self.times.mechanics += clock.elapsed().as_secs_f64();
 
         let mut contacts = Contacts::new(comm, model, part, None, Some(&mut mech))?;
@@ -416,6 +428,22 @@ impl Stages<'_, '_> {
             checkpoint::restore_thermal(comm, part, Saved::Memory(&snapshot), s)?;
             s.iterations = iterations;
             s.assemblies += assemblies;
+            if let Some((lo, block)) = pending.as_ref() {
+                let gids = part.owned_gids();
+                let q = crate::parallel::exchange::from_blocks(
+                    comm,
+                    (*lo, block),
+                    1,
+                    total_nodes,
+                    gids,
+                );
+                let heat: Vec<(u32, f64)> = part.petsc[..part.num_owned()]
+                    .iter()
+                    .zip(q)
+                    .map(|(&r, q)| (r, q))
+                    .collect();
+                s.add_heat(&heat)?;
+            }
         }
         self.times.assembly += clock.elapsed().as_secs_f64();
         setup::couple_temperatures(

@@ -82,8 +82,9 @@ pub(super) fn mechanics(
 enum Source {
     /// No thermal contact.
     None,
-    /// The mechanics' candidates (a coupled run: one search per detection).
-    Mechanics,
+    /// The mechanics' candidates (a coupled run: one search per
+    /// detection), and the pinball distance of near-field gaps.
+    Mechanics(Option<f64>),
     /// The contact search at the model's positions (a thermal run; bodies
     /// with a prescribed velocity move between detections).
     Search(Box<ThermalSearch>),
@@ -130,12 +131,23 @@ impl Contacts {
         model: &Model,
         part: &Part,
         restart: Option<&Restart>,
-        mech: Option<&mut Mechanics>,
+        mut mech: Option<&mut Mechanics>,
     ) -> Result<Contacts> {
         let source = if !(model.thermal_active && model.contact.is_some()) {
             Source::None
-        } else if mech.is_some() {
-            Source::Mechanics
+        } else if let Some(m) = mech.as_deref_mut() {
+            let gap = model.contact.as_ref().and_then(|c| c.gap.as_ref());
+            // Collective where the scenario has gaps (every rank alike).
+            let pinball = gap.map(|g| {
+                g.pinball
+                    .unwrap_or_else(|| 0.5 * max_extent(comm, &part.contact_tets(None)))
+            });
+            if let Some(p) = pinball {
+                // Candidates within the pinball stay among the candidates
+                // while nodes use up half the margin.
+                m.domain.widen_margin(2.0 * p);
+            }
+            Source::Mechanics(pinball)
         } else {
             let mut own = part.contact_tets(None);
             let moving = model.has_motion();
@@ -147,14 +159,7 @@ impl Contacts {
                     moved_positions(model, part, r.file.head.time, &mut own.x);
                 }
             }
-            let ext = (0..own.len())
-                .map(|t| {
-                    let (lo, hi) = crate::geometry::tet_bounds(&own.corners(t));
-                    (0..3).map(|d| hi[d] - lo[d]).fold(0.0, f64::max)
-                })
-                .fold(0.0, f64::max);
-            let mut max_ext = 0.0;
-            comm.all_reduce_into(&ext, &mut max_ext, SystemOperation::max());
+            let max_ext = max_extent(comm, &own);
             let gap = model.contact.as_ref().and_then(|c| c.gap.as_ref());
             let pinball = gap.map(|g| g.pinball.unwrap_or(0.5 * max_ext));
             Source::Search(Box::new(ThermalSearch {
@@ -263,13 +268,16 @@ impl Contacts {
         let mut gaps = Vec::new();
         let local = match (&mut self.source, mech) {
             (Source::None, _) => return Ok(ContactSet::default()),
-            (Source::Mechanics, Some(m)) => {
+            (Source::Mechanics(pinball), Some(m)) => {
                 let before = m.domain.counters.detect_time;
                 let pairs = m.domain.thermal_contacts(comm)?;
+                if let Some(p) = *pinball {
+                    gaps = m.domain.gap_links(comm, gap_range(model, p));
+                }
                 searched = m.domain.counters.detect_time - before;
                 pairs
             }
-            (Source::Mechanics, None) => unreachable!("a coupled run has mechanics"),
+            (Source::Mechanics(_), None) => unreachable!("a coupled run has mechanics"),
             (Source::Spent, _) => unreachable!("contact.every = 0 detects once"),
             (Source::Search(ts), _) => {
                 let t = Instant::now();
@@ -293,15 +301,42 @@ impl Contacts {
                 self.search_time += searched;
                 self.searches += 1;
                 if let Some(p) = ts.pinball {
-                    gaps = og.gap_links(&candidates, p);
+                    gaps = og.gap_links(&candidates, gap_range(model, p));
                 }
-                og.contact_pairs(&candidates)
+                let depth = model
+                    .contact
+                    .as_ref()
+                    .is_some_and(|c| c.needs_penetration());
+                og.contact_pairs(&candidates, depth)
             }
         };
         let set = contact_set(comm, local, gaps);
         self.surface_time += clock.elapsed().as_secs_f64() - searched;
         Ok(set)
     }
+}
+
+/// The links' range: the pinball `p` and the scenario's smallest gap.
+fn gap_range(model: &Model, p: f64) -> crate::contact::gap::GapRange {
+    let min = model
+        .contact
+        .as_ref()
+        .and_then(|c| c.gap.as_ref())
+        .and_then(|g| g.min_gap);
+    crate::contact::gap::GapRange::new(p, min)
+}
+
+/// Collective. The largest extent (along x, y or z) of any tet of the ranks.
+fn max_extent(comm: &SimpleCommunicator, own: &ContactTets) -> f64 {
+    let ext = (0..own.len())
+        .map(|t| {
+            let (lo, hi) = crate::geometry::tet_bounds(&own.corners(t));
+            (0..3).map(|d| hi[d] - lo[d]).fold(0.0, f64::max)
+        })
+        .fold(0.0, f64::max);
+    let mut max_ext = 0.0;
+    comm.all_reduce_into(&ext, &mut max_ext, SystemOperation::max());
+    max_ext
 }
 
 /// Positions of the part's nodes at time `t`: the reference ones, each

@@ -70,6 +70,14 @@ pub struct ContactSpec {
     /// Frictional heating of the penalty contact (issue 20), with mechanics.
     #[serde(default)]
     pub friction_heating: Option<FrictionHeatingSpec>,
+    /// Tabular conductance h(T, P, gap) for every material pair (issue 20,
+    /// seed 001 sec 7.1.4); a pair's own choice overrides it.
+    #[serde(default)]
+    pub table: Option<crate::contact::table::ConductanceTable>,
+    /// Slip speed (m/s) above which a closed contact is *sliding* (the
+    /// contact status of seed 001 sec 7.1.1). Default 1e-4 m/s.
+    #[serde(default)]
+    pub sliding_speed: Option<f64>,
 }
 
 /// The penalty friction's dissipated power turned into heat at the nodes
@@ -101,6 +109,10 @@ pub struct GapSpec {
     /// half the largest tet extent.
     #[serde(default)]
     pub pinball: Option<f64>,
+    /// Gaps below it (m) exchange heat as if this far apart, so k/g stays
+    /// bounded as faces close. Default: 1 % of the pinball distance.
+    #[serde(default)]
+    pub min_gap: Option<f64>,
     /// Conductivity of the gap's medium k_gap (W/m/K), default 0.
     #[serde(default)]
     pub conductivity: f64,
@@ -113,6 +125,14 @@ pub struct GapSpec {
     /// View factor of the facing faces (default 1).
     #[serde(default = "one")]
     pub view_factor: f64,
+    /// k_gap(T): the medium's conductivity against temperature (replaces
+    /// `conductivity`), `{ temperature = [...], k = [...] }`.
+    #[serde(default)]
+    pub conductivity_table: Option<crate::contact::table::Table1>,
+    /// The view factor against the gap (replaces `view_factor`),
+    /// `{ gap = [...], value = [...] }`.
+    #[serde(default)]
+    pub view_factor_table: Option<crate::contact::table::Table1>,
 }
 
 fn one() -> f64 {
@@ -134,6 +154,9 @@ pub struct ContactPairSpec {
     /// Cooper–Mikic–Yovanovich conductance for this pair (issue 20).
     #[serde(default)]
     pub cmy: Option<crate::contact::conductance::Cmy>,
+    /// Tabular conductance h(T, P, gap) for this pair (issue 20).
+    #[serde(default)]
+    pub table: Option<crate::contact::table::ConductanceTable>,
 }
 
 /// Resistance from a `resistance`/`conductance` choice (infinite: no contact heat).

@@ -415,6 +415,52 @@ impl Scenario {
                 }
             }
         }
+        if let Some(c) = &self.contact {
+            let all = c.table.iter().map(|t| ("contact.table".to_string(), t));
+            let each =
+                c.pair.iter().enumerate().filter_map(|(i, p)| {
+                    Some((format!("contact.pair[{i}].table"), p.table.as_ref()?))
+                });
+            for (key, t) in all.chain(each) {
+                t.check(&key).map_err(|e| (key.clone(), e))?;
+                if t.depends_on_pressure()
+                    && t.prescribed_pressure.is_none()
+                    && self.mechanics.is_none()
+                {
+                    return bad(
+                        &format!("{key}.prescribed_pressure"),
+                        "the table depends on pressure and a run without [mechanics] has no \
+                         contact pressure: prescribe it (Pa)"
+                            .into(),
+                    );
+                }
+                if t.depends_on_temperature() && c.delta_t == crate::contact::DeltaT::Average {
+                    return bad(
+                        &format!("{key}.temperature"),
+                        "a temperature-dependent conductance needs delta_t = \"local\"".into(),
+                    );
+                }
+            }
+            for (i, p) in c.pair.iter().enumerate() {
+                let given = [p.resistance.is_some() || p.conductance.is_some()]
+                    .into_iter()
+                    .chain([p.cmy.is_some(), p.table.is_some()])
+                    .filter(|&g| g)
+                    .count();
+                if given > 1 {
+                    return bad(
+                        &format!("contact.pair[{i}]"),
+                        "give one of resistance/conductance, cmy or table".into(),
+                    );
+                }
+            }
+            if let Some(v) = c.sliding_speed.filter(|v| !(v.is_finite() && *v > 0.0)) {
+                return bad(
+                    "contact.sliding_speed",
+                    format!("must be positive (m/s), got {v}"),
+                );
+            }
+        }
         if let Some(f) = self.contact.as_ref().and_then(|c| c.friction_heating) {
             for (key, v) in [("fraction", f.fraction), ("weight", f.weight)] {
                 if !(0.0..=1.0).contains(&v) {
@@ -447,18 +493,27 @@ impl Scenario {
                     );
                 }
             }
+            if let Some(m) = g.min_gap.filter(|m| !(m.is_finite() && *m > 0.0)) {
+                return bad(
+                    "contact.gap.min_gap",
+                    format!("must be positive (m), got {m}"),
+                );
+            }
+            if let Some(k) = &g.conductivity_table {
+                k.check("contact.gap.conductivity_table")
+                    .map_err(|e| ("contact.gap.conductivity_table".to_string(), e))?;
+            }
+            if let Some(f) = &g.view_factor_table {
+                let key = "contact.gap.view_factor_table";
+                f.check(key).map_err(|e| (key.to_string(), e))?;
+                if let Some(v) = f.y.iter().find(|v| !(**v > 0.0 && **v <= 1.0)) {
+                    return bad(key, format!("values must be in (0, 1], got {v}"));
+                }
+            }
             if !(g.view_factor > 0.0 && g.view_factor <= 1.0) {
                 return bad(
                     "contact.gap.view_factor",
                     format!("must be in (0, 1], got {}", g.view_factor),
-                );
-            }
-            if self.mechanics.is_some() {
-                return bad(
-                    "contact.gap",
-                    "near-field gap heat is computed in thermal runs only so far (a run \
-                     with [mechanics] finds no gaps)"
-                        .into(),
                 );
             }
         }

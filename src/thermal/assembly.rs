@@ -7,6 +7,7 @@ use std::collections::BTreeMap;
 
 use mpi::topology::SimpleCommunicator;
 
+use crate::contact::gap::GapLink;
 use crate::contact::{
     local_conductance_block, rank_one_conductance_block, ContactOperator, ContactSet, DeltaT,
 };
@@ -16,6 +17,7 @@ use crate::petsc::{Matrix, Petsc, Result, Vector};
 use crate::scenario::{CapacityKind, ConductionKind};
 
 use super::element;
+use super::exchange::{Law, Laws, Unit};
 
 /// The unconstrained operators of M Ṫ + K T = f.
 pub struct Operators<'p> {
@@ -33,6 +35,9 @@ pub struct Operators<'p> {
     pub load_convection: Vector<'p>,
     /// Free-surface radiation to the ambient, when the scenario asks for it.
     pub radiation: Option<Radiation<'p>>,
+    /// Pairs and gap links whose conductance follows the temperature, and
+    /// their laws (issue 20): the step is then nonlinear.
+    pub exchange: Option<(Vec<Unit>, Laws)>,
 }
 
 /// Radiation of the free surfaces (issue 20): per PETSc row, ε σ times the
@@ -49,36 +54,141 @@ pub struct Radiation<'p> {
     pub ambient4: f64,
 }
 
-/// The contact resistance of a pair (m² K/W): the Cooper–Mikic–Yovanovich
-/// 1/h at the prescribed or the pair's penalty pressure where the material
-/// pair has it (issue 20), else the scenario's Rc; infinite: no heat.
-pub fn pair_resistance(model: &Model, d: &crate::contact::PairDofs) -> f64 {
+/// The contact resistance of a pair (m² K/W) at mean temperature `t`: a
+/// table's 1/h(T, P, penetration) or the Cooper–Mikic–Yovanovich 1/h at
+/// the prescribed or the pair's penalty pressure where the material pair
+/// has one (issue 20), else the scenario's Rc; infinite: no heat.
+pub fn pair_resistance(model: &Model, d: &crate::contact::PairDofs, t: f64) -> f64 {
     let [a, b] = d.materials;
-    let cmy = model
-        .contact
-        .as_ref()
-        .and_then(|c| c.cmy[a as usize][b as usize]);
-    match cmy {
-        None => model.resistance(a, b),
-        Some(c) => {
-            let k = |m: u32| model.materials[m as usize].conductivity;
-            let h = crate::contact::conductance::cmy_conductance(
-                k(a),
-                k(b),
-                &c,
-                c.pressure.unwrap_or(d.pressure),
-            );
-            if h > 0.0 {
-                1.0 / h
-            } else {
-                f64::INFINITY
-            }
+    let Some(c) = model.contact.as_ref() else {
+        return f64::INFINITY;
+    };
+    let h = if let Some(table) = c.table_of(a, b) {
+        let p = table.prescribed_pressure.unwrap_or(d.pressure);
+        table.eval(t, p, d.penetration).0
+    } else if let Some(cmy) = c.cmy[a as usize][b as usize] {
+        let k = |m: u32| model.materials[m as usize].conductivity;
+        let p = cmy.pressure.unwrap_or(d.pressure);
+        crate::contact::conductance::cmy_conductance(k(a), k(b), &cmy, p)
+    } else {
+        return model.resistance(a, b);
+    };
+    if h > 0.0 {
+        1.0 / h
+    } else {
+        f64::INFINITY
+    }
+}
+
+/// The law of a pair whose table depends on temperature, if it has one.
+pub fn pair_law(model: &Model, d: &crate::contact::PairDofs) -> Option<Law> {
+    let c = model.contact.as_ref()?;
+    let [a, b] = d.materials;
+    let i = c.table[a as usize][b as usize]?;
+    let table = &c.tables[i];
+    table.depends_on_temperature().then(|| Law::Table {
+        table: i,
+        pressure: table.prescribed_pressure.unwrap_or(d.pressure),
+        gap: d.penetration,
+    })
+}
+
+/// The law of gap link `l`: its material pair's table at gap −g (open),
+/// else the medium's k(T)/g + h_nf.
+pub fn gap_law(model: &Model, gs: &crate::scenario::GapSpec, l: &GapLink) -> Law {
+    let c = model.contact.as_ref().expect("gaps come with [contact]");
+    let [a, b] = l.materials;
+    match c.table[a as usize][b as usize] {
+        Some(i) => Law::Table {
+            table: i,
+            pressure: 0.0,
+            gap: -l.gap,
+        },
+        None => Law::Medium {
+            gap: l.gap,
+            h: gs.h,
+        },
+    }
+}
+
+/// The laws' tables: the scenario's, and the gap medium's k(T) (a
+/// constant k as a one-point table).
+pub fn laws(model: &Model) -> Laws {
+    let Some(c) = model.contact.as_ref() else {
+        return Laws::default();
+    };
+    let medium = c.gap.as_ref().map(|g| {
+        g.conductivity_table
+            .clone()
+            .unwrap_or(crate::contact::table::Table1 {
+                x: vec![0.0],
+                y: vec![g.conductivity],
+            })
+    });
+    Laws {
+        tables: c.tables.clone(),
+        medium,
+    }
+}
+
+/// A pair's unit (Λ at unit conductance: the block at Rc = 1; T̄ the mean
+/// of the two sides' face temperatures, eq 26's weights).
+pub fn pair_unit(
+    p: &crate::contact::ContactPair,
+    d: &crate::contact::PairDofs,
+    law: Law,
+    block: fn(&crate::contact::ContactPair, f64) -> [f64; 64],
+) -> Unit {
+    let s = &p.surface;
+    let (st, sc) = (
+        s.w_target.iter().sum::<f64>(),
+        s.w_contactor.iter().sum::<f64>(),
+    );
+    let mut mean = [0.0; 8];
+    for i in 0..4 {
+        mean[i] = 0.5 * s.w_target[i] / st;
+        mean[4 + i] = 0.5 * s.w_contactor[i] / sc;
+    }
+    Unit {
+        rows: d.petsc,
+        n: 8,
+        lap: block(p, 1.0),
+        mean,
+        law,
+    }
+}
+
+/// A gap link's unit: Λ of [`add_links`] at conductance area A; T̄ the
+/// mean of the searching face's corners and the point met.
+pub fn gap_unit(l: &GapLink, law: Law) -> Unit {
+    let mut rows = [0; 8];
+    rows[..3].copy_from_slice(&l.rows_a);
+    rows[3..6].copy_from_slice(&l.rows_b);
+    let mut lap = [0.0; 64];
+    let mut mean = [0.0; 8];
+    for i in 0..3 {
+        mean[i] = 1.0 / 6.0;
+        mean[3 + i] = 0.5 * l.beta[i];
+        for j in 0..3 {
+            let c = l.area * l.beta[j] / 3.0;
+            let (a, b) = (i, 3 + j);
+            lap[8 * a + a] += c;
+            lap[8 * b + b] += c;
+            lap[8 * a + b] -= c;
+            lap[8 * b + a] -= c;
         }
+    }
+    Unit {
+        rows,
+        n: 6,
+        lap,
+        mean,
+        law,
     }
 }
 
 /// The rows of a gap link: the searching face's corners, then the facing face's.
-fn gap_rows(l: &crate::contact::gap::GapLink) -> [i32; 6] {
+fn gap_rows(l: &GapLink) -> [i32; 6] {
     let mut r = [0; 6];
     for j in 0..3 {
         r[j] = l.rows_a[j] as i32;
@@ -91,7 +201,7 @@ fn gap_rows(l: &crate::contact::gap::GapLink) -> [i32; 6] {
 /// the searching face to corner j of the facing one with g β_j / 3, so
 /// the heat is g (mean T_a − T_b at the ray's point), and every row sums
 /// to zero (heat is exchanged, not made).
-fn add_links(m: &mut Matrix, l: &crate::contact::gap::GapLink, g: f64) -> Result<()> {
+fn add_links(m: &mut Matrix, l: &GapLink, g: f64) -> Result<()> {
     let idx = gap_rows(l);
     let mut block = [0.0; 36];
     for i in 0..3 {
@@ -194,7 +304,7 @@ fn free_areas<'p>(
 fn average_rows(model: &Model, contacts: &ContactSet) -> BTreeMap<(u32, u32), BTreeMap<u32, f64>> {
     let mut rows: BTreeMap<(u32, u32), BTreeMap<u32, f64>> = Default::default();
     for (p, d) in contacts.local.iter().zip(&contacts.dofs) {
-        let g = p.area() / pair_resistance(model, d);
+        let g = p.area() / pair_resistance(model, d, 0.0);
         let r = rows.entry((d.bodies[0], d.bodies[1])).or_default();
         for i in 0..4 {
             *r.entry(d.petsc[i]).or_default() += g * p.surface.w_target[i];
@@ -356,10 +466,23 @@ pub fn assemble<'p>(
     // Near-field gaps (seed 001 secs 7.1.4–7.1.5): conduction k/g and convection h
     // over the searching face's area, as links from its corners (a third
     // each) to the facing face's corners (the ray point's weights).
+    // A law that follows the temperature makes the link a unit of the
+    // nonlinear exchange instead.
     let gap_spec = model.contact.as_ref().and_then(|c| c.gap.as_ref());
+    let laws = laws(model);
+    let nonlinear = model
+        .contact
+        .as_ref()
+        .is_some_and(|c| c.temperature_dependent());
+    let mut units = Vec::new();
     if let Some(gs) = gap_spec {
         for l in &contacts.gaps {
-            let h = gs.conductivity / l.gap + gs.h;
+            let law = gap_law(model, gs, l);
+            if nonlinear && laws.depends_on_temperature(&law) {
+                units.push(gap_unit(l, law));
+                continue;
+            }
+            let h = laws.eval(&law, 0.0).0;
             if h > 0.0 {
                 add_links(&mut stiffness, l, h * l.area)?;
             }
@@ -395,7 +518,11 @@ pub fn assemble<'p>(
     match mode {
         DeltaT::Local => {
             for (p, d) in contacts.local.iter().zip(&contacts.dofs) {
-                let rc = pair_resistance(model, d);
+                if let Some(law) = pair_law(model, d) {
+                    units.push(pair_unit(p, d, law, block));
+                    continue;
+                }
+                let rc = pair_resistance(model, d, 0.0);
                 if !rc.is_finite() {
                     continue;
                 }
@@ -423,7 +550,11 @@ pub fn assemble<'p>(
         lap.zero_entries()?;
         for l in &contacts.gaps {
             let [ea, eb] = l.materials.map(|m| model.materials[m as usize].emissivity);
-            let f = gs.view_factor * super::radiation::grey_exchange(ea, eb);
+            let vf = gs
+                .view_factor_table
+                .as_ref()
+                .map_or(gs.view_factor, |t| t.eval(l.gap).0);
+            let f = vf * super::radiation::grey_exchange(ea, eb);
             add_links(&mut lap, l, super::radiation::STEFAN_BOLTZMANN * f * l.area)?;
         }
         lap.assemble()?;
@@ -469,5 +600,6 @@ pub fn assemble<'p>(
         load_flux,
         load_convection,
         radiation,
+        exchange: nonlinear.then_some((units, laws)),
     })
 }

@@ -3,6 +3,8 @@
 
 pub mod assembly;
 pub mod element;
+pub mod exchange;
+pub mod flows;
 pub mod limits;
 pub mod monotone;
 pub mod nonlinear;

@@ -8,9 +8,13 @@
 //! so they keep T = T_d. Radiation across near-field gaps adds L u(T) to
 //! R, u = (T + offset)⁴, with L the Laplacian of the links' σ F A shares,
 //! and P L diag(4 (T + offset)³) to J (P: the free rows); J is then not
-//! symmetric.
+//! symmetric. Contact and gap conductances that follow the temperature
+//! (tables, k_gap(T): [`super::exchange`]) add their heat q(T) to R and
+//! P ∂q/∂T to J, which is not symmetric either.
 
 use crate::petsc::{Matrix, Nonlinear, Result, Vector};
+
+use super::exchange::Exchange;
 
 use super::radiation::{emitted, emitted_slope};
 
@@ -99,6 +103,9 @@ pub struct RadiatingStep<'p> {
     pub work: Vector<'p>,
     /// Radiation across near-field gaps, when computed.
     pub gap: Option<GapRadiation<'p>>,
+    /// Contact and gap heat with temperature-dependent conductance, and
+    /// the free rows' mask.
+    pub exchange: Option<(Exchange<'p>, Vector<'p>)>,
 }
 
 impl Nonlinear for RadiatingStep<'_> {
@@ -117,6 +124,13 @@ impl Nonlinear for RadiatingStep<'_> {
             fourth_powers(x, self.offset, &mut g.u)?;
             g.lap.mult(&g.u, &mut g.lu)?;
             self.work.pointwise_mult(&g.lu, &g.free)?;
+            f.axpy(self.theta, &self.work)?;
+        }
+        if let Some((ex, free)) = self.exchange.as_mut() {
+            self.work.set(0.0)?;
+            ex.add_heat(x, &mut self.work, false)?;
+            self.work
+                .pointwise_mult(&self.work.duplicate_from()?, free)?;
             f.axpy(self.theta, &self.work)?;
         }
         Ok(())
@@ -144,6 +158,11 @@ impl Nonlinear for RadiatingStep<'_> {
             g.scaled.copy_values_from(&g.lap)?;
             g.scaled.diagonal_scale(Some(&g.free), Some(&g.u))?;
             j.axpy_same_pattern(self.theta, &g.scaled)?;
+        }
+        if let Some((ex, free)) = self.exchange.as_mut() {
+            ex.add_heat(x, &mut self.work, true)?;
+            ex.jac.diagonal_scale(Some(free), None)?;
+            j.axpy_same_pattern(self.theta, &ex.jac)?;
         }
         if self.symmetric {
             j.set_symmetric(true)?;

@@ -34,6 +34,7 @@ use crate::scenario::{CapacityKind, SolverSpec};
 use mpi::topology::SimpleCommunicator;
 
 use super::assembly::{assemble, Operators};
+use super::exchange::Exchange;
 use super::nonlinear::{radiated, GapRadiation, RadiatingStep};
 
 /// Linear solver defaults by problem size (the options database wins).
@@ -196,6 +197,9 @@ struct Radiating<'p> {
     r1: Vector<'p>,
     /// Σ Δt (θ R(Tⁿ⁺¹) + (1 − θ) R(Tⁿ)) per row.
     sum: Vector<'p>,
+    /// Contact and gap heat with temperature-dependent conductance: part
+    /// of R here (it sums to zero over the rows).
+    exchange: Option<Exchange<'p>>,
 }
 
 /// Prescribed temperatures that ramp: per owned row, the start and end
@@ -220,7 +224,11 @@ impl Radiating<'_> {
     fn power(&mut self, x: &Vector, end: bool) -> Result<()> {
         let out = if end { &mut self.r1 } else { &mut self.r0 };
         let (c, g, o, a4) = (&self.coef, self.gap.as_ref(), self.offset, self.ambient4);
-        radiated(c, g, x, o, a4, &mut self.u, out)
+        radiated(c, g, x, o, a4, &mut self.u, out)?;
+        if let Some(ex) = self.exchange.as_mut() {
+            ex.add_heat(x, out, false)?;
+        }
+        Ok(())
     }
 }
 
@@ -274,9 +282,24 @@ impl<'p> ThermalSystem<'p> {
         contacts: &ContactSet,
     ) -> crate::error::Result<Self> {
         let mut ops = assemble(petsc, comm, model, part, contacts)?;
-        let radiation = ops.radiation.take();
+        let mut radiation = ops.radiation.take();
+        let exchange = ops.exchange.take();
+        if exchange.is_some() && radiation.is_none() {
+            // Temperature-dependent contact conductance alone: the Newton
+            // step with nothing radiated.
+            let mut coef = Vector::new(petsc, part.owned_rows())?;
+            coef.set(0.0)?;
+            radiation = Some(super::assembly::Radiation {
+                coef,
+                gap: None,
+                offset: model.thermal.offset,
+                ambient4: 0.0,
+            });
+        }
         let gap_radiates = radiation.as_ref().is_some_and(|r| r.gap.is_some());
+        // g'(T̄) (Λ T) mᵀ of a temperature-dependent conductance is not symmetric.
         let symmetric = !gap_radiates
+            && exchange.is_none()
             && model
                 .contact
                 .as_ref()
@@ -426,8 +449,16 @@ impl<'p> ThermalSystem<'p> {
                         lu: t.duplicate()?,
                     }),
                 };
+                let ex = match exchange.as_ref() {
+                    None => None,
+                    Some((units, laws)) => Some((
+                        Exchange::new(units.clone(), laws.clone(), &t, &ops.capacity)?,
+                        free_mask.duplicate_from()?,
+                    )),
+                };
                 let step = RadiatingStep {
                     gap,
+                    exchange: ex,
                     rhs: t.duplicate()?,
                     work: t.duplicate()?,
                     a,
@@ -501,7 +532,12 @@ impl<'p> ThermalSystem<'p> {
             Some(r) => {
                 let mut sum = t.duplicate()?;
                 sum.set(0.0)?;
+                let exchange = match exchange {
+                    None => None,
+                    Some((units, laws)) => Some(Exchange::new(units, laws, &t, &ops.capacity)?),
+                };
                 Some(Radiating {
+                    exchange,
                     u: t.duplicate()?,
                     gap: r.gap,
                     offset: r.offset,
@@ -738,9 +774,43 @@ impl<'p> ThermalSystem<'p> {
         f.assemble()
     }
 
+    /// The frictional heat handed over and not yet released, per owned
+    /// node of `part` (J; the copies of a node sharing a row split it),
+    /// when frictional heating is on.
+    pub fn pending_heat(&self, part: &Part) -> Result<Option<Vec<f64>>> {
+        let Some(f) = self.friction.as_ref() else {
+            return Ok(None);
+        };
+        let lo = part.starts[part.rank];
+        let rows = f.to_local_vec()?;
+        let mut copies = vec![0u32; rows.len()];
+        for &p in &part.petsc[..part.n_owned] {
+            copies[p as usize - lo] += 1;
+        }
+        Ok(Some(
+            part.petsc[..part.n_owned]
+                .iter()
+                .map(|&p| rows[p as usize - lo] / f64::from(copies[p as usize - lo]))
+                .collect(),
+        ))
+    }
+
     /// The temperature of every owned node of `part` (part order).
     pub fn node_temperatures(&self, part: &Part) -> Result<Vec<f64>> {
         Ok(part.rows_to_nodes(&self.t.to_local_vec()?))
+    }
+
+    /// Collective. This rank's share of the heat flowing through contacts
+    /// and across gaps now ([`super::flows`]).
+    pub fn contact_flows(
+        &self,
+        model: &Model,
+        contacts: &crate::contact::ContactSet,
+    ) -> Result<super::flows::Flows> {
+        let rows = super::flows::flow_rows(contacts);
+        let mut g = crate::petsc::Gather::new(&self.t, &rows)?;
+        let t = g.gather(&self.t)?.to_vec();
+        Ok(super::flows::flows(model, contacts, &t))
     }
 
     /// Steps taken.

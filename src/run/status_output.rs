@@ -1,0 +1,317 @@
+//! The contact status of every boundary face (issue 20, seed 001 sec
+//! 7.1.1): `<stem>_status.h5` and `<stem>_status.xdmf`, a time series
+//! beside the bodies' whose cells are the bodies' boundary triangles, with
+//! the cell field `status`: 0 free, 1 near-field (across a gap within the
+//! pinball), 2 closed (the face has contact surface), 3 sliding (closed,
+//! with a slip speed above `contact.sliding_speed`), and a point field
+//! `displacement` (ParaView: Warp By Vector). The faces are those of the
+//! bodies' boundaries at the start (crack faces opened later are not in
+//! the grid).
+//!
+//! Rows follow the element ids: the faces of elements in the block
+//! [`block`] of ids that rank r holds are rank r's rows, in (element id,
+//! local face) order, so the files do not depend on the number of ranks
+//! and nothing of the size of the mesh is held on one rank. Each output,
+//! element owners send their boundary elements' corners, and the ranks
+//! that found pairs and gap links send the faces' status bits, to the
+//! block holders.
+
+use std::path::{Path, PathBuf};
+
+use mpi::collective::SystemOperation;
+use mpi::topology::{Communicator, SimpleCommunicator};
+use mpi::traits::*;
+
+use crate::contact::ContactSet;
+use crate::error::Result;
+use crate::io::{MeshPart, TimeSeriesWriter};
+use crate::mesh::LOCAL_FACES;
+use crate::model::Model;
+use crate::parallel::exchange::{all_gather, all_to_all, block_owner};
+use crate::parallel::Part;
+
+/// Status codes of the `status` field.
+pub const FREE: u8 = 0;
+/// Across a gap within the pinball distance.
+pub const NEAR_FIELD: u8 = 1;
+/// Touching: the face has contact surface.
+pub const CLOSED: u8 = 2;
+/// Closed and slipping.
+pub const SLIDING: u8 = 3;
+
+/// The status of a face from its bits (closed, sliding, near-field).
+pub fn face_status(closed: bool, sliding: bool, near: bool) -> u8 {
+    match (closed, sliding, near) {
+        (true, true, _) => SLIDING,
+        (true, false, _) => CLOSED,
+        (false, _, true) => NEAR_FIELD,
+        _ => FREE,
+    }
+}
+
+/// Per boundary element of this rank's block: its id and face mask.
+struct Block {
+    gid: Vec<u32>,
+    mask: Vec<u8>,
+}
+
+impl Block {
+    fn faces(&self) -> usize {
+        self.mask.iter().map(|m| m.count_ones() as usize).sum()
+    }
+
+    fn find(&self, gid: u32) -> Option<usize> {
+        self.gid.binary_search(&gid).ok()
+    }
+}
+
+/// Collective. Send rows (id first) to the holders of their ids' blocks.
+fn to_holders(
+    comm: &SimpleCommunicator,
+    total: u64,
+    rows: impl Iterator<Item = Vec<f64>>,
+) -> Vec<f64> {
+    let size = comm.size() as usize;
+    let mut send: Vec<Vec<f64>> = vec![Vec::new(); size];
+    for r in rows {
+        send[block_owner(r[0] as u64, total, size)].extend(r);
+    }
+    all_to_all(comm, send).iter().flatten().copied().collect()
+}
+
+/// The open status series.
+pub(super) struct StatusOutput {
+    writer: TimeSeriesWriter,
+    block: Block,
+    /// Reference corners of each face of the block, flat.
+    reference: Vec<f64>,
+    elements: u64,
+    /// The paths of the series.
+    pub xdmf: PathBuf,
+}
+
+/// Boundary faces by status over the ranks (free, near-field, closed, sliding).
+pub type StatusCounts = [u64; 4];
+
+impl StatusOutput {
+    /// Collective. Create `<dir>/<stem>_status.h5` with the boundary faces
+    /// at their reference positions (or reopen it to continue after the
+    /// checkpoint at `continue_after`).
+    pub fn open(
+        comm: &SimpleCommunicator,
+        model: &Model,
+        part: &Part,
+        dir: &Path,
+        stem: &str,
+        continue_after: Option<f64>,
+    ) -> Result<StatusOutput> {
+        let elements = model.totals().1;
+        let rows = (0..part.num_elements())
+            .filter(|&e| part.face_mask[e] != 0)
+            .map(|e| {
+                let mut r = vec![
+                    f64::from(part.elem_gid[e]),
+                    f64::from(part.face_mask[e]),
+                    f64::from(part.mesh.body[e]),
+                ];
+                for &n in &part.mesh.tets[e] {
+                    r.extend(part.mesh.nodes[n as usize]);
+                }
+                r
+            });
+        let got = to_holders(comm, elements, rows);
+        let mut recs: Vec<&[f64]> = got.chunks_exact(15).collect();
+        recs.sort_by_key(|r| r[0] as u32);
+        let block = Block {
+            gid: recs.iter().map(|r| r[0] as u32).collect(),
+            mask: recs.iter().map(|r| r[1] as u8).collect(),
+        };
+        let mut reference = Vec::new();
+        let mut body = Vec::new();
+        for r in &recs {
+            let m = r[1] as u8;
+            for (f, face) in LOCAL_FACES.iter().enumerate() {
+                if m & (1 << f) != 0 {
+                    for &k in face {
+                        reference.extend_from_slice(&r[3 + 3 * k..6 + 3 * k]);
+                    }
+                    body.push(r[2] as i32);
+                }
+            }
+        }
+        let mine = block.faces() as u64;
+        let counts = all_gather(comm, &[mine]);
+        let offset: u64 = counts[..comm.rank() as usize].iter().sum();
+        let total: u64 = counts.iter().sum();
+        let coords: Vec<[f64; 3]> = reference
+            .chunks_exact(3)
+            .map(|c| [c[0], c[1], c[2]])
+            .collect();
+        let cells: Vec<u32> = (0..3 * mine).map(|p| (3 * offset + p) as u32).collect();
+        let mesh = MeshPart {
+            global_nodes: 3 * total,
+            node_offset: 3 * offset,
+            coords: &coords,
+            global_cells: total,
+            cell_offset: offset,
+            cells: &cells,
+            nodes_per_cell: 3,
+        };
+        let name = format!("{stem}_status");
+        let point_row: Vec<i32> = (0..3 * mine).map(|p| (3 * offset + p) as i32).collect();
+        let writer = match continue_after {
+            Some(t) => TimeSeriesWriter::reopen(comm, dir, &name, &mesh, &point_row, t)?,
+            None => {
+                let mut w = TimeSeriesWriter::create(comm, dir, &name, &mesh)?;
+                w.write_static_cell_field_i32("body", &body)?;
+                w
+            }
+        };
+        let xdmf = writer.xdmf_path().to_path_buf();
+        Ok(StatusOutput {
+            writer,
+            block,
+            reference,
+            elements,
+            xdmf,
+        })
+    }
+
+    /// Collective. The status of each face of the block, from the pairs'
+    /// and gap links' faces (any rank's).
+    fn statuses(&self, comm: &SimpleCommunicator, contacts: &ContactSet, sliding: f64) -> Vec<u8> {
+        let rows = status_rows(contacts, sliding);
+        let got = to_holders(comm, self.elements, rows.into_iter());
+        let n = self.block.gid.len();
+        let mut bits = vec![[0u8; 3]; n];
+        for r in got.chunks_exact(4) {
+            if let Some(i) = self.block.find(r[0] as u32) {
+                for k in 0..3 {
+                    bits[i][k] |= r[1 + k] as u8;
+                }
+            }
+        }
+        let mut out = Vec::with_capacity(self.block.faces());
+        for (i, &m) in self.block.mask.iter().enumerate() {
+            for f in (0..4).filter(|f| m & (1 << f) != 0) {
+                let b = |k: usize| bits[i][k] & (1 << f) != 0;
+                out.push(face_status(b(0), b(1), b(2)));
+            }
+        }
+        out
+    }
+
+    /// Collective. The faces by status over the ranks.
+    pub fn counts(
+        &self,
+        comm: &SimpleCommunicator,
+        contacts: &ContactSet,
+        sliding: f64,
+    ) -> StatusCounts {
+        count(comm, &self.statuses(comm, contacts, sliding))
+    }
+
+    /// Collective. Write the faces' status and displacement at `time`, the
+    /// part's nodes at `positions` (part order); returns the counts.
+    pub fn write(
+        &mut self,
+        comm: &SimpleCommunicator,
+        part: &Part,
+        positions: &[[f64; 3]],
+        contacts: &ContactSet,
+        sliding: f64,
+        time: f64,
+    ) -> Result<StatusCounts> {
+        let status = self.statuses(comm, contacts, sliding);
+        let rows = (0..part.num_elements())
+            .filter(|&e| part.face_mask[e] != 0)
+            .map(|e| {
+                let mut r = vec![f64::from(part.elem_gid[e])];
+                for &n in &part.mesh.tets[e] {
+                    r.extend(positions[n as usize]);
+                }
+                r
+            });
+        let got = to_holders(comm, self.elements, rows);
+        let mut corners = vec![[0.0; 12]; self.block.gid.len()];
+        for r in got.chunks_exact(13) {
+            if let Some(i) = self.block.find(r[0] as u32) {
+                corners[i].copy_from_slice(&r[1..]);
+            }
+        }
+        let mut u = Vec::with_capacity(self.reference.len());
+        for (i, &m) in self.block.mask.iter().enumerate() {
+            for (f, face) in LOCAL_FACES.iter().enumerate() {
+                if m & (1 << f) != 0 {
+                    for &k in face {
+                        u.extend_from_slice(&corners[i][3 * k..3 * k + 3]);
+                    }
+                }
+            }
+        }
+        for (x, x0) in u.iter_mut().zip(&self.reference) {
+            *x -= x0;
+        }
+        let s: Vec<f64> = status.iter().map(|&v| f64::from(v)).collect();
+        self.writer.write_step(
+            time,
+            &[("displacement", 3, &u[..])],
+            &[("status", 1, &s[..])],
+        )?;
+        Ok(count(comm, &status))
+    }
+
+    /// Collective. Close the series.
+    pub fn close(self) -> Result<()> {
+        self.writer.close()?;
+        Ok(())
+    }
+}
+
+/// Collective. Faces by status over the ranks.
+fn count(comm: &SimpleCommunicator, status: &[u8]) -> StatusCounts {
+    let mut mine = [0u64; 4];
+    for &s in status {
+        mine[s as usize] += 1;
+    }
+    let mut all = [0u64; 4];
+    comm.all_reduce_into(&mine[..], &mut all[..], SystemOperation::sum());
+    all
+}
+
+/// Rows (element id, closed bits, sliding bits, near-field bits) of the
+/// faces that this rank's pairs and gap links touch.
+fn status_rows(contacts: &ContactSet, sliding: f64) -> Vec<Vec<f64>> {
+    let mut rows = Vec::new();
+    for (p, d) in contacts.local.iter().zip(&contacts.dofs) {
+        let slides = d.slip > sliding;
+        for (gid, faces) in [
+            (p.target, p.surface.faces_target),
+            (p.contactor, p.surface.faces_contactor),
+        ] {
+            let s = if slides { faces } else { 0 };
+            rows.push(vec![f64::from(gid), f64::from(faces), f64::from(s), 0.0]);
+        }
+    }
+    for l in &contacts.gaps {
+        for k in 0..2 {
+            let bit = 1u8 << l.faces[k];
+            rows.push(vec![f64::from(l.tets[k]), 0.0, 0.0, f64::from(bit)]);
+        }
+    }
+    rows
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn closed_wins_over_near_and_sliding_needs_closed() {
+        assert_eq!(face_status(false, false, false), FREE);
+        assert_eq!(face_status(false, false, true), NEAR_FIELD);
+        assert_eq!(face_status(true, false, true), CLOSED);
+        assert_eq!(face_status(true, true, false), SLIDING);
+        assert_eq!(face_status(false, true, true), NEAR_FIELD);
+    }
+}

@@ -163,6 +163,8 @@ impl StatusOutput {
             Some(t) => TimeSeriesWriter::reopen(comm, dir, &name, &mesh, &point_row, t)?,
             None => {
                 let mut w = TimeSeriesWriter::create(comm, dir, &name, &mesh)?;
+                // A restart in place checks the rows against these ids.
+                w.write_static_node_field_i32("node_id", &point_row)?;
                 w.write_static_cell_field_i32("body", &body)?;
                 w
             }

@@ -113,6 +113,7 @@ impl ExplicitDomain {
             v!("x_detect", self.x_detect),
             ("contact_local", self.contact_local.capacity() * 8),
             ("search trees", self.search.held_bytes()),
+            ("pair forces", self.pair_forces.held_bytes()),
             (
                 "send_slots",
                 self.send_slots.iter().map(|s| s.capacity() * 4).sum(),

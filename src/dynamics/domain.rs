@@ -129,8 +129,8 @@ pub struct ExplicitDomain {
     /// overlap (`geometry::separating_axis`; 0: none).
     pub(super) witness: Vec<u8>,
     pub(super) x_detect: Vec<Vector3<f64>>,
-    /// Force contributions: 4 per element, 8 per candidate pair, then those
-    /// received from neighbours for shared nodes.
+    /// Element force contributions: 4 per element, then those received
+    /// from neighbours' elements for shared nodes.
     pub(super) contrib: Vec<Vector3<f64>>,
     /// Per owned node, its contribution slots in (global) key order.
     pub(super) gather_off: Vec<u32>,
@@ -141,6 +141,8 @@ pub struct ExplicitDomain {
     /// Per neighbour, the buffer its ghost contributions are packed into
     /// each substep (kept: the same sizes every substep of a detection).
     pub(super) send_buf: Vec<Vec<f64>>,
+    /// The touching pairs' forces of the substep, routed to their owners.
+    pub(super) pair_forces: super::pair_sum::PairForces,
     /// Owned velocities before the last substep (v^{n−½}), for energies at t_n.
     pub(super) v_prev: Vec<Vector3<f64>>,
     /// Time step (s).
@@ -368,6 +370,7 @@ impl ExplicitDomain {
             send_slots: Vec::new(),
             recv_at: Vec::new(),
             send_buf: Vec::new(),
+            pair_forces: Default::default(),
             dt,
             run_time_per_substep: coupling_dt / substeps.max(1) as f64,
             gravity: Vector3::from(mm.gravity),

@@ -1,7 +1,10 @@
 //! The global-order force summation: each owned node's force is summed
 //! from its contributions in a fixed global key order (element id; pairs
 //! after all elements, by (a, b)), whichever rank computed them, so the
-//! trajectories are bitwise the same on any number of ranks.
+//! trajectories are bitwise the same on any number of ranks. The
+//! elements' contributions have fixed slots, built here at each
+//! detection; the touching pairs' are routed each substep
+//! ([`super::pair_sum`]).
 
 use mpi::topology::SimpleCommunicator;
 use nalgebra::Vector3;
@@ -10,14 +13,12 @@ use super::ExplicitDomain;
 
 impl ExplicitDomain {
     /// Collective over the neighbours. The order in which each owned
-    /// node's force is summed: its contributions sorted by a global key
-    /// (the element id; pairs after all elements, by (a, b)), whichever
-    /// rank computed them. Ghost contributions travel one by one, not
-    /// pre-summed, so the sums, and hence the trajectories, are bitwise
-    /// the same on any number of ranks.
+    /// node's element forces are summed: its contributions sorted by the
+    /// element id, whichever rank computed them. Ghost contributions
+    /// travel one by one, not pre-summed, so the sums, and hence the
+    /// trajectories, are bitwise the same on any number of ranks.
     pub(super) fn build_assembly(&mut self, comm: &SimpleCommunicator) {
         let ne = self.elements.len();
-        let pair_base = 4 * ne;
         let nbrs: Vec<i32> = self.halo.neighbours().to_vec();
         let n_owned = self.n_owned as u32;
         // Pass 1: each owned node's count of contributions, and the
@@ -63,8 +64,8 @@ impl ExplicitDomain {
             .collect();
         self.halo.exchange(comm, &keys_out, &mut keys_in, || {});
         drop(keys_out);
-        // Received contributions land after the pairs' slots, by neighbour.
-        let recv_base = pair_base + 8 * self.candidates.len();
+        // Received contributions land after the elements' slots, by neighbour.
+        let recv_base = 4 * ne;
         let n_recv: usize = keys_in.iter().map(|k| k.len() / 2).sum();
         let mut recv_node: Vec<u32> = Vec::with_capacity(n_recv);
         let mut recv_key: Vec<u64> = Vec::with_capacity(n_recv);
@@ -112,10 +113,8 @@ impl ExplicitDomain {
         drop((fill, recv_node));
         let key_of = |s: u32| -> u64 {
             let s = s as usize;
-            if s < pair_base {
+            if s < recv_base {
                 u64::from(self.elem_ids[s / 4])
-            } else if s < recv_base {
-                pair_key(&self.candidates[(s - pair_base) / 8])
             } else {
                 recv_key[s - recv_base]
             }
@@ -129,33 +128,23 @@ impl ExplicitDomain {
         refill(&mut self.contrib, next, Vector3::zeros());
     }
 
-    /// Every contribution slot of the elements and the pairs, in slot
-    /// order, as (local node, global key, slot): 4 per element, keyed by
-    /// its id; 8 per pair (a's nodes, then b's), keyed after all elements.
+    /// Every contribution slot of the elements, in slot order, as (local
+    /// node, global key, slot): 4 per element, keyed by its id.
     fn for_each_slot(&self, mut f: impl FnMut(u32, u64, usize)) {
-        let pair_base = 4 * self.elements.len();
         for (i, el) in self.elements.iter().enumerate() {
             for k in 0..4 {
                 f(el.nodes[k], u64::from(self.elem_ids[i]), 4 * i + k);
             }
         }
-        for (j, c) in self.candidates.iter().enumerate() {
-            let key = pair_key(c);
-            let (ta, tb) = (
-                &self.pair_tets[c.ta as usize],
-                &self.pair_tets[c.tb as usize],
-            );
-            for k in 0..4 {
-                f(ta[k], key, pair_base + 8 * j + k);
-                f(tb[k], key, pair_base + 8 * j + 4 + k);
-            }
-        }
     }
 
-    /// The force on every owned node: its contributions summed in key
-    /// order (see [`Self::build_assembly`]), plus the external load.
+    /// The force on every owned node: its element contributions summed in
+    /// key order (see [`Self::build_assembly`]), then its touching pairs'
+    /// in key order (pair keys follow all element keys), plus the external
+    /// load. The pair forces must have been routed and received.
     pub(super) fn sum_owned_forces(&mut self) {
         let no = self.n_owned;
+        self.pair_forces.order(no);
         for i in 0..no {
             let mut f = Vector3::zeros();
             for &s in
@@ -163,6 +152,7 @@ impl ExplicitDomain {
             {
                 f += self.contrib[s as usize];
             }
+            self.pair_forces.add_to(i, &mut f);
             self.f[i] = f + self.ext[i];
         }
     }
@@ -170,7 +160,7 @@ impl ExplicitDomain {
 
 /// The summation key of a pair's contributions: after every element's
 /// (the top bit), by (a, b).
-fn pair_key(c: &super::candidates::Candidate) -> u64 {
+pub(super) fn pair_key(c: &super::candidates::Candidate) -> u64 {
     const PAIR: u64 = 1 << 63;
     PAIR | (u64::from(c.a) << 31) | u64::from(c.b)
 }

@@ -39,7 +39,10 @@
 //!   list and halo), `balance_pairs`, and the thermal narrow phase on the
 //!   candidates in a coupled run (`thermal_contacts`);
 //! - `force_sum`: the global-order force summation that makes the
-//!   trajectories bitwise the same on any number of ranks;
+//!   trajectories bitwise the same on any number of ranks (the elements'
+//!   fixed slots);
+//! - `pair_sum`: the touching pairs' share of it, routed each substep to
+//!   the nodes' owners with their keys;
 //! - `state`: energies, output fields, checkpoint save and restore;
 //! - `joints`: the cohesive joints of the jointed bodies (issue 19),
 //!   whose forces are added to the owned nodes after the force sum, the
@@ -51,6 +54,7 @@ mod domain;
 mod force_sum;
 mod gaps;
 mod joints;
+mod pair_sum;
 mod state;
 mod substep;
 mod time_step;

@@ -8,8 +8,9 @@
 use mpi::collective::SystemOperation;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
-use nalgebra::Vector3;
 
+use super::force_sum::pair_key;
+use super::pair_sum::NodeRoutes;
 use super::{ExplicitDomain, NONE};
 use crate::contact::penalty::{overlap_state, penalty_forces, LinearizedOverlap, PenaltyParams};
 use crate::error::{Error, Result};
@@ -76,7 +77,8 @@ impl ExplicitDomain {
         let mut error: Option<Error> = None;
         let ne = self.elements.len();
         let pair_base = 4 * ne;
-        // Contact forces, 8 slots per candidate pair.
+        // Contact forces of the touching candidate pairs.
+        self.pair_forces.clear();
         self.contact_energy = 0.0;
         self.active_pairs = 0;
         self.touching.iter_mut().for_each(|t| *t = 0);
@@ -97,7 +99,6 @@ impl ExplicitDomain {
             let witness = &mut self.witness;
             let mut exact = 0u64;
             for (j, c) in self.candidates.iter().enumerate() {
-                let out = &mut self.contrib[pair_base + 8 * j..pair_base + 8 * j + 8];
                 let (ta, tb) = (c.ta as usize, c.tb as usize);
                 let ((xa, lo_a, hi_a), (xb, lo_b, hi_b)) = (&geo[ta], &geo[tb]);
                 let slot = lin_of[j] as usize;
@@ -112,7 +113,6 @@ impl ExplicitDomain {
                         || separated_along(xa, xb, witness[j]))
                 {
                     lin_of[j] = NONE;
-                    out.iter_mut().for_each(|f| *f = Vector3::zeros());
                     continue;
                 }
                 let (la, lb) = (&self.pair_tets[ta], &self.pair_tets[tb]);
@@ -156,26 +156,20 @@ impl ExplicitDomain {
                         }
                     }
                 };
-                match result {
-                    Some(r) => {
-                        for k in 0..4 {
-                            out[k] = Vector3::from(r.forces_a[k]);
-                            out[4 + k] = Vector3::from(r.forces_b[k]);
+                if let Some(r) = result {
+                    self.pair_forces.push(j, &r.forces_a, &r.forces_b);
+                    self.contact_energy += r.energy;
+                    power += r.dissipation;
+                    if self.friction_heating.is_some() {
+                        if self.pair_friction.len() != self.candidates.len() {
+                            self.pair_friction.resize(self.candidates.len(), 0.0);
                         }
-                        self.contact_energy += r.energy;
-                        power += r.dissipation;
-                        if self.friction_heating.is_some() {
-                            if self.pair_friction.len() != self.candidates.len() {
-                                self.pair_friction.resize(self.candidates.len(), 0.0);
-                            }
-                            self.pair_friction[j] += r.friction_power * self.dt;
-                            self.friction_work += r.friction_power * self.dt;
-                        }
-                        self.active_pairs += 1;
-                        self.touching[c.body_a as usize] = 1;
-                        self.touching[c.body_b as usize] = 1;
+                        self.pair_friction[j] += r.friction_power * self.dt;
+                        self.friction_work += r.friction_power * self.dt;
                     }
-                    None => out.iter_mut().for_each(|f| *f = Vector3::zeros()),
+                    self.active_pairs += 1;
+                    self.touching[c.body_a as usize] = 1;
+                    self.touching[c.body_b as usize] = 1;
                 }
             }
             self.dissipated += power * self.dt;
@@ -203,21 +197,33 @@ impl ExplicitDomain {
             Ok(w) => strain += w,
             Err(e) => elem_error = Some((e, 0)),
         }
-        // Ghost contributions, one by one, to their owners.
+        // Ghost contributions, one by one, to their owners: the halo
+        // elements' (fixed slots), and the touching pairs'.
         let mut send = std::mem::take(&mut self.send_buf);
         send.resize(self.send_slots.len(), Vec::new());
         for (buf, slots) in send.iter_mut().zip(&self.send_slots) {
             buf.clear();
             for &s in slots {
                 let s = s as usize;
-                let f = if s < pair_base {
-                    f_b[s / 4][s % 4]
-                } else {
-                    rest[s - pair_base]
-                };
+                let f = f_b[s / 4][s % 4];
                 buf.extend_from_slice(&[f.x, f.y, f.z]);
             }
         }
+        let routes = NodeRoutes {
+            n_owned: self.n_owned,
+            gid: &self.node_gid,
+            owner: &self.node_owner,
+            neighbours: self.halo.neighbours(),
+        };
+        let (candidates, pair_tets) = (&self.candidates, &self.pair_tets);
+        self.pair_forces.route(&routes, |j| {
+            let c = &candidates[j];
+            let (a, b) = (pair_tets[c.ta as usize], pair_tets[c.tb as usize]);
+            (
+                [a[0], a[1], a[2], a[3], b[0], b[1], b[2], b[3]],
+                pair_key(c),
+            )
+        });
         // Contributions from the neighbours land in place, after the pairs'.
         let recv_base = self
             .recv_at
@@ -236,7 +242,10 @@ impl ExplicitDomain {
         let interior = &self.elements[nb..];
         let (materials, x, v) = (&self.materials, &self.x, &self.v);
         let mut inner: std::result::Result<f64, crate::mechanics::MechanicsError> = Ok(0.0);
-        self.halo.exchange_into(comm, &send, recv, || {
+        // Without penalty contact no pair forces travel (all ranks agree).
+        let pairs = &mut self.pair_forces;
+        let sized = (self.penalty.is_some()).then(|| (&pairs.send[..], &mut pairs.recv[..]));
+        self.halo.exchange_into_sized(comm, &send, recv, sized, || {
             inner = element_forces(
                 interior,
                 materials,
@@ -248,6 +257,7 @@ impl ExplicitDomain {
             );
         });
         self.send_buf = send;
+        self.pair_forces.take_received(&routes);
         match inner {
             Ok(w) => strain += w,
             Err(e) => {

@@ -7,6 +7,7 @@
 //! Values live in a flat `&mut [f64]` with `width` values per local node
 //! (local index = position in the rank's owned-then-ghost node list).
 
+use mpi::datatype::Equivalence;
 use mpi::traits::*;
 
 /// The exchange pattern of one rank.
@@ -203,7 +204,22 @@ impl Halo {
         &self,
         comm: &C,
         send: &[Vec<f64>],
+        recv: Vec<&mut [f64]>,
+        work: impl FnOnce(),
+    ) {
+        self.exchange_into_sized(comm, send, recv, None, work);
+    }
+
+    /// Collective over the neighbours. [`Halo::exchange_into`], and with
+    /// `sized` = (send, recv) also one message to and from every neighbour
+    /// whose length the receiver does not know: each `recv[i]` is resized
+    /// to what neighbour i sent (possibly nothing).
+    pub fn exchange_into_sized<C: Communicator>(
+        &self,
+        comm: &C,
+        send: &[Vec<f64>],
         mut recv: Vec<&mut [f64]>,
+        sized: Option<(&[Vec<f64>], &mut [Vec<f64>])>,
         work: impl FnOnce(),
     ) {
         if self.neighbours.is_empty() {
@@ -227,9 +243,30 @@ impl Halo {
                     sends.push(comm.process_at_rank(*r).immediate_send(scope, &buf[..]));
                 }
             }
+            let mut sized_recv = None;
+            if let Some((out, into)) = sized {
+                for (r, buf) in self.neighbours.iter().zip(out) {
+                    super::count_sent(std::mem::size_of_val(&buf[..]));
+                    sends.push(comm.process_at_rank(*r).immediate_send_with_tag(
+                        scope,
+                        &buf[..],
+                        SIZED_TAG,
+                    ));
+                }
+                sized_recv = Some(into);
+            }
             work();
             for q in requests {
                 q.wait();
+            }
+            if let Some(into) = sized_recv {
+                for (r, buf) in self.neighbours.iter().zip(into.iter_mut()) {
+                    let (msg, status) = comm.process_at_rank(*r).matched_probe_with_tag(SIZED_TAG);
+                    let n = status.count(f64::equivalent_datatype()) as usize;
+                    buf.clear();
+                    buf.resize(n, 0.0);
+                    msg.matched_receive_into(&mut buf[..]);
+                }
             }
             for q in sends {
                 q.wait();
@@ -237,6 +274,10 @@ impl Halo {
         });
     }
 }
+
+/// The tag of [`Halo::exchange_into_sized`]'s messages of unknown length
+/// (the others use the default tag), so a probe never meets the others.
+const SIZED_TAG: mpi::Tag = 0x5053;
 
 fn pack(values: &[f64], idx: &[u32], width: usize) -> Vec<f64> {
     let mut out = Vec::with_capacity(idx.len() * width);

@@ -219,7 +219,7 @@ impl Halo {
         comm: &C,
         send: &[Vec<f64>],
         mut recv: Vec<&mut [f64]>,
-        sized: Option<(&[Vec<f64>], &mut [Vec<f64>])>,
+        sized: Option<SizedBuffers>,
         work: impl FnOnce(),
     ) {
         if self.neighbours.is_empty() {
@@ -274,6 +274,10 @@ impl Halo {
         });
     }
 }
+
+/// What [`Halo::exchange_into_sized`] sends to each neighbour, and where
+/// what each sends lands (resized to it).
+pub type SizedBuffers<'a> = (&'a [Vec<f64>], &'a mut [Vec<f64>]);
 
 /// The tag of [`Halo::exchange_into_sized`]'s messages of unknown length
 /// (the others use the default tag), so a probe never meets the others.

@@ -476,8 +476,9 @@ fn write_parallel_to(
             what,
         }
     };
+    let hints = super::ffi::IoHints::new();
     let file = File::with_options()
-        .with_fapl(|p| p.mpio(comm.as_raw(), None))
+        .with_fapl(|p| p.mpio(comm.as_raw(), Some(hints.info())))
         .create(path)
         .map_err(h5err("creating with the MPI-IO driver"))?;
     let xfer = super::ffi::CollectiveXfer::new().map_err(call("a transfer property list"))?;

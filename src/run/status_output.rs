@@ -27,7 +27,7 @@ use crate::error::Result;
 use crate::io::{MeshPart, TimeSeriesWriter};
 use crate::mesh::LOCAL_FACES;
 use crate::model::Model;
-use crate::parallel::exchange::{all_gather, all_to_all, block_owner};
+use crate::parallel::exchange::{all_gather, all_to_all, block_owner, Received};
 use crate::parallel::Part;
 
 /// Status codes of the `status` field.
@@ -65,26 +65,31 @@ impl Block {
     }
 }
 
-/// Collective. Send rows (id first) to the holders of their ids' blocks.
-fn to_holders(
+/// Collective. Send rows (id first) to the holders of their ids' blocks;
+/// what arrived here, by source rank (no row is a heap allocation, and
+/// what arrives is not copied again).
+fn to_holders<const W: usize>(
     comm: &SimpleCommunicator,
     total: u64,
-    rows: impl Iterator<Item = Vec<f64>>,
-) -> Vec<f64> {
+    rows: impl Iterator<Item = [f64; W]>,
+) -> Received<f64> {
     let size = comm.size() as usize;
     let mut send: Vec<Vec<f64>> = vec![Vec::new(); size];
     for r in rows {
-        send[block_owner(r[0] as u64, total, size)].extend(r);
+        send[block_owner(r[0] as u64, total, size)].extend_from_slice(&r);
     }
-    all_to_all(comm, send).iter().flatten().copied().collect()
+    all_to_all(comm, send)
+}
+
+/// The rows of `W` values that arrived.
+fn rows_of<const W: usize>(got: &Received<f64>) -> impl Iterator<Item = &[f64]> + '_ {
+    got.iter().flat_map(|list| list.chunks_exact(W))
 }
 
 /// The open status series.
 pub(super) struct StatusOutput {
     writer: TimeSeriesWriter,
     block: Block,
-    /// Reference corners of each face of the block, flat.
-    reference: Vec<f64>,
     elements: u64,
     /// The paths of the series.
     pub xdmf: PathBuf,
@@ -109,44 +114,41 @@ impl StatusOutput {
         let rows = (0..part.num_elements())
             .filter(|&e| part.face_mask[e] != 0)
             .map(|e| {
-                let mut r = vec![
-                    f64::from(part.elem_gid[e]),
-                    f64::from(part.face_mask[e]),
-                    f64::from(part.mesh.body[e]),
-                ];
-                for &n in &part.mesh.tets[e] {
-                    r.extend(part.mesh.nodes[n as usize]);
+                let mut r = [0.0; 15];
+                r[0] = f64::from(part.elem_gid[e]);
+                r[1] = f64::from(part.face_mask[e]);
+                r[2] = f64::from(part.mesh.body[e]);
+                for (k, &n) in part.mesh.tets[e].iter().enumerate() {
+                    r[3 + 3 * k..6 + 3 * k].copy_from_slice(&part.mesh.nodes[n as usize]);
                 }
                 r
             });
         let got = to_holders(comm, elements, rows);
-        let mut recs: Vec<&[f64]> = got.chunks_exact(15).collect();
+        let mut recs: Vec<&[f64]> = rows_of::<15>(&got).collect();
         recs.sort_by_key(|r| r[0] as u32);
         let block = Block {
             gid: recs.iter().map(|r| r[0] as u32).collect(),
             mask: recs.iter().map(|r| r[1] as u8).collect(),
         };
-        let mut reference = Vec::new();
-        let mut body = Vec::new();
+        let mine = block.faces() as u64;
+        let mut coords: Vec<[f64; 3]> = Vec::with_capacity(3 * mine as usize);
+        let mut body = Vec::with_capacity(mine as usize);
         for r in &recs {
             let m = r[1] as u8;
             for (f, face) in LOCAL_FACES.iter().enumerate() {
                 if m & (1 << f) != 0 {
                     for &k in face {
-                        reference.extend_from_slice(&r[3 + 3 * k..6 + 3 * k]);
+                        coords.push([r[3 + 3 * k], r[4 + 3 * k], r[5 + 3 * k]]);
                     }
                     body.push(r[2] as i32);
                 }
             }
         }
-        let mine = block.faces() as u64;
+        drop(recs);
+        drop(got);
         let counts = all_gather(comm, &[mine]);
         let offset: u64 = counts[..comm.rank() as usize].iter().sum();
         let total: u64 = counts.iter().sum();
-        let coords: Vec<[f64; 3]> = reference
-            .chunks_exact(3)
-            .map(|c| [c[0], c[1], c[2]])
-            .collect();
         let cells: Vec<u32> = (0..3 * mine).map(|p| (3 * offset + p) as u32).collect();
         let mesh = MeshPart {
             global_nodes: 3 * total,
@@ -173,7 +175,6 @@ impl StatusOutput {
         Ok(StatusOutput {
             writer,
             block,
-            reference,
             elements,
             xdmf,
         })
@@ -186,7 +187,7 @@ impl StatusOutput {
         let got = to_holders(comm, self.elements, rows.into_iter());
         let n = self.block.gid.len();
         let mut bits = vec![[0u8; 3]; n];
-        for r in got.chunks_exact(4) {
+        for r in rows_of::<4>(&got) {
             if let Some(i) = self.block.find(r[0] as u32) {
                 for k in 0..3 {
                     bits[i][k] |= r[1 + k] as u8;
@@ -214,7 +215,9 @@ impl StatusOutput {
     }
 
     /// Collective. Write the faces' status and displacement at `time`, the
-    /// part's nodes at `positions` (part order); returns the counts.
+    /// part's nodes at `positions` (part order; the displacement is taken
+    /// from the part's reference coordinates by the element's owner);
+    /// returns the counts.
     pub fn write(
         &mut self,
         comm: &SimpleCommunicator,
@@ -228,32 +231,41 @@ impl StatusOutput {
         let rows = (0..part.num_elements())
             .filter(|&e| part.face_mask[e] != 0)
             .map(|e| {
-                let mut r = vec![f64::from(part.elem_gid[e])];
-                for &n in &part.mesh.tets[e] {
-                    r.extend(positions[n as usize]);
+                let mut r = [0.0; 13];
+                r[0] = f64::from(part.elem_gid[e]);
+                for (k, &n) in part.mesh.tets[e].iter().enumerate() {
+                    let (x, x0) = (positions[n as usize], part.mesh.nodes[n as usize]);
+                    for d in 0..3 {
+                        r[1 + 3 * k + d] = x[d] - x0[d];
+                    }
                 }
                 r
             });
         let got = to_holders(comm, self.elements, rows);
-        let mut corners = vec![[0.0; 12]; self.block.gid.len()];
-        for r in got.chunks_exact(13) {
+        // Each arriving element's place in the block, then the faces' corners
+        // in block order.
+        let mut at = vec![u32::MAX; self.block.gid.len()];
+        let got_rows: Vec<&[f64]> = rows_of::<13>(&got).collect();
+        for (j, r) in got_rows.iter().enumerate() {
             if let Some(i) = self.block.find(r[0] as u32) {
-                corners[i].copy_from_slice(&r[1..]);
+                at[i] = j as u32;
             }
         }
-        let mut u = Vec::with_capacity(self.reference.len());
+        let mut u = Vec::with_capacity(9 * self.block.faces());
+        // (Every boundary element of the block arrives from its owner.)
+        let none = [0.0; 13];
         for (i, &m) in self.block.mask.iter().enumerate() {
+            let r = got_rows.get(at[i] as usize).copied().unwrap_or(&none);
             for (f, face) in LOCAL_FACES.iter().enumerate() {
                 if m & (1 << f) != 0 {
                     for &k in face {
-                        u.extend_from_slice(&corners[i][3 * k..3 * k + 3]);
+                        u.extend_from_slice(&r[1 + 3 * k..4 + 3 * k]);
                     }
                 }
             }
         }
-        for (x, x0) in u.iter_mut().zip(&self.reference) {
-            *x -= x0;
-        }
+        drop(got_rows);
+        drop(got);
         let s: Vec<f64> = status.iter().map(|&v| f64::from(v)).collect();
         self.writer.write_step(
             time,
@@ -283,7 +295,7 @@ fn count(comm: &SimpleCommunicator, status: &[u8]) -> StatusCounts {
 
 /// Rows (element id, closed bits, sliding bits, near-field bits) of the
 /// faces that this rank's pairs and gap links touch.
-fn status_rows(contacts: &ContactSet, sliding: f64) -> Vec<Vec<f64>> {
+fn status_rows(contacts: &ContactSet, sliding: f64) -> Vec<[f64; 4]> {
     let mut rows = Vec::new();
     for (p, d) in contacts.local.iter().zip(&contacts.dofs) {
         let slides = d.slip > sliding;
@@ -292,13 +304,13 @@ fn status_rows(contacts: &ContactSet, sliding: f64) -> Vec<Vec<f64>> {
             (p.contactor, p.surface.faces_contactor),
         ] {
             let s = if slides { faces } else { 0 };
-            rows.push(vec![f64::from(gid), f64::from(faces), f64::from(s), 0.0]);
+            rows.push([f64::from(gid), f64::from(faces), f64::from(s), 0.0]);
         }
     }
     for l in &contacts.gaps {
         for k in 0..2 {
             let bit = 1u8 << l.faces[k];
-            rows.push(vec![f64::from(l.tets[k]), 0.0, 0.0, f64::from(bit)]);
+            rows.push([f64::from(l.tets[k]), 0.0, 0.0, f64::from(bit)]);
         }
     }
     rows

@@ -23,8 +23,9 @@ pub(crate) fn part_path(path: &Path) -> PathBuf {
 /// The default (earliest) format bounds keep the files readable by older
 /// HDF5 libraries, ParaView's among them.
 pub(super) fn create_file(comm: &SimpleCommunicator, path: &Path) -> Result<File, IoError> {
+    let hints = crate::io::ffi::IoHints::new();
     File::with_options()
-        .with_fapl(|p| p.mpio(comm.as_raw(), None))
+        .with_fapl(|p| p.mpio(comm.as_raw(), Some(hints.info())))
         .create(path)
         .map_err(|e| IoError::hdf5(path, "creating the file with the MPI-IO driver", e))
 }

@@ -292,6 +292,13 @@ impl ExplicitDomain {
                 .copied()
                 .filter(|&i| !touches(&self.elements[i])),
         );
+        drop(by_id);
+        // Only a repartition changes the order (contact ghosts come after
+        // the part's nodes, so no element touches them): keep the arrays.
+        if order.iter().enumerate().all(|(k, &i)| k == i) {
+            self.stress.resize(self.elements.len(), Matrix3::zeros());
+            return;
+        }
         self.elements = order.iter().map(|&i| self.elements[i]).collect();
         self.elem_ids = order.iter().map(|&i| self.elem_ids[i]).collect();
         self.elem_tref = order.iter().map(|&i| self.elem_tref[i]).collect();

@@ -15,6 +15,10 @@
 //!   [`crate::dynamics::ExplicitDomain`].
 //! - [`frequency`]: the highest natural frequency of a whole small body
 //!   (its exact explicit step limit) and congruence of template copies.
+//! - [`hex8`]: trilinear Hex8 shape functions, Jacobian and the inverse
+//!   isoparametric maps of Hex8 (Newton) and Tet4 (exact), seed 002 eqs 6–11.
+//! - [`hex8_element`]: finite-strain Hex8 with the same law, selective
+//!   reduced shear and twist-mode hourglass control; lumped mass.
 //! - `error`: [`MechanicsError`].
 //!
 //! Conventions: tension-positive Cauchy stress; nodal force arrays hold the
@@ -25,6 +29,8 @@ pub mod element;
 mod error;
 pub mod explicit;
 pub mod frequency;
+pub mod hex8;
+pub mod hex8_element;
 pub mod material;
 
 pub use element::{element_response, ElementResponse, Kinematics, Tet4Reference, ThermalState};

@@ -19,12 +19,16 @@
 //!   isoparametric maps of Hex8 (Newton) and Tet4 (exact), seed 002 eqs 6–11.
 //! - [`hex8_element`]: finite-strain Hex8 with the same law, selective
 //!   reduced shear and twist-mode hourglass control; lumped mass.
+//! - [`bond`]: bonded sphere lattice of seed 002 (eqs 2–4, 12–15): spring
+//!   and conductance constants, incremental bond kernel with rotations,
+//!   bond heat flows, damped particle update.
 //! - `error`: [`MechanicsError`].
 //!
 //! Conventions: tension-positive Cauchy stress; nodal force arrays hold the
 //! forces acting on the nodes (M a = f); ΔT is the element temperature
 //! minus the stress-free reference temperature.
 
+pub mod bond;
 pub mod element;
 mod error;
 pub mod explicit;

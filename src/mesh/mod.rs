@@ -22,6 +22,7 @@
 //!   file `scenarios/meshes/nut-144.msh`).
 //! - [`container`]: open-top cylindrical cup ([`container::container_mesh`]).
 //! - [`hex8`]: structured Hex8 box ([`hex8::hex_box`]) for seed 002.
+//! - [`lattice`]: bonded cubic lattice of spheres from a box (seed 002 Fig 2).
 //! - `closed`: [`TetMesh::check_closed_volume`], the single closed solid
 //!   check for particle templates.
 
@@ -35,6 +36,7 @@ pub mod generate;
 mod geometry;
 pub mod gmsh;
 pub mod hex8;
+pub mod lattice;
 pub mod nut;
 mod sets;
 #[cfg(test)]

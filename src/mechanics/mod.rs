@@ -22,6 +22,8 @@
 //! - [`bond`]: bonded sphere lattice of seed 002 (eqs 2–4, 12–15): spring
 //!   and conductance constants, incremental bond kernel with rotations,
 //!   bond heat flows, damped particle update.
+//! - [`ghost`]: ghost particles of the FE–DE interface (seed 002 eqs 5,
+//!   16–17): placement, interpolation, force and heat return with N_I.
 //! - `error`: [`MechanicsError`].
 //!
 //! Conventions: tension-positive Cauchy stress; nodal force arrays hold the
@@ -33,6 +35,7 @@ pub mod element;
 mod error;
 pub mod explicit;
 pub mod frequency;
+pub mod ghost;
 pub mod hex8;
 pub mod hex8_element;
 pub mod material;

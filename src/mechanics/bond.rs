@@ -149,6 +149,7 @@ fn rotate_between(d: &Vector3<f64>, a: &Vector3<f64>, b: &Vector3<f64>) -> Vecto
 /// Per bond: d is first carried along with the rotation of the
 /// centre line, then incremented by the relative velocity of the midpoint
 /// (eqs 12–15); the force is f = k_n d_n n + k_s d_t (eq 3 with k_s = k_t).
+#[allow(clippy::too_many_arguments)]
 pub fn bond_forces(
     bonds: &[LatticeBond],
     state: &mut [BondState],
@@ -208,6 +209,7 @@ pub fn bond_heat(bonds: &[LatticeBond], h: &[f64; 3], t: &[f64], heat: &mut [f64
 /// (seed 002 eq 2 with the damping force −c m v, and −c I ω for the spin):
 /// v ← ((1 − c Δt/2) v + Δt f/m)/(1 + c Δt/2), x ← x + Δt v, likewise ω with
 /// the moment and I. Particles with `fixed[p]` keep zero velocity.
+#[allow(clippy::too_many_arguments)]
 pub fn update_particles(
     mass: f64,
     inertia: f64,

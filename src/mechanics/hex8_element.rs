@@ -279,7 +279,7 @@ pub fn hex8_forces(
     let mut mean = Matrix3::zeros();
     let mut volume = 0.0;
     let mut energy = 0.0;
-    for g in 0..8 {
+    for (g, stress_g) in gauss_stress.iter_mut().enumerate() {
         let f = assumed(r, &gradient(x, &r.grad[g]), &f_c_off, true);
         // Without viscosity the rate of deformation is not needed (D_e only enters 2ηD_e).
         let f_dot = if eta > 0.0 {
@@ -313,7 +313,7 @@ pub fn hex8_forces(
         };
         let e = thermal_split(&k, material.expansion, thermal)?;
         let sigma = cauchy_stress(mu, lambda, eta, &e);
-        gauss_stress[g] = sigma;
+        *stress_g = sigma;
         mean += sigma * (j * r.dv[g]);
         volume += j * r.dv[g];
         energy += e.stretch.powi(3) * r.dv[g] * strain_energy_density(mu, lambda, &e);
@@ -322,9 +322,9 @@ pub fn hex8_forces(
         let p_nat = r.frame_inv * p * r.frame_inv.transpose();
         let p_diag = r.frame * Matrix3::from_diagonal(&p_nat.diagonal()) * at;
         let p_off = r.frame * off_diagonal(&p_nat) * at;
-        for i in 0..8 {
+        for (i, fi) in forces.iter_mut().enumerate() {
             // Not numbered in the seeds (virtual work): f_I = −Σ_g dV_g (P_diag ∇N_I(g) + P_off ∇N_I(0)).
-            forces[i] -= (p_diag * r.grad[g][i] + p_off * r.grad_centre[i]) * r.dv[g];
+            *fi -= (p_diag * r.grad[g][i] + p_off * r.grad_centre[i]) * r.dv[g];
         }
     }
     // Hourglass control of the three twist modes, in the co-rotated frame.
@@ -334,8 +334,8 @@ pub fn hex8_forces(
         let q: f64 = (0..8).map(|i| axis.dot(&x[i]) * r.gamma[k][i]).sum();
         let stiffness = mu * r.twist_stiffness[k];
         energy += 0.5 * stiffness * q * q;
-        for i in 0..8 {
-            forces[i] -= axis * (stiffness * q * r.gamma[k][i]);
+        for (fi, gi) in forces.iter_mut().zip(r.gamma[k]) {
+            *fi -= axis * (stiffness * q * gi);
         }
     }
     Ok(Hex8Response {

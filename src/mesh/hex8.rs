@@ -30,7 +30,8 @@ impl HexMesh {
 /// finite, or the mesh would exceed [`super::MAX_ELEMENTS`].
 pub fn hex_box(lo: [f64; 3], hi: [f64; 3], n: [usize; 3]) -> Result<HexMesh, MeshError> {
     for a in 0..3 {
-        if n[a] == 0 || !(hi[a] > lo[a]) || !(lo[a].is_finite() && hi[a].is_finite()) {
+        let ordered = hi[a] > lo[a] && lo[a].is_finite() && hi[a].is_finite();
+        if n[a] == 0 || !ordered {
             return Err(MeshError::InvalidParameter(format!(
                 "Hex8 box: need n >= 1 and lo < hi along each axis, got n = {n:?}, lo = {lo:?}, hi = {hi:?}"
             )));

@@ -80,11 +80,11 @@ pub fn coupled_cantilever(
     let c = lattice.counts;
     let p0: Vec<Vector3<f64>> = lattice.centres.iter().map(|p| Vector3::from(*p)).collect();
     let count = p0.len();
-    let is_ghost = |p: usize| p % c[0] == 0 || p % c[0] == c[0] - 1;
+    let is_ghost = |p: usize| p.is_multiple_of(c[0]) || p % c[0] == c[0] - 1;
     let mut ghosts: Vec<(usize, Ghost)> = Vec::new();
     for p in (0..count).filter(|&p| is_ghost(p)) {
         // The boundary sphere it mirrors and the normal from FE into DE.
-        let (b, normal) = if p % c[0] == 0 {
+        let (b, normal) = if p.is_multiple_of(c[0]) {
             (p + 1, Vector3::x())
         } else {
             (p - 1, -Vector3::x())

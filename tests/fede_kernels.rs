@@ -65,7 +65,7 @@ fn de_short_cantilever_within_8_percent() {
     assert!(err.abs() < 0.08, "{err}");
 }
 
-/// The seed's DE model at full size. Measured: 55 s wall in release on this machine.
+/// The seed's DE model at full size. Measured: 64 s wall in release on this machine.
 #[test]
 #[ignore]
 fn de_cantilever_full_resolution_within_8_percent() {
@@ -130,7 +130,7 @@ fn coupled_short_cantilever_within_5_percent() {
 }
 
 /// Seed 002 Fig 7 at full size: FE on [0, 7.5] and [12.5, 20] mm, spheres
-/// between. Measured: 70 s wall in release on this machine.
+/// between. Measured: 46–70 s wall in release on this machine.
 #[test]
 #[ignore]
 fn coupled_cantilever_within_5_percent() {

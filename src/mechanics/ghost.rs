@@ -16,6 +16,16 @@
 //! (the forces conjugate to that spin: they sum to zero and their moment
 //! is M), so the interface conserves momentum and angular momentum. The
 //! gradients are those of the reference element (small rotations).
+//!
+//! Known limitation (derived, not yet measured): eq 17 returns a ghost's
+//! force at the ghost, a distance r inside the element, not at the
+//! interface. In uniform tension with elements of side h the element face
+//! inside the FE region then takes N = r/h of the interface traction
+//! (1/4 for h = 4r) and the boundary element carries only 1 − r/h of the
+//! stress: a 2 % patch test across the interface cannot pass with eq 17 as
+//! written. Returning each ghost–sphere bond force at the bond's midpoint
+//! (N_I there, on the interface) would make uniform tension exact; the
+//! coupled cantilever (bending) does not show it at this resolution.
 
 use nalgebra::{Matrix3, Vector3};
 

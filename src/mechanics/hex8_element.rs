@@ -10,9 +10,11 @@
 //! A fully integrated trilinear brick locks in bending: the bending mode
 //! u_x ∝ ξζ carries a parasitic shear ∂u_x/∂z ∝ ξ that vanishes only at the
 //! centre. Its energy relative to the bending energy of an element is
-//! (μ/E)(a/c)² for the part of the curvature resolved inside the element,
-//! which with 4 cube elements through the thickness stiffens a cantilever by
-//! about 2–3 %, the whole of the 3 % budget. The two cures the issue names:
+//! (μ/E)(a/c)² for the part of the curvature resolved inside the element
+//! (a fraction 1/n² of the bending energy with n elements through the
+//! thickness), which with 4 cube elements estimates to a 2–3 % stiffer
+//! cantilever (an estimate, not measured here), the whole of the 3 %
+//! budget. The two cures the issue names:
 //! - incompatible modes (Wilson–Taylor) add 9 internal unknowns per element
 //!   that must be condensed out with a linear stiffness every step; with the
 //!   finite-strain, thermally split law that is a nonlinear local solve per

@@ -15,16 +15,29 @@
 //!   [`crate::dynamics::ExplicitDomain`].
 //! - [`frequency`]: the highest natural frequency of a whole small body
 //!   (its exact explicit step limit) and congruence of template copies.
+//! - [`hex8`]: trilinear Hex8 shape functions, Jacobian and the inverse
+//!   isoparametric maps of Hex8 (Newton) and Tet4 (exact), seed 002 eqs 6–11.
+//! - [`hex8_element`]: finite-strain Hex8 with the same law, selective
+//!   reduced shear and twist-mode hourglass control; lumped mass.
+//! - [`bond`]: bonded sphere lattice of seed 002 (eqs 2–4, 12–15): spring
+//!   and conductance constants, incremental bond kernel with rotations,
+//!   bond heat flows, damped particle update.
+//! - [`ghost`]: ghost particles of the FE–DE interface (seed 002 eqs 5,
+//!   16–17): placement, interpolation, force and heat return with N_I.
 //! - `error`: [`MechanicsError`].
 //!
 //! Conventions: tension-positive Cauchy stress; nodal force arrays hold the
 //! forces acting on the nodes (M a = f); ΔT is the element temperature
 //! minus the stress-free reference temperature.
 
+pub mod bond;
 pub mod element;
 mod error;
 pub mod explicit;
 pub mod frequency;
+pub mod ghost;
+pub mod hex8;
+pub mod hex8_element;
 pub mod material;
 
 pub use element::{element_response, ElementResponse, Kinematics, Tet4Reference, ThermalState};

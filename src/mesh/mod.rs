@@ -21,6 +21,8 @@
 //!   144-tet default for seed 000 sec 6 [`nut::nut_mesh_default`]; template
 //!   file `scenarios/meshes/nut-144.msh`).
 //! - [`container`]: open-top cylindrical cup ([`container::container_mesh`]).
+//! - [`hex8`]: structured Hex8 box ([`hex8::hex_box`]) for seed 002.
+//! - [`lattice`]: bonded cubic lattice of spheres from a box (seed 002 Fig 2).
 //! - `closed`: [`TetMesh::check_closed_volume`], the single closed solid
 //!   check for particle templates.
 
@@ -33,6 +35,8 @@ mod error;
 pub mod generate;
 mod geometry;
 pub mod gmsh;
+pub mod hex8;
+pub mod lattice;
 pub mod nut;
 mod sets;
 #[cfg(test)]

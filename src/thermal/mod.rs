@@ -1,10 +1,12 @@
-//! Heat conduction: Tet4 element kernels (seed 000 eqs 14–20, pure), the
+//! Heat conduction: Tet4 element kernels (seed 000 eqs 14–20, pure), Hex8
+//! element matrices ([`hex8`]), the
 //! distributed assembly and the theta integrator (eq 22) on PETSc.
 
 pub mod assembly;
 pub mod element;
 pub mod exchange;
 pub mod flows;
+pub mod hex8;
 pub mod limits;
 pub mod monotone;
 pub mod nonlinear;

@@ -1,6 +1,8 @@
 //! Analytic and exact reference solutions the validation tests compare against.
 
 pub mod ambient;
+pub mod cantilever;
+pub mod coupled_cantilever;
 pub mod lumped;
 pub mod pipe_network;
 pub mod semidiscrete;

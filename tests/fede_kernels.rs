@@ -67,7 +67,7 @@ fn de_short_cantilever_within_8_percent() {
 
 /// The seed's DE model at full size. Measured: 64 s wall in release on this machine.
 #[test]
-#[ignore]
+#[ignore = "about a minute on one core; CI runs the L = 10 mm beam at the same sizes"]
 fn de_cantilever_full_resolution_within_8_percent() {
     let beam = Cantilever::seed002();
     let start = Instant::now();
@@ -132,7 +132,7 @@ fn coupled_short_cantilever_within_5_percent() {
 /// Seed 002 Fig 7 at full size: FE on [0, 7.5] and [12.5, 20] mm, spheres
 /// between. Measured: 46–70 s wall in release on this machine.
 #[test]
-#[ignore]
+#[ignore = "about a minute on one core; CI runs the L = 10 mm beam at the same sizes"]
 fn coupled_cantilever_within_5_percent() {
     let err = coupled_case(&Cantilever::seed002(), [7.5e-3, 12.5e-3]);
     assert!(err.abs() < 0.05, "{err}");

@@ -142,7 +142,7 @@ impl<'p> Exchange<'p> {
         if jacobian {
             self.jac.zero_entries()?;
         }
-        let t = self.gather.gather(x)?.to_vec();
+        let t = self.gather.gather(x)?;
         let mut at = 0;
         for u in &self.units {
             let (q, j) = unit_heat(u, &self.laws, &t[at..at + u.n]);

@@ -809,7 +809,7 @@ impl<'p> ThermalSystem<'p> {
     ) -> Result<super::flows::Flows> {
         let rows = super::flows::flow_rows(contacts);
         let mut g = crate::petsc::Gather::new(&self.t, &rows)?;
-        let t = g.gather(&self.t)?.to_vec();
+        let t = g.gather(&self.t)?;
         Ok(super::flows::flows(model, contacts, &t))
     }
 

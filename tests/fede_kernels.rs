@@ -3,8 +3,12 @@
 
 use std::time::Instant;
 
+use nalgebra::Vector3;
+
 use fdem::validation::cantilever::{de_cantilever, fe_cantilever, Cantilever, Relaxation};
 use fdem::validation::coupled_cantilever::coupled_cantilever;
+use fdem::validation::fede_coupling::Coupling;
+use fdem::validation::fede_patch::{fede_patch, PatchBar, PatchResult};
 
 fn analytic(beam: &Cantilever, x: f64) -> f64 {
     let i = beam.width * beam.height.powi(3) / 12.0;
@@ -94,7 +98,8 @@ fn coupled_case(beam: &Cantilever, segment: [f64; 2]) -> f64 {
         tolerance: 1e-5,
         ..Relaxation::default()
     };
-    let s = coupled_cantilever(beam, 0.5e-3, 0.125e-3, segment, &relax).unwrap();
+    let s =
+        coupled_cantilever(beam, 0.5e-3, 0.125e-3, segment, Coupling::default(), &relax).unwrap();
     let reference = analytic(beam, s.tip_x);
     let err = (s.tip - reference) / reference;
     eprintln!(
@@ -136,4 +141,194 @@ fn coupled_short_cantilever_within_5_percent() {
 fn coupled_cantilever_within_5_percent() {
     let err = coupled_case(&Cantilever::seed002(), [7.5e-3, 12.5e-3]);
     assert!(err.abs() < 0.05, "{err}");
+}
+
+/// What the patch test asserts, relative to σ_ref = E ε and to the force
+/// σ_ref carries over a node's (h²) or a sphere's ((2r)²) area.
+struct PatchFigures {
+    /// Worst |σ_xx/σ_ref − 1| of any element.
+    fe_element: f64,
+    /// Worst over the layers of elements of the layer's mean σ_xx.
+    fe_layer: f64,
+    /// Worst over the DE planes of the section stress.
+    de_section: f64,
+    /// Worst over the DE layers of E × strain.
+    de_strain: f64,
+    /// Imposed exact field: largest net force on the inner nodes of the
+    /// coupled elements (x = x₁ − h), / σ_ref h².
+    inner: f64,
+    /// Same on the interface face's nodes.
+    face: f64,
+    /// Same on the other FE nodes.
+    fe_away: f64,
+    /// Imposed exact field: largest net force on the first layer of spheres, / σ_ref (2r)².
+    boundary: f64,
+    /// Same on the other free spheres.
+    de_away: f64,
+}
+
+/// The patch test's figures, printed.
+fn patch_report(name: &str, bar: &PatchBar, p: &PatchResult) -> PatchFigures {
+    // Reference: uniaxial stress E ε (the ends hold the exact field).
+    let sigma = bar.young * bar.strain;
+    let dev = |s: f64| (s / sigma - 1.0).abs();
+    let fe_element = p.fe_stress.iter().map(|(_, s)| dev(*s)).fold(0.0, f64::max);
+    // Elements per layer of x: the range and the mean of σ_xx/σ_ref.
+    let mut layers: Vec<(f64, f64, f64, f64, usize)> = Vec::new();
+    for (x, s) in &p.fe_stress {
+        let r = s / sigma;
+        match layers.iter_mut().find(|l| (l.0 - x).abs() < 1e-9) {
+            Some(l) => {
+                l.1 = l.1.min(r);
+                l.2 = l.2.max(r);
+                l.3 += r;
+                l.4 += 1;
+            }
+            None => layers.push((*x, r, r, r, 1)),
+        }
+    }
+    layers.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let fe_layer = layers
+        .iter()
+        .map(|l| (l.3 / l.4 as f64 - 1.0).abs())
+        .fold(0.0, f64::max);
+    let de_section = p
+        .de_section
+        .iter()
+        .map(|(_, s)| dev(*s))
+        .fold(0.0, f64::max);
+    let de_strain = p
+        .de_strain
+        .iter()
+        .map(|(_, e)| dev(bar.young * e))
+        .fold(0.0, f64::max);
+    let node = sigma * bar.size * bar.size;
+    let sphere = sigma * 4.0 * bar.radius * bar.radius;
+    let x1 = bar.interface;
+    let at = |x: f64, a: f64| (x - a).abs() < 1e-9;
+    let max_norm = |v: &[(Vector3<f64>, Vector3<f64>)], keep: &dyn Fn(f64) -> bool| {
+        v.iter()
+            .filter(|(x, _)| keep(x[0]))
+            .map(|(_, f)| f.norm())
+            .fold(0.0_f64, f64::max)
+    };
+    // The coupled elements are the FE region's last layer [x₁ − h, x₁].
+    let f = PatchFigures {
+        fe_element,
+        fe_layer,
+        de_section,
+        de_strain,
+        inner: max_norm(&p.fe_residual, &|x| at(x, x1 - bar.size)) / node,
+        face: max_norm(&p.fe_residual, &|x| at(x, x1)) / node,
+        fe_away: max_norm(&p.fe_residual, &|x| x < x1 - bar.size - 1e-9) / node,
+        boundary: max_norm(&p.de_residual, &|x| at(x, x1 + bar.radius)) / sphere,
+        de_away: max_norm(&p.de_residual, &|x| x > x1 + bar.radius + 1e-9) / sphere,
+    };
+    eprintln!(
+        "{name}: {} steps of {:.3e} s; worst FE element {:.2} %, FE layer mean {:.2} %, DE section {:.2} %, \
+         E×DE strain {:.2} %; |σ_yy|,|σ_zz| ≤ {:.1e} σ; deviation from the exact field {:.1e} εL",
+        p.steps,
+        p.dt,
+        f.fe_element * 100.0,
+        f.fe_layer * 100.0,
+        f.de_section * 100.0,
+        f.de_strain * 100.0,
+        p.fe_lateral / sigma,
+        p.max_deviation / (bar.strain * bar.length)
+    );
+    eprintln!(
+        "{name}: imposed exact field, largest net force: inner nodes of the coupled elements {:.2e} σh², \
+         interface-face nodes {:.2e} σh², other FE nodes {:.1e} σh²; first sphere layer {:.2e} σ(2r)², \
+         other spheres {:.2e} σ(2r)²",
+        f.inner, f.face, f.fe_away, f.boundary, f.de_away
+    );
+    for (x, lo, hi, sum, n) in layers {
+        eprintln!(
+            "{name}: FE layer x = {:.3} mm: σ/σ_ref mean {:.4} in [{lo:.4}, {hi:.4}]",
+            x * 1e3,
+            sum / n as f64
+        );
+    }
+    for (x, s) in &p.de_section {
+        eprintln!(
+            "{name}: DE plane x = {:.3} mm: σ/σ_ref {:.4}",
+            x * 1e3,
+            s / sigma
+        );
+    }
+    for (x, e) in &p.de_strain {
+        eprintln!(
+            "{name}: DE layers x = {:.3} mm: Eε/σ_ref {:.4}",
+            x * 1e3,
+            bar.young * e / sigma
+        );
+    }
+    f
+}
+
+fn patch_relaxation() -> Relaxation {
+    Relaxation {
+        tolerance: 1e-10,
+        ..Relaxation::default()
+    }
+}
+
+/// Issue 21 patch test: uniform tension across the FE–DE interface
+/// (4 × 2 × 2 mm bar, Hex8 h = 0.5 mm on [0, 2] mm, spheres r = 0.125 mm on
+/// [2, 4] mm, ends held on the exact field, relaxed to static). Section
+/// stresses within 2 % in both regions and no spurious force at the ghost
+/// layer. Eq 17 as written is measured and printed beside it.
+#[test]
+fn fede_patch_uniform_tension_within_2_percent() {
+    let bar = PatchBar::seed002();
+    let start = Instant::now();
+    let seed = patch_report(
+        "seed eq 17",
+        &bar,
+        &fede_patch(&bar, Coupling::Seed, &patch_relaxation()).unwrap(),
+    );
+    // Eq 17 as written: the inner nodes of the coupled elements take r/h of their share (ghost docs).
+    assert!(seed.inner > 0.2, "{}", seed.inner);
+    let p = patch_report(
+        "interface",
+        &bar,
+        &fede_patch(&bar, Coupling::Interface, &patch_relaxation()).unwrap(),
+    );
+    eprintln!("patch test wall {:.1} s", start.elapsed().as_secs_f64());
+    assert!(p.fe_layer < 0.02, "FE layer {}", p.fe_layer);
+    assert!(p.de_section < 0.02, "DE section {}", p.de_section);
+    assert!(p.de_strain < 0.02, "DE strain {}", p.de_strain);
+    // No spurious force: the inner nodes of the coupled elements feel nothing (round-off of the
+    // finite-strain element, as everywhere in the FE region), the first layer of spheres no more
+    // than the lattice's own box-edge spheres elsewhere.
+    assert!(
+        p.inner < 1e-3 && p.fe_away < 1e-3,
+        "{} {}",
+        p.inner,
+        p.fe_away
+    );
+    assert!(
+        p.boundary <= p.de_away * (1.0 + 1e-6),
+        "{} {}",
+        p.boundary,
+        p.de_away
+    );
+}
+
+/// The strict reading of the patch test: every element's σ_xx within 2 %.
+/// Measured 2.97 % (elements at the interface beside the lateral faces):
+/// the lattice's surface weights put the diagonal bonds' share of a surface
+/// sphere's force at its inner bond midpoints, so the interface-face nodes
+/// within h of a lateral face receive up to 7.9 % of σh² more or less than
+/// a uniform traction gives them.
+#[test]
+#[ignore = "fails: worst element 2.97 % at the interface beside the lateral faces (lattice surface weights), see docs/validation.md"]
+fn fede_patch_every_element_within_2_percent() {
+    let bar = PatchBar::seed002();
+    let p = patch_report(
+        "interface",
+        &bar,
+        &fede_patch(&bar, Coupling::Interface, &patch_relaxation()).unwrap(),
+    );
+    assert!(p.fe_element < 0.02, "{}", p.fe_element);
 }

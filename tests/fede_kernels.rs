@@ -5,7 +5,10 @@ use std::time::Instant;
 
 use nalgebra::Vector3;
 
-use fdem::validation::cantilever::{de_cantilever, fe_cantilever, Cantilever, Relaxation};
+use fdem::validation::cantilever::{
+    de_cantilever, fe_cantilever, Cantilever, Relaxation, StaticSolution,
+};
+use fdem::validation::cantilever_plot::write_fig8;
 use fdem::validation::coupled_cantilever::coupled_cantilever;
 use fdem::validation::fede_coupling::Coupling;
 use fdem::validation::fede_patch::{fede_patch, PatchBar, PatchResult};
@@ -331,4 +334,91 @@ fn fede_patch_every_element_within_2_percent() {
         &fede_patch(&bar, Coupling::Interface, &patch_relaxation()).unwrap(),
     );
     assert!(p.fe_element < 0.02, "{}", p.fe_element);
+}
+
+/// The three models of seed 002 Fig 8 on `beam`, with the coupled DE
+/// segment `segment`: (FE, DE, coupled), each tip printed with its error.
+fn fig8_models(
+    beam: &Cantilever,
+    segment: [f64; 2],
+    relax: &Relaxation,
+) -> [(StaticSolution, f64); 3] {
+    let start = Instant::now();
+    let err = |s: &StaticSolution| {
+        let reference = analytic(beam, s.tip_x);
+        (s.tip - reference) / reference
+    };
+    let fe = fe_cantilever(beam, 0.5e-3, relax).unwrap();
+    let de = de_cantilever(beam, 0.125e-3, relax).unwrap();
+    let coupled =
+        coupled_cantilever(beam, 0.5e-3, 0.125e-3, segment, Coupling::default(), relax).unwrap();
+    let out = [fe, de, coupled].map(|s| {
+        let e = err(&s);
+        (s, e)
+    });
+    for (name, (s, e)) in ["FE", "DE", "coupled"].iter().zip(&out) {
+        eprintln!(
+            "Fig 8 L = {} mm {name}: tip {:.5} mm at x = {:.4} mm ({:+.2} %), {} steps",
+            beam.length * 1e3,
+            s.tip * 1e3,
+            s.tip_x * 1e3,
+            e * 100.0,
+            s.steps
+        );
+    }
+    eprintln!("Fig 8 models: {:.1} s wall", start.elapsed().as_secs_f64());
+    out
+}
+
+/// Fig 8 at CI size (L = 10 mm): the three profiles as a PNG in a
+/// temporary directory; the tips within the tolerances.
+#[test]
+fn fig8_short_beam_png() {
+    let beam = Cantilever {
+        length: 10e-3,
+        ..Cantilever::seed002()
+    };
+    let relax = Relaxation {
+        tolerance: 1e-5,
+        ..Relaxation::default()
+    };
+    let [(fe, fe_err), (de, de_err), (coupled, coupled_err)] =
+        fig8_models(&beam, [3.5e-3, 6.5e-3], &relax);
+    assert!(fe_err.abs() < 0.03, "FE {fe_err}");
+    assert!(de_err.abs() < 0.08, "DE {de_err}");
+    assert!(coupled_err.abs() < 0.05, "coupled {coupled_err}");
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("fede-cantilever-short.png");
+    write_fig8(&beam, &fe, &de, &coupled, &path).unwrap();
+    let bytes = std::fs::read(&path).unwrap();
+    assert!(
+        bytes.len() > 1000 && bytes.starts_with(b"\x89PNG"),
+        "{} bytes",
+        bytes.len()
+    );
+}
+
+/// Fig 8 at the seed's size: writes docs/fede-cantilever.png and prints the
+/// profiles. Measured: about 2.5 minutes on one core.
+#[test]
+#[ignore = "about 2.5 minutes on one core; writes docs/fede-cantilever.png (fig8_short_beam_png runs in CI)"]
+fn fig8_full_size_png() {
+    let beam = Cantilever::seed002();
+    let [(fe, fe_err), (de, de_err), (coupled, coupled_err)] =
+        fig8_models(&beam, [7.5e-3, 12.5e-3], &Relaxation::default());
+    for (name, s) in [("FE", &fe), ("DE", &de), ("coupled", &coupled)] {
+        for (x, u) in &s.profile {
+            eprintln!(
+                "fig8 {name} {:.4} {:.5} {:.5}",
+                x * 1e3,
+                u * 1e3,
+                analytic(&beam, *x) * 1e3
+            );
+        }
+    }
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/fede-cantilever.png");
+    write_fig8(&beam, &fe, &de, &coupled, &path).unwrap();
+    assert!(fe_err.abs() < 0.03, "FE {fe_err}");
+    assert!(de_err.abs() < 0.08, "DE {de_err}");
+    assert!(coupled_err.abs() < 0.05, "coupled {coupled_err}");
 }

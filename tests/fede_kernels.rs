@@ -11,6 +11,7 @@ use fdem::validation::cantilever::{
 use fdem::validation::cantilever_plot::write_fig8;
 use fdem::validation::coupled_cantilever::coupled_cantilever;
 use fdem::validation::fede_coupling::Coupling;
+use fdem::validation::fede_heat::{fede_heat, HeatResult};
 use fdem::validation::fede_patch::{fede_patch, PatchBar, PatchResult};
 
 fn analytic(beam: &Cantilever, x: f64) -> f64 {
@@ -421,4 +422,67 @@ fn fig8_full_size_png() {
     assert!(fe_err.abs() < 0.03, "FE {fe_err}");
     assert!(de_err.abs() < 0.08, "DE {de_err}");
     assert!(coupled_err.abs() < 0.05, "coupled {coupled_err}");
+}
+
+/// Worst deviations of the heat case: [FE temperature, DE temperature] as
+/// fractions of T₁ − T₂, [FE element flux, DE section flux, inflow] as
+/// fractions of k (T₁ − T₂)/L; printed.
+fn heat_report(name: &str, bar: &PatchBar, k: f64, t: (f64, f64), r: &HeatResult) -> [f64; 5] {
+    // Reference: the linear steady profile and its flux, computed here.
+    let exact = |x: f64| t.0 + (t.1 - t.0) * x / bar.length;
+    let dt = t.0 - t.1;
+    let flux = k * dt / bar.length;
+    let worst_t = |v: &[(Vector3<f64>, f64)]| {
+        let (mut w, mut at) = (0.0, Vector3::zeros());
+        for (x, temp) in v {
+            let d = ((temp - exact(x[0])) / dt).abs();
+            if d > w {
+                (w, at) = (d, *x);
+            }
+        }
+        eprintln!(
+            "{name}: worst temperature {:.3} % at {:.3?} mm",
+            w * 100.0,
+            (at * 1e3).as_slice()
+        );
+        w
+    };
+    let worst_q = |v: &[(f64, f64)]| {
+        v.iter()
+            .map(|(_, q)| (q / flux - 1.0).abs())
+            .fold(0.0, f64::max)
+    };
+    let out = [
+        worst_t(&r.fe_temperature),
+        worst_t(&r.de_temperature),
+        worst_q(&r.fe_flux),
+        worst_q(&r.de_flux),
+        (r.inflow / flux - 1.0).abs(),
+    ];
+    eprintln!(
+        "{name}: worst |T − T_exact|/ΔT: FE nodes {:.3} %, spheres {:.3} %; flux: worst element {:.2} %, \
+         DE sections {:.3} %, inflow at X = 0 {:.3} %",
+        out[0] * 100.0,
+        out[1] * 100.0,
+        out[2] * 100.0,
+        out[3] * 100.0,
+        out[4] * 100.0
+    );
+    out
+}
+
+/// Issue 21, heat across the interface: the patch bar (Hex8 | spheres) held
+/// at T₁ and T₂ at its ends; the steady profile is linear within 2 % of
+/// T₁ − T₂ in both regions.
+#[test]
+fn fede_heat_steady_linear_within_2_percent() {
+    let bar = PatchBar::seed002();
+    let (k, t) = (1.5, (100.0, 20.0));
+    let start = Instant::now();
+    let seed = fede_heat(&bar, k, t.0, t.1, Coupling::Seed).unwrap();
+    heat_report("heat, seed eq 17", &bar, k, t, &seed);
+    let r = fede_heat(&bar, k, t.0, t.1, Coupling::Interface).unwrap();
+    let w = heat_report("heat, interface", &bar, k, t, &r);
+    eprintln!("heat cases {:.1} s wall", start.elapsed().as_secs_f64());
+    assert!(w[0] < 0.02 && w[1] < 0.02, "{w:?}");
 }

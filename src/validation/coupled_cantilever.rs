@@ -89,7 +89,7 @@ pub fn coupled_cantilever(
         let cell = [0, 1, 2].map(|a| ((xg[a] / size).floor().max(0.0) as usize).min(n[a] - 1));
         kept[cell[0] + n[0] * (cell[1] + n[1] * cell[2])]
     };
-    let mut layer = GhostLayer::new(coupling, &lattice, &normal, &stiffness, &hexes, &x0, locate)?;
+    let mut layer = GhostLayer::new(coupling, &lattice, &normal, &hexes, &x0, locate)?;
     let omega_max = schur_bound(layer.all_bonds(), &stiffness, &p0, pmass, inertia);
     dt = dt.min(0.95 * 2.0 / omega_max);
     // FE boundary conditions and load, as in the FE-only driver.

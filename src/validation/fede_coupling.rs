@@ -28,10 +28,10 @@
 
 use nalgebra::Vector3;
 
-use crate::mechanics::bond::{advance_bond, bond_forces, BondState, BondStiffness};
+use crate::mechanics::bond::{advance_bond, bond_forces, bond_heat, BondState, BondStiffness};
 use crate::mechanics::ghost::{ghost_position, hex8_ghost, Ghost};
 use crate::mechanics::hex8::InverseMapError;
-use crate::mesh::lattice::{Lattice, LatticeBond};
+use crate::mesh::lattice::{BondKind, Lattice, LatticeBond};
 
 /// How a ghost–sphere bond acts on the finite elements (module docs).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -53,9 +53,10 @@ struct Link {
     ghost: usize,
     /// The element's material point at the bond's midpoint.
     point: Ghost,
-    /// Normal and tangential stiffness, weight included.
-    kn: f64,
-    ks: f64,
+    /// Neighbour group.
+    kind: BondKind,
+    /// Weight of the half bond (twice the lattice's weight).
+    weight: f64,
 }
 
 /// The ghost layer and the bonds of a coupled lattice.
@@ -88,7 +89,6 @@ impl GhostLayer {
         coupling: Coupling,
         lattice: &Lattice,
         normal: &[Option<Vector3<f64>>],
-        stiffness: &BondStiffness,
         hexes: &[[u32; 8]],
         x0: &[Vector3<f64>],
         locate: impl Fn(&Vector3<f64>) -> usize,
@@ -158,13 +158,12 @@ impl GhostLayer {
                     let point = hex8_ghost(&elem_nodes(e), &mid, e)?;
                     // Half bond: twice the stiffness (module docs).
                     let w = 2.0 * weight;
-                    let k = b.kind as usize;
                     links.push(Link {
                         sphere: s,
                         ghost: g,
                         point,
-                        kn: stiffness.normal[k] * w,
-                        ks: stiffness.tangential[k] * w,
+                        kind: b.kind,
+                        weight: w,
                     });
                     link_bonds.push(LatticeBond {
                         i: s as u32,
@@ -233,12 +232,12 @@ impl GhostLayer {
                 (b.i as usize, b.j as usize, f)
             })
             .collect();
-        out.extend(
-            self.links
-                .iter()
-                .zip(&self.link_state)
-                .map(|(l, s)| (l.sphere, l.ghost, force(s, l.kn, l.ks))),
-        );
+        out.extend(self.links.iter().zip(&self.link_state).map(|(l, s)| {
+            let k = l.kind as usize;
+            let w = l.weight;
+            let f = force(s, stiffness.normal[k] * w, stiffness.tangential[k] * w);
+            (l.sphere, l.ghost, f)
+        }));
         out
     }
 
@@ -308,7 +307,9 @@ impl GhostLayer {
                     let half = (branch - (pv[l.ghost] - pv[l.sphere]) * (0.5 * dt)) * 0.5;
                     // seed 002 eq 15 for the sphere, eq 14 for the relative velocity.
                     let vo = pv[l.sphere] + pw[l.sphere].cross(&half);
-                    let fb = advance_bond(s, l.kn, l.ks, &n, &(v_point - vo), dt);
+                    let (k, w) = (l.kind as usize, l.weight);
+                    let (kn, ks) = (stiffness.normal[k] * w, stiffness.tangential[k] * w);
+                    let fb = advance_bond(s, kn, ks, &n, &(v_point - vo), dt);
                     pf[l.sphere] += fb;
                     pm[l.sphere] += half.cross(&fb);
                     // seed 002 eq 17 at the midpoint: the force on the element, −f, with N_I(ξ_o).
@@ -320,6 +321,96 @@ impl GhostLayer {
                 }
             }
         }
+    }
+}
+
+impl GhostLayer {
+    /// Heat flows of the lattice and the interface at nodal temperatures
+    /// `t` and particle temperatures `pt` (the ghosts' entries are
+    /// overwritten with Σ N_I T_I): each bond conducts with `h` per group
+    /// (times its weight); the heat into the spheres is added to `pq`, the
+    /// heat the interface gives the elements to the nodes' `q` (W).
+    /// [`Coupling::Seed`]: a ghost takes its element's temperature at the
+    /// ghost and returns its heat with N_I there; [`Coupling::Interface`]:
+    /// each ghost–sphere bond is the sphere's half (conductance doubled)
+    /// between the sphere and the element's material point at the bond
+    /// midpoint, temperature and heat with N_I there. Either way the heat is
+    /// conserved and the flows are symmetric in the temperatures.
+    #[allow(clippy::too_many_arguments)]
+    pub fn add_heat(
+        &self,
+        h: &[f64; 3],
+        hexes: &[[u32; 8]],
+        t: &[f64],
+        pt: &mut [f64],
+        q: &mut [f64],
+        pq: &mut [f64],
+    ) {
+        for (p, g) in &self.ghosts {
+            pt[*p] = g.temperature(&hexes[g.elem].map(|a| t[a as usize]));
+        }
+        // Flux equivalence (mechanics::bond docs): Q_{j→i} = h w (T_j − T_i).
+        bond_heat(&self.bonds, h, pt, pq);
+        match self.coupling {
+            Coupling::Seed => {
+                for (p, g) in &self.ghosts {
+                    let mut nodal = [0.0; 8];
+                    g.scatter_heat(pq[*p], &mut nodal);
+                    for (a, qa) in hexes[g.elem].iter().zip(nodal) {
+                        q[*a as usize] += qa;
+                    }
+                    pq[*p] = 0.0;
+                }
+            }
+            Coupling::Interface => {
+                for l in &self.links {
+                    let e = hexes[l.point.elem];
+                    let t_point = l.point.temperature(&e.map(|a| t[a as usize]));
+                    // Half bond of conductance 2 h w: Q into the sphere from the point.
+                    let flow = h[l.kind as usize] * l.weight * (t_point - pt[l.sphere]);
+                    pq[l.sphere] += flow;
+                    let mut nodal = [0.0; 8];
+                    l.point.scatter_heat(-flow, &mut nodal);
+                    for (a, qa) in e.iter().zip(nodal) {
+                        q[*a as usize] += qa;
+                    }
+                }
+            }
+        }
+    }
+}
+
+impl GhostLayer {
+    /// Each bond's heat flow (W) from its particle i to j at nodal
+    /// temperatures `t` and particle temperatures `pt` (ghosts' entries as
+    /// [`GhostLayer::add_heat`] leaves them): lattice bonds first, then the
+    /// links of [`Coupling::Interface`] (i = sphere, j = ghost, the flow from
+    /// the sphere to the element's point at the bond midpoint).
+    pub fn heat_flows(
+        &self,
+        h: &[f64; 3],
+        hexes: &[[u32; 8]],
+        t: &[f64],
+        pt: &[f64],
+    ) -> Vec<(usize, usize, f64)> {
+        let mut out: Vec<_> = self
+            .bonds
+            .iter()
+            .map(|b| {
+                let (i, j) = (b.i as usize, b.j as usize);
+                (i, j, h[b.kind as usize] * b.weight * (pt[i] - pt[j]))
+            })
+            .collect();
+        out.extend(self.links.iter().map(|l| {
+            let e = hexes[l.point.elem];
+            let t_point = l.point.temperature(&e.map(|a| t[a as usize]));
+            (
+                l.sphere,
+                l.ghost,
+                h[l.kind as usize] * l.weight * (pt[l.sphere] - t_point),
+            )
+        }));
+        out
     }
 }
 
@@ -345,4 +436,134 @@ pub(crate) fn schur_bound<'a>(
         bound[j] += lam;
     }
     bound.iter().copied().fold(0.0, f64::max).sqrt()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mechanics::bond::bond_conductance;
+    use crate::mesh::hex8::hex_box;
+    use crate::mesh::lattice::cubic_lattice;
+
+    const R: f64 = 0.125e-3;
+
+    /// The layer, the elements, their nodes and the particles.
+    type Setup = (
+        GhostLayer,
+        Vec<[u32; 8]>,
+        Vec<Vector3<f64>>,
+        Vec<Vector3<f64>>,
+    );
+
+    /// 2×2×2 Hex8 of side 4r on [0, 8r]³, spheres on [8r, 16r] × [0, 8r]²
+    /// with their ghost layer inside the elements.
+    fn setup(coupling: Coupling) -> Setup {
+        let h = 4.0 * R;
+        let mesh = hex_box([0.0; 3], [2.0 * h; 3], [2; 3]).unwrap();
+        let x0: Vec<Vector3<f64>> = mesh.nodes.iter().map(|p| Vector3::from(*p)).collect();
+        let lattice = cubic_lattice(
+            [2.0 * h - 2.0 * R, 0.0, 0.0],
+            [4.0 * h, 2.0 * h, 2.0 * h],
+            R,
+            false,
+        )
+        .unwrap();
+        let nx = lattice.counts[0];
+        let p0: Vec<Vector3<f64>> = lattice.centres.iter().map(|p| Vector3::from(*p)).collect();
+        let normal: Vec<Option<Vector3<f64>>> = (0..p0.len())
+            .map(|p| (p % nx == 0).then(Vector3::x))
+            .collect();
+        let locate = |p: &Vector3<f64>| {
+            let c = [0, 1, 2].map(|a| ((p[a] / h).floor().max(0.0) as usize).min(1));
+            c[0] + 2 * (c[1] + 2 * c[2])
+        };
+        let layer = GhostLayer::new(coupling, &lattice, &normal, &mesh.hexes, &x0, locate).unwrap();
+        (layer, mesh.hexes, x0, p0)
+    }
+
+    #[test]
+    fn interface_heat_is_conserved_and_symmetric() {
+        for coupling in [Coupling::Seed, Coupling::Interface] {
+            let (layer, hexes, x0, p0) = setup(coupling);
+            let cond = bond_conductance(2.0, R);
+            let ghosts: Vec<usize> = layer.ghosts.iter().map(|(p, _)| *p).collect();
+            let flows = |t: &[f64], pt: &[f64]| {
+                let mut pt = pt.to_vec();
+                let (mut q, mut pq) = (vec![0.0; x0.len()], vec![0.0; p0.len()]);
+                layer.add_heat(&cond, &hexes, t, &mut pt, &mut q, &mut pq);
+                (q, pq)
+            };
+            // Arbitrary temperatures: the heat is conserved.
+            let t: Vec<f64> = (0..x0.len()).map(|i| ((i * 37) % 11) as f64).collect();
+            let pt: Vec<f64> = (0..p0.len()).map(|i| ((i * 13) % 7) as f64).collect();
+            let (q, pq) = flows(&t, &pt);
+            let total: f64 = q.iter().sum::<f64>() + pq.iter().sum::<f64>();
+            let scale: f64 = q.iter().chain(&pq).map(|v| v.abs()).sum();
+            assert!(
+                total.abs() < 1e-13 * scale,
+                "{coupling:?}: {total} of {scale}"
+            );
+            assert!(ghosts
+                .iter()
+                .all(|&g| pq[g] == 0.0 || coupling == Coupling::Interface));
+            // Symmetric: the heat into node a from a unit temperature at sphere s equals the
+            // heat into sphere s from a unit temperature at node a.
+            let s = layer.links.first().map_or(1, |l| l.sphere);
+            let a = hexes[1][1] as usize;
+            let mut ts = vec![0.0; p0.len()];
+            ts[s] = 1.0;
+            let (q_a, _) = flows(&vec![0.0; x0.len()], &ts);
+            let mut ta = vec![0.0; x0.len()];
+            ta[a] = 1.0;
+            let (_, pq_s) = flows(&ta, &vec![0.0; p0.len()]);
+            assert!((q_a[a] - pq_s[s]).abs() < 1e-15 * cond[0], "{coupling:?}");
+            assert!(
+                q_a[a] != 0.0,
+                "{coupling:?}: node {a} and sphere {s} are not coupled"
+            );
+        }
+    }
+
+    #[test]
+    fn rigid_rotation_gives_no_interface_force() {
+        // The ghost spin of Seed uses the reference gradients (small rotations, ghost docs):
+        // 0.005 rad; the interface points carry any rotation: 0.5 rad.
+        for (coupling, steps) in [(Coupling::Seed, 10), (Coupling::Interface, 1000)] {
+            let (mut layer, hexes, x0, p0) = setup(coupling);
+            let stiffness = BondStiffness::seed002(1e9, 0.23, R).unwrap();
+            let omega = Vector3::new(0.3, -0.5, 0.8) * 1e3;
+            let centre = Vector3::repeat(4.0 * R);
+            let rigid = |x: &[Vector3<f64>], t: f64| -> Vec<Vector3<f64>> {
+                let rot = nalgebra::Rotation3::from_scaled_axis(omega * t);
+                x.iter().map(|p| centre + rot * (p - centre)).collect()
+            };
+            let dt = 5e-7;
+            let (mut x, mut px) = (x0.clone(), p0.clone());
+            let mut pw = vec![omega; p0.len()];
+            let (mut f, mut pf, mut pm) = (
+                vec![Vector3::zeros(); x0.len()],
+                vec![Vector3::zeros(); p0.len()],
+                vec![Vector3::zeros(); p0.len()],
+            );
+            for step in 1..=steps {
+                let (nx, npx) = (rigid(&x0, step as f64 * dt), rigid(&p0, step as f64 * dt));
+                let v: Vec<Vector3<f64>> = nx.iter().zip(&x).map(|(a, b)| (a - b) / dt).collect();
+                let mut pv: Vec<Vector3<f64>> =
+                    npx.iter().zip(&px).map(|(a, b)| (a - b) / dt).collect();
+                (x, px) = (nx, npx);
+                f.iter_mut().for_each(|a| *a = Vector3::zeros());
+                pf.iter_mut().for_each(|a| *a = Vector3::zeros());
+                pm.iter_mut().for_each(|a| *a = Vector3::zeros());
+                layer.add_forces(
+                    &stiffness, &hexes, &x, &v, dt, &mut f, &mut px, &mut pv, &mut pw, &mut pf,
+                    &mut pm,
+                );
+                pw.iter_mut().for_each(|w| *w = omega);
+            }
+            // |ω|Δt = 5e-4; time-discretisation error O(steps (|ω|Δt)³ ℓ).
+            let bound = 1e-5 * stiffness.normal[0] * 2.0 * R;
+            let worst = f.iter().chain(&pf).map(|a| a.norm()).fold(0.0, f64::max);
+            assert!(worst < bound, "{coupling:?}: {worst} vs {bound}");
+        }
+    }
 }

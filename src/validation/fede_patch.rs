@@ -204,15 +204,7 @@ impl Model {
             let cell = [0, 1, 2].map(|a| ((p[a] / h).floor().max(0.0) as usize).min(n[a] - 1));
             cell[0] + n[0] * (cell[1] + n[1] * cell[2])
         };
-        let layer = GhostLayer::new(
-            coupling,
-            &lattice,
-            &normal,
-            &stiffness,
-            &mesh.hexes,
-            &x0,
-            locate,
-        )?;
+        let layer = GhostLayer::new(coupling, &lattice, &normal, &mesh.hexes, &x0, locate)?;
         dt = dt.min(0.95 * 2.0 / schur_bound(layer.all_bonds(), &stiffness, &p0, pmass, inertia));
         let ghost: Vec<bool> = normal.iter().map(Option::is_some).collect();
         let fixed_particle = (0..p0.len())

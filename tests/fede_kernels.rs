@@ -3,8 +3,16 @@
 
 use std::time::Instant;
 
-use fdem::validation::cantilever::{de_cantilever, fe_cantilever, Cantilever, Relaxation};
+use nalgebra::Vector3;
+
+use fdem::validation::cantilever::{
+    de_cantilever, fe_cantilever, Cantilever, Relaxation, StaticSolution,
+};
+use fdem::validation::cantilever_plot::write_fig8;
 use fdem::validation::coupled_cantilever::coupled_cantilever;
+use fdem::validation::fede_coupling::Coupling;
+use fdem::validation::fede_heat::{fede_heat, HeatResult};
+use fdem::validation::fede_patch::{fede_patch, PatchBar, PatchResult};
 
 fn analytic(beam: &Cantilever, x: f64) -> f64 {
     let i = beam.width * beam.height.powi(3) / 12.0;
@@ -89,12 +97,17 @@ fn de_cantilever_full_resolution_within_8_percent() {
 
 /// Coupled tip deflection and its error against the analytic value.
 fn coupled_case(beam: &Cantilever, segment: [f64; 2]) -> f64 {
+    coupled_case_with(beam, segment, Coupling::default())
+}
+
+/// [`coupled_case`] with the given coupling.
+fn coupled_case_with(beam: &Cantilever, segment: [f64; 2], coupling: Coupling) -> f64 {
     let start = Instant::now();
     let relax = Relaxation {
         tolerance: 1e-5,
         ..Relaxation::default()
     };
-    let s = coupled_cantilever(beam, 0.5e-3, 0.125e-3, segment, &relax).unwrap();
+    let s = coupled_cantilever(beam, 0.5e-3, 0.125e-3, segment, coupling, &relax).unwrap();
     let reference = analytic(beam, s.tip_x);
     let err = (s.tip - reference) / reference;
     eprintln!(
@@ -129,6 +142,15 @@ fn coupled_short_cantilever_within_5_percent() {
     assert!(err.abs() < 0.05, "{err}");
 }
 
+/// Eq 17 as written (ghost forces at the ghosts, ghosts spinning with their
+/// element) on the seed's beam, for comparison with the default coupling.
+#[test]
+#[ignore = "about a minute on one core; a comparison, the default coupling is tested"]
+fn coupled_cantilever_seed_eq17() {
+    let err = coupled_case_with(&Cantilever::seed002(), [7.5e-3, 12.5e-3], Coupling::Seed);
+    assert!(err.abs() < 0.05, "{err}");
+}
+
 /// Seed 002 Fig 7 at full size: FE on [0, 7.5] and [12.5, 20] mm, spheres
 /// between. Measured: 46–70 s wall in release on this machine.
 #[test]
@@ -136,4 +158,344 @@ fn coupled_short_cantilever_within_5_percent() {
 fn coupled_cantilever_within_5_percent() {
     let err = coupled_case(&Cantilever::seed002(), [7.5e-3, 12.5e-3]);
     assert!(err.abs() < 0.05, "{err}");
+}
+
+/// What the patch test asserts, relative to σ_ref = E ε and to the force
+/// σ_ref carries over a node's (h²) or a sphere's ((2r)²) area.
+struct PatchFigures {
+    /// Worst |σ_xx/σ_ref − 1| of any element.
+    fe_element: f64,
+    /// Worst over the layers of elements of the layer's mean σ_xx.
+    fe_layer: f64,
+    /// Worst over the DE planes of the section stress.
+    de_section: f64,
+    /// Worst over the DE layers of E × strain.
+    de_strain: f64,
+    /// Imposed exact field: largest net force on the inner nodes of the
+    /// coupled elements (x = x₁ − h), / σ_ref h².
+    inner: f64,
+    /// Same on the interface face's nodes.
+    face: f64,
+    /// Same on the other FE nodes.
+    fe_away: f64,
+    /// Imposed exact field: largest net force on the first layer of spheres, / σ_ref (2r)².
+    boundary: f64,
+    /// Same on the other free spheres.
+    de_away: f64,
+}
+
+/// The patch test's figures, printed.
+fn patch_report(name: &str, bar: &PatchBar, p: &PatchResult) -> PatchFigures {
+    // Reference: uniaxial stress E ε (the ends hold the exact field).
+    let sigma = bar.young * bar.strain;
+    let dev = |s: f64| (s / sigma - 1.0).abs();
+    let fe_element = p.fe_stress.iter().map(|(_, s)| dev(*s)).fold(0.0, f64::max);
+    // Elements per layer of x: the range and the mean of σ_xx/σ_ref.
+    let mut layers: Vec<(f64, f64, f64, f64, usize)> = Vec::new();
+    for (x, s) in &p.fe_stress {
+        let r = s / sigma;
+        match layers.iter_mut().find(|l| (l.0 - x).abs() < 1e-9) {
+            Some(l) => {
+                l.1 = l.1.min(r);
+                l.2 = l.2.max(r);
+                l.3 += r;
+                l.4 += 1;
+            }
+            None => layers.push((*x, r, r, r, 1)),
+        }
+    }
+    layers.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let fe_layer = layers
+        .iter()
+        .map(|l| (l.3 / l.4 as f64 - 1.0).abs())
+        .fold(0.0, f64::max);
+    let de_section = p
+        .de_section
+        .iter()
+        .map(|(_, s)| dev(*s))
+        .fold(0.0, f64::max);
+    let de_strain = p
+        .de_strain
+        .iter()
+        .map(|(_, e)| dev(bar.young * e))
+        .fold(0.0, f64::max);
+    let node = sigma * bar.size * bar.size;
+    let sphere = sigma * 4.0 * bar.radius * bar.radius;
+    let x1 = bar.interface;
+    let at = |x: f64, a: f64| (x - a).abs() < 1e-9;
+    let max_norm = |v: &[(Vector3<f64>, Vector3<f64>)], keep: &dyn Fn(f64) -> bool| {
+        v.iter()
+            .filter(|(x, _)| keep(x[0]))
+            .map(|(_, f)| f.norm())
+            .fold(0.0_f64, f64::max)
+    };
+    // The coupled elements are the FE region's last layer [x₁ − h, x₁].
+    let f = PatchFigures {
+        fe_element,
+        fe_layer,
+        de_section,
+        de_strain,
+        inner: max_norm(&p.fe_residual, &|x| at(x, x1 - bar.size)) / node,
+        face: max_norm(&p.fe_residual, &|x| at(x, x1)) / node,
+        fe_away: max_norm(&p.fe_residual, &|x| x < x1 - bar.size - 1e-9) / node,
+        boundary: max_norm(&p.de_residual, &|x| at(x, x1 + bar.radius)) / sphere,
+        de_away: max_norm(&p.de_residual, &|x| x > x1 + bar.radius + 1e-9) / sphere,
+    };
+    eprintln!(
+        "{name}: {} steps of {:.3e} s; worst FE element {:.2} %, FE layer mean {:.2} %, DE section {:.2} %, \
+         E×DE strain {:.2} %; |σ_yy|,|σ_zz| ≤ {:.1e} σ; deviation from the exact field {:.1e} εL",
+        p.steps,
+        p.dt,
+        f.fe_element * 100.0,
+        f.fe_layer * 100.0,
+        f.de_section * 100.0,
+        f.de_strain * 100.0,
+        p.fe_lateral / sigma,
+        p.max_deviation / (bar.strain * bar.length)
+    );
+    eprintln!(
+        "{name}: imposed exact field, largest net force: inner nodes of the coupled elements {:.2e} σh², \
+         interface-face nodes {:.2e} σh², other FE nodes {:.1e} σh²; first sphere layer {:.2e} σ(2r)², \
+         other spheres {:.2e} σ(2r)²",
+        f.inner, f.face, f.fe_away, f.boundary, f.de_away
+    );
+    for (x, lo, hi, sum, n) in layers {
+        eprintln!(
+            "{name}: FE layer x = {:.3} mm: σ/σ_ref mean {:.4} in [{lo:.4}, {hi:.4}]",
+            x * 1e3,
+            sum / n as f64
+        );
+    }
+    for (x, s) in &p.de_section {
+        eprintln!(
+            "{name}: DE plane x = {:.3} mm: σ/σ_ref {:.4}",
+            x * 1e3,
+            s / sigma
+        );
+    }
+    for (x, e) in &p.de_strain {
+        eprintln!(
+            "{name}: DE layers x = {:.3} mm: Eε/σ_ref {:.4}",
+            x * 1e3,
+            bar.young * e / sigma
+        );
+    }
+    f
+}
+
+fn patch_relaxation() -> Relaxation {
+    Relaxation {
+        tolerance: 1e-10,
+        ..Relaxation::default()
+    }
+}
+
+/// Issue 21 patch test: uniform tension across the FE–DE interface
+/// (4 × 2 × 2 mm bar, Hex8 h = 0.5 mm on [0, 2] mm, spheres r = 0.125 mm on
+/// [2, 4] mm, ends held on the exact field, relaxed to static). Section
+/// stresses within 2 % in both regions and no spurious force at the ghost
+/// layer. Eq 17 as written is measured and printed beside it.
+#[test]
+fn fede_patch_uniform_tension_within_2_percent() {
+    let bar = PatchBar::seed002();
+    let start = Instant::now();
+    let seed = patch_report(
+        "seed eq 17",
+        &bar,
+        &fede_patch(&bar, Coupling::Seed, &patch_relaxation()).unwrap(),
+    );
+    // Eq 17 as written: the inner nodes of the coupled elements take r/h of their share (ghost docs).
+    assert!(seed.inner > 0.2, "{}", seed.inner);
+    let p = patch_report(
+        "interface",
+        &bar,
+        &fede_patch(&bar, Coupling::Interface, &patch_relaxation()).unwrap(),
+    );
+    eprintln!("patch test wall {:.1} s", start.elapsed().as_secs_f64());
+    assert!(p.fe_layer < 0.02, "FE layer {}", p.fe_layer);
+    assert!(p.de_section < 0.02, "DE section {}", p.de_section);
+    assert!(p.de_strain < 0.02, "DE strain {}", p.de_strain);
+    // No spurious force: the inner nodes of the coupled elements feel nothing (round-off of the
+    // finite-strain element, as everywhere in the FE region), the first layer of spheres no more
+    // than the lattice's own box-edge spheres elsewhere.
+    assert!(
+        p.inner < 1e-3 && p.fe_away < 1e-3,
+        "{} {}",
+        p.inner,
+        p.fe_away
+    );
+    assert!(
+        p.boundary <= p.de_away * (1.0 + 1e-6),
+        "{} {}",
+        p.boundary,
+        p.de_away
+    );
+}
+
+/// The strict reading of the patch test: every element's σ_xx within 2 %.
+/// Measured 2.97 % (elements at the interface beside the lateral faces):
+/// the lattice's surface weights put the diagonal bonds' share of a surface
+/// sphere's force at its inner bond midpoints, so the interface-face nodes
+/// within h of a lateral face receive up to 7.9 % of σh² more or less than
+/// a uniform traction gives them.
+#[test]
+#[ignore = "fails: worst element 2.97 % at the interface beside the lateral faces (lattice surface weights), see docs/validation.md"]
+fn fede_patch_every_element_within_2_percent() {
+    let bar = PatchBar::seed002();
+    let p = patch_report(
+        "interface",
+        &bar,
+        &fede_patch(&bar, Coupling::Interface, &patch_relaxation()).unwrap(),
+    );
+    assert!(p.fe_element < 0.02, "{}", p.fe_element);
+}
+
+/// The three models of seed 002 Fig 8 on `beam`, with the coupled DE
+/// segment `segment`: (FE, DE, coupled), each tip printed with its error.
+fn fig8_models(
+    beam: &Cantilever,
+    segment: [f64; 2],
+    relax: &Relaxation,
+) -> [(StaticSolution, f64); 3] {
+    let start = Instant::now();
+    let err = |s: &StaticSolution| {
+        let reference = analytic(beam, s.tip_x);
+        (s.tip - reference) / reference
+    };
+    let fe = fe_cantilever(beam, 0.5e-3, relax).unwrap();
+    let de = de_cantilever(beam, 0.125e-3, relax).unwrap();
+    let coupled =
+        coupled_cantilever(beam, 0.5e-3, 0.125e-3, segment, Coupling::default(), relax).unwrap();
+    let out = [fe, de, coupled].map(|s| {
+        let e = err(&s);
+        (s, e)
+    });
+    for (name, (s, e)) in ["FE", "DE", "coupled"].iter().zip(&out) {
+        eprintln!(
+            "Fig 8 L = {} mm {name}: tip {:.5} mm at x = {:.4} mm ({:+.2} %), {} steps",
+            beam.length * 1e3,
+            s.tip * 1e3,
+            s.tip_x * 1e3,
+            e * 100.0,
+            s.steps
+        );
+    }
+    eprintln!("Fig 8 models: {:.1} s wall", start.elapsed().as_secs_f64());
+    out
+}
+
+/// Fig 8 at CI size (L = 10 mm): the three profiles as a PNG in a
+/// temporary directory; the tips within the issue's tolerances.
+#[test]
+fn fig8_short_beam_png() {
+    let beam = Cantilever {
+        length: 10e-3,
+        ..Cantilever::seed002()
+    };
+    let relax = Relaxation {
+        tolerance: 1e-5,
+        ..Relaxation::default()
+    };
+    let [(fe, fe_err), (de, de_err), (coupled, coupled_err)] =
+        fig8_models(&beam, [3.5e-3, 6.5e-3], &relax);
+    assert!(fe_err.abs() < 0.03, "FE {fe_err}");
+    assert!(de_err.abs() < 0.08, "DE {de_err}");
+    assert!(coupled_err.abs() < 0.05, "coupled {coupled_err}");
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("fede-cantilever-short.png");
+    write_fig8(&beam, &fe, &de, &coupled, &path).unwrap();
+    let bytes = std::fs::read(&path).unwrap();
+    assert!(
+        bytes.len() > 1000 && bytes.starts_with(b"\x89PNG"),
+        "{} bytes",
+        bytes.len()
+    );
+}
+
+/// Fig 8 at the seed's size: writes docs/fede-cantilever.png and prints the
+/// profiles. Measured: about 2.5 minutes on one core.
+#[test]
+#[ignore = "about 2.5 minutes on one core; writes docs/fede-cantilever.png (fig8_short_beam_png runs in CI)"]
+fn fig8_full_size_png() {
+    let beam = Cantilever::seed002();
+    let [(fe, fe_err), (de, de_err), (coupled, coupled_err)] =
+        fig8_models(&beam, [7.5e-3, 12.5e-3], &Relaxation::default());
+    for (name, s) in [("FE", &fe), ("DE", &de), ("coupled", &coupled)] {
+        for (x, u) in &s.profile {
+            eprintln!(
+                "fig8 {name} {:.4} {:.5} {:.5}",
+                x * 1e3,
+                u * 1e3,
+                analytic(&beam, *x) * 1e3
+            );
+        }
+    }
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/fede-cantilever.png");
+    write_fig8(&beam, &fe, &de, &coupled, &path).unwrap();
+    assert!(fe_err.abs() < 0.03, "FE {fe_err}");
+    assert!(de_err.abs() < 0.08, "DE {de_err}");
+    assert!(coupled_err.abs() < 0.05, "coupled {coupled_err}");
+}
+
+/// Worst deviations of the heat case: [FE temperature, DE temperature] as
+/// fractions of T₁ − T₂, [FE element flux, DE section flux, inflow] as
+/// fractions of k (T₁ − T₂)/L; printed.
+fn heat_report(name: &str, bar: &PatchBar, k: f64, t: (f64, f64), r: &HeatResult) -> [f64; 5] {
+    // Reference: the linear steady profile and its flux, computed here.
+    let exact = |x: f64| t.0 + (t.1 - t.0) * x / bar.length;
+    let dt = t.0 - t.1;
+    let flux = k * dt / bar.length;
+    let worst_t = |v: &[(Vector3<f64>, f64)]| {
+        let (mut w, mut at) = (0.0, Vector3::zeros());
+        for (x, temp) in v {
+            let d = ((temp - exact(x[0])) / dt).abs();
+            if d > w {
+                (w, at) = (d, *x);
+            }
+        }
+        eprintln!(
+            "{name}: worst temperature {:.3} % at {:.3?} mm",
+            w * 100.0,
+            (at * 1e3).as_slice()
+        );
+        w
+    };
+    let worst_q = |v: &[(f64, f64)]| {
+        v.iter()
+            .map(|(_, q)| (q / flux - 1.0).abs())
+            .fold(0.0, f64::max)
+    };
+    let out = [
+        worst_t(&r.fe_temperature),
+        worst_t(&r.de_temperature),
+        worst_q(&r.fe_flux),
+        worst_q(&r.de_flux),
+        (r.inflow / flux - 1.0).abs(),
+    ];
+    eprintln!(
+        "{name}: worst |T − T_exact|/ΔT: FE nodes {:.3} %, spheres {:.3} %; flux: worst element {:.2} %, \
+         DE sections {:.3} %, inflow at X = 0 {:.3} %",
+        out[0] * 100.0,
+        out[1] * 100.0,
+        out[2] * 100.0,
+        out[3] * 100.0,
+        out[4] * 100.0
+    );
+    out
+}
+
+/// Issue 21, heat across the interface: the patch bar (Hex8 | spheres) held
+/// at T₁ and T₂ at its ends; the steady profile is linear within 2 % of
+/// T₁ − T₂ in both regions.
+#[test]
+fn fede_heat_steady_linear_within_2_percent() {
+    let bar = PatchBar::seed002();
+    let (k, t) = (1.5, (100.0, 20.0));
+    let start = Instant::now();
+    let seed = fede_heat(&bar, k, t.0, t.1, Coupling::Seed).unwrap();
+    heat_report("heat, seed eq 17", &bar, k, t, &seed);
+    let r = fede_heat(&bar, k, t.0, t.1, Coupling::Interface).unwrap();
+    let w = heat_report("heat, interface", &bar, k, t, &r);
+    eprintln!("heat cases {:.1} s wall", start.elapsed().as_secs_f64());
+    assert!(w[0] < 0.02 && w[1] < 0.02, "{w:?}");
 }

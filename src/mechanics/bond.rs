@@ -140,6 +140,30 @@ fn rotate_between(d: &Vector3<f64>, a: &Vector3<f64>, b: &Vector3<f64>) -> Vecto
     d + v.cross(d) + v.cross(&v.cross(d)) / (1.0 + c)
 }
 
+/// One bond's incremental update (seed 002 eqs 12–13 and 3): carries d
+/// along with the rotation of the centre line to the unit direction `n`,
+/// adds the relative midpoint velocity `v_rel` (ẋ_o^j − ẋ_o^i, eq 14) over
+/// `dt`, and returns the force on i, f = k_n d_n n + k_s d_t (the force on j
+/// is −f). `kn` and `ks` include the bond's weight.
+#[inline]
+pub fn advance_bond(
+    s: &mut BondState,
+    kn: f64,
+    ks: f64,
+    n: &Vector3<f64>,
+    v_rel: &Vector3<f64>,
+    dt: f64,
+) -> Vector3<f64> {
+    let d_old = rotate_between(&s.d, &s.n, n);
+    // seed 002 eqs 12–13: d_{n+1} = d_n + ẋ^ij_{n+1/2} Δt.
+    let d = d_old + v_rel * dt;
+    s.d = d;
+    s.n = *n;
+    let dn = d.dot(n);
+    // seed 002 eq 3: f = k d, with (f_n, f_s, f_t) = (k_n d_n, k_s d_s, k_t d_t) and k_s = k_t.
+    n * (kn * dn) + (d - n * dn) * ks
+}
+
 /// Updates the bonds `bonds` (with `state`, one per bond) over the step
 /// `dt` and adds their forces and moments to `force` and `moment`.
 ///
@@ -168,21 +192,13 @@ pub fn bond_forces(
         let ks = stiffness.tangential[b.kind as usize] * b.weight;
         let branch = x[j] - x[i];
         let n = branch.normalize();
-        let d_old = rotate_between(&s.d, &s.n, &n);
         // Moment arms at mid-step (central difference: the velocities are those of t + dt/2).
         let half = (branch - (v[j] - v[i]) * (0.5 * dt)) * 0.5;
         // seed 002 eq 15: velocities of the midpoint o seen from i and j (r^i = +ℓn/2, r^j = −ℓn/2).
         let vo_i = v[i] + w[i].cross(&half);
         let vo_j = v[j] - w[j].cross(&half);
         // seed 002 eq 14: relative velocity ẋ^ij = ẋ_o^j − ẋ_o^i.
-        let v_rel = vo_j - vo_i;
-        // seed 002 eqs 12–13: d_{n+1} = d_n + ẋ^ij_{n+1/2} Δt.
-        let d = d_old + v_rel * dt;
-        s.d = d;
-        s.n = n;
-        let dn = d.dot(&n);
-        // seed 002 eq 3: f = k d, with (f_n, f_s, f_t) = (k_n d_n, k_s d_s, k_t d_t) and k_s = k_t.
-        let f = n * (kn * dn) + (d - n * dn) * ks;
+        let f = advance_bond(s, kn, ks, &n, &(vo_j - vo_i), dt);
         force[i] += f;
         force[j] -= f;
         // seed 002 eq 2: moments of the bond force about each centre, r × f (the same for both ends).

@@ -1,38 +1,35 @@
 //! Serial reference driver for the coupled cantilever of seed 002 (Fig 7):
 //! Hex8 segments on [0, x₁] and [x₂, L], a bonded sphere lattice on
 //! [x₁, x₂], joined through one layer of ghost particles on each side
-//! (eq 5: x_g = x_b − 2 r n, inside the boundary elements; eqs 16–17: ghost
-//! velocities from the element's nodes, ghost forces back with N_I; ghosts
-//! also spin with their element, see [`crate::mechanics::ghost`]).
+//! (eq 5: x_g = x_b − 2 r n, inside the boundary elements), coupled as
+//! [`super::fede_coupling`] says ([`Coupling::Interface`] by default,
+//! [`Coupling::Seed`] for eqs 16–17 as written).
 //!
 //! The lattice is generated over [x₁ − 2r, x₂ + 2r]: its first and last
 //! layers are the ghosts. Ghost–ghost bonds are dropped (the elements carry
-//! that material). A ghost–sphere bond keeps the stiffness the sphere's
-//! half would have inside the lattice, doubled (w = f_sphere in the
-//! notation of [`crate::mesh::lattice`]): 1 away from the beam's faces, as
-//! in eq 4; the elements already carry the ghost's half cell.
-//! Relaxation, loads and measures as in [`super::cantilever`].
+//! that material). Relaxation, loads and measures as in
+//! [`super::cantilever`].
 
 use nalgebra::Vector3;
 
 use super::cantilever::{Cantilever, CantileverError, Relaxation, StaticSolution};
-use crate::mechanics::bond::{
-    bond_forces, sphere_mass_inertia, update_particles, BondState, BondStiffness,
-};
-use crate::mechanics::ghost::{ghost_position, hex8_ghost, Ghost};
+use super::fede_coupling::{schur_bound, Coupling, GhostLayer};
+use crate::mechanics::bond::{sphere_mass_inertia, update_particles, BondStiffness};
 use crate::mechanics::hex8_element::{hex8_forces, Hex8Reference};
 use crate::mechanics::ThermalState;
 use crate::mesh::hex8::hex_box;
-use crate::mesh::lattice::{cubic_lattice, LatticeBond};
+use crate::mesh::lattice::cubic_lattice;
 use crate::mesh::MeshError;
 
 /// The coupled beam: elements of side `size`, spheres of radius `radius`
-/// on [x₁, x₂] = `de_segment` (multiples of `size` and of 2r).
+/// on [x₁, x₂] = `de_segment` (multiples of `size` and of 2r), joined by
+/// `coupling`.
 pub fn coupled_cantilever(
     beam: &Cantilever,
     size: f64,
     radius: f64,
     de_segment: [f64; 2],
+    coupling: Coupling,
     relaxation: &Relaxation,
 ) -> Result<StaticSolution, CantileverError> {
     let [x1, x2] = de_segment;
@@ -80,48 +77,20 @@ pub fn coupled_cantilever(
     let c = lattice.counts;
     let p0: Vec<Vector3<f64>> = lattice.centres.iter().map(|p| Vector3::from(*p)).collect();
     let count = p0.len();
-    let is_ghost = |p: usize| p.is_multiple_of(c[0]) || p % c[0] == c[0] - 1;
-    let mut ghosts: Vec<(usize, Ghost)> = Vec::new();
-    for p in (0..count).filter(|&p| is_ghost(p)) {
-        // The boundary sphere it mirrors and the normal from FE into DE.
-        let (b, normal) = if p.is_multiple_of(c[0]) {
-            (p + 1, Vector3::x())
-        } else {
-            (p - 1, -Vector3::x())
-        };
-        let xg = ghost_position(&p0[b], radius, &normal);
-        debug_assert!((xg - p0[p]).norm() < 1e-9 * radius);
-        let cell = [0, 1, 2].map(|a| ((xg[a] / size).floor() as usize).min(n[a] - 1));
-        let e_box = cell[0] + n[0] * (cell[1] + n[1] * cell[2]);
-        let e = kept[e_box];
-        let elem_nodes = hexes[e].map(|a| x0[a as usize]);
-        ghosts.push((p, hex8_ghost(&elem_nodes, &xg, e)?));
-    }
-    // Bonds: no ghost–ghost; ghost–sphere with the sphere's doubled half (module docs).
-    let has = |p: usize, o: [i64; 3]| {
-        let q = [p % c[0], (p / c[0]) % c[1], p / (c[0] * c[1])];
-        (0..3).all(|a| {
-            let v = q[a] as i64 + o[a];
-            v >= 0 && v < c[a] as i64
-        })
-    };
-    let bonds: Vec<LatticeBond> = lattice
-        .bonds
-        .iter()
-        .filter(|b| !(is_ghost(b.i as usize) && is_ghost(b.j as usize)))
-        .map(|b| {
-            let (i, j) = (b.i as usize, b.j as usize);
-            if !(is_ghost(i) || is_ghost(j)) {
-                return *b;
-            }
-            let (s, g) = if is_ghost(i) { (j, i) } else { (i, j) };
-            let o = ((p0[g] - p0[s]) / (2.0 * radius)).map(|v| v.round() as i64);
-            let back = [-o[0], -o[1], -o[2]];
-            let weight = if has(s, back) { 1.0 } else { 2.0 };
-            LatticeBond { weight, ..*b }
+    // Ghosts: the first and last layers, normals from FE into DE.
+    let normal: Vec<Option<Vector3<f64>>> = (0..count)
+        .map(|p| match p % c[0] {
+            0 => Some(Vector3::x()),
+            i if i == c[0] - 1 => Some(-Vector3::x()),
+            _ => None,
         })
         .collect();
-    let omega_max = schur_bound(&bonds, &stiffness, &p0, pmass, inertia);
+    let locate = |xg: &Vector3<f64>| {
+        let cell = [0, 1, 2].map(|a| ((xg[a] / size).floor().max(0.0) as usize).min(n[a] - 1));
+        kept[cell[0] + n[0] * (cell[1] + n[1] * cell[2])]
+    };
+    let mut layer = GhostLayer::new(coupling, &lattice, &normal, &hexes, &x0, locate)?;
+    let omega_max = schur_bound(layer.all_bonds(), &stiffness, &p0, pmass, inertia);
     dt = dt.min(0.95 * 2.0 / omega_max);
     // FE boundary conditions and load, as in the FE-only driver.
     let mut fixed_node: Vec<bool> = mass.iter().map(|m| *m == 0.0).collect();
@@ -146,11 +115,7 @@ pub fn coupled_cantilever(
     }
     let damping = relaxation.damping * beam.first_frequency();
     let (a, b) = (1.0 - 0.5 * damping * dt, 1.0 / (1.0 + 0.5 * damping * dt));
-    let fixed_particle: Vec<bool> = (0..count).map(is_ghost).collect();
-    let mut state: Vec<BondState> = bonds
-        .iter()
-        .map(|b| BondState::new(&p0[b.i as usize], &p0[b.j as usize]))
-        .collect();
+    let fixed_particle: Vec<bool> = normal.iter().map(Option::is_some).collect();
     let (mut x, mut v, mut f) = (
         x0.clone(),
         vec![Vector3::zeros(); nodes],
@@ -179,29 +144,11 @@ pub fn coupled_cantilever(
                 f[*p as usize] += fe;
             }
         }
-        // Seed 002 eq 16: ghosts follow their elements; they spin with them (ghost module docs).
-        for (p, g) in &ghosts {
-            let h = hexes[g.elem];
-            let hv = h.map(|q| v[q as usize]);
-            px[*p] = g.interpolate(&h.map(|q| x[q as usize]));
-            pv[*p] = g.interpolate(&hv);
-            pw[*p] = g.spin(&hv);
-        }
         pf.iter_mut().for_each(|z| *z = Vector3::zeros());
         pm.iter_mut().for_each(|z| *z = Vector3::zeros());
-        bond_forces(
-            &bonds, &mut state, &stiffness, &px, &pv, &pw, dt, &mut pf, &mut pm,
+        layer.add_forces(
+            &stiffness, &hexes, &x, &v, dt, &mut f, &mut px, &mut pv, &mut pw, &mut pf, &mut pm,
         );
-        // Seed 002 eq 17: ghost forces back to the element's nodes.
-        for (p, g) in &ghosts {
-            let h = hexes[g.elem];
-            let mut nodal = [Vector3::zeros(); 8];
-            g.scatter_force(&pf[*p], &mut nodal);
-            g.scatter_moment(&pm[*p], &mut nodal);
-            for (q, fq) in h.iter().zip(nodal) {
-                f[*q as usize] += fq;
-            }
-        }
         for p in 0..nodes {
             if fixed_node[p] {
                 continue;
@@ -252,27 +199,4 @@ pub fn coupled_cantilever(
         steps,
         dt,
     })
-}
-
-/// Bound on the highest circular frequency of the bonded spheres (Schur
-/// test over bonds, as in [`super::cantilever::de_cantilever`]).
-fn schur_bound(
-    bonds: &[LatticeBond],
-    k: &BondStiffness,
-    x: &[Vector3<f64>],
-    mass: f64,
-    inertia: f64,
-) -> f64 {
-    let mut bound = vec![0.0; x.len()];
-    for b in bonds {
-        let (i, j) = (b.i as usize, b.j as usize);
-        let half2 = 0.25 * (x[j] - x[i]).norm_squared();
-        let kind = b.kind as usize;
-        let lam = b.weight
-            * (2.0 * k.normal[kind] / mass
-                + k.tangential[kind] * (2.0 / mass + 2.0 * half2 / inertia));
-        bound[i] += lam;
-        bound[j] += lam;
-    }
-    bound.iter().copied().fold(0.0, f64::max).sqrt()
 }

@@ -2,7 +2,11 @@
 
 pub mod ambient;
 pub mod cantilever;
+pub mod cantilever_plot;
 pub mod coupled_cantilever;
+pub mod fede_coupling;
+pub mod fede_heat;
+pub mod fede_patch;
 pub mod lumped;
 pub mod pipe_network;
 pub mod semidiscrete;

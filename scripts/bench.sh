@@ -5,7 +5,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 source scripts/env.sh
-bash scripts/setup.sh
+bash scripts/setup.sh --bench
 cargo build --release --bin fdem
 BIN=target/release/fdem
 OUT=$(mktemp -d)

@@ -5,14 +5,16 @@
 # Opt-in: `FDEM_PARAVIEW=1 bash scripts/setup.sh` or `bash scripts/setup.sh
 # --paraview` also installs ParaView (pvbatch), its Python module and Xvfb
 # for scripts/paraview-check.sh. They are large (~1 GB), so the default
-# setup leaves them out and the check skips itself.
+# setup leaves them out and the check skips itself. `--bench` adds the
+# FEniCSx peer of scripts/bench-fenicsx.sh (python3-dolfinx, python3-h5py).
 set -euo pipefail
 
 paraview="${FDEM_PARAVIEW:-0}"
 for arg in "$@"; do
   case "$arg" in
     --paraview) paraview=1 ;;
-    *) echo "setup: unknown argument $arg (known: --paraview)" >&2; exit 2 ;;
+    --bench) bench=1 ;;
+    *) echo "setup: unknown argument $arg (known: --paraview, --bench)" >&2; exit 2 ;;
   esac
 done
 
@@ -33,6 +35,11 @@ PKGS=(
   procps              # pgrep: scripts/fault_check.py finds the ranks to kill
   fonts-dejavu-core   # DejaVuSans.ttf: text in PNG plots (src/io/plot.rs)
 )
+if [ "${bench:-0}" = 1 ]; then
+  # The peer of scripts/bench-fenicsx.sh (issue 22), and h5py to read
+  # fdem's output there.
+  PKGS+=(python3-dolfinx python3-h5py)
+fi
 if [ "$paraview" = 1 ]; then
   # pvbatch + paraview.simple, and a virtual X server to render under.
   PKGS+=(paraview python3-paraview xvfb xauth)

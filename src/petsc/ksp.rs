@@ -72,6 +72,12 @@ impl<'p> Ksp<'p> {
         petsc_call!(KSPSetInitialGuessNonzero(self.raw, to_bool(yes)))
     }
 
+    /// Stop on the natural norm (for CG: sqrt(rᵀ z), which it computes
+    /// anyway, so an iteration needs one reduction less).
+    pub fn set_natural_norm(&mut self) -> Result<()> {
+        petsc_call!(KSPSetNormType(self.raw, ffi::KSPNormType::KSP_NORM_NATURAL))
+    }
+
     /// Read `-ksp_*` / `-pc_*` options from the database (command line wins).
     pub fn set_from_options(&mut self) -> Result<()> {
         petsc_call!(KSPSetFromOptions(self.raw))

@@ -11,6 +11,8 @@ pub mod limits;
 pub mod monotone;
 pub mod nonlinear;
 pub mod radiation;
+pub mod solver_choice;
 pub mod system;
 
-pub use system::{SolverChoice, StepStats, ThermalSystem};
+pub use solver_choice::SolverChoice;
+pub use system::{StepStats, ThermalSystem};

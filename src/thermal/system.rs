@@ -37,71 +37,6 @@ use super::assembly::{assemble, Operators};
 use super::exchange::Exchange;
 use super::nonlinear::{radiated, GapRadiation, RadiatingStep};
 
-/// Linear solver defaults by problem size (the options database wins).
-#[derive(Debug, Clone, PartialEq)]
-pub struct SolverChoice {
-    /// KSP type.
-    pub ksp_type: String,
-    /// PC type.
-    pub pc_type: String,
-    /// Extra defaults (name, value) put into the options database unless set.
-    pub defaults: Vec<(String, String)>,
-}
-
-impl SolverChoice {
-    /// Sparse direct solves, factorised once, up to 50,000 unknowns:
-    /// - up to 10,000: PETSc's own Cholesky on one rank (1–6 us per step on
-    ///   the seed's bars); on several ranks the `redundant` PC (every rank
-    ///   factorises the whole matrix once, a solve costs one gather: 7 us
-    ///   per step on 2 ranks against 178 us for a distributed solve);
-    /// - 10,000 to 50,000: MUMPS, whose factorisation stays fast when
-    ///   contacts couple many nodes (0.7 s where PETSc's own took 24 s on
-    ///   the 512-cube contact lattice), at a higher cost per solve.
-    ///
-    /// Above that, CG with algebraic multigrid (GAMG), which also handles
-    /// the steady limit (large dt) where the capacity no longer dominates.
-    ///
-    /// A non-symmetric operator (average-dT contact) uses LU instead of
-    /// Cholesky, and GMRES instead of CG.
-    pub fn auto(global_rows: usize, ranks: usize, symmetric: bool) -> SolverChoice {
-        let opt = |k: &str, v: &str| (k.to_string(), v.to_string());
-        let factor = if symmetric { "cholesky" } else { "lu" };
-        if global_rows <= 10_000 && ranks == 1 {
-            SolverChoice {
-                ksp_type: "preonly".into(),
-                pc_type: factor.into(),
-                defaults: vec![opt("pc_factor_mat_ordering_type", "nd")],
-            }
-        } else if global_rows <= 10_000 {
-            SolverChoice {
-                ksp_type: "preonly".into(),
-                pc_type: "redundant".into(),
-                defaults: vec![
-                    opt("redundant_pc_type", factor),
-                    opt("redundant_pc_factor_mat_ordering_type", "nd"),
-                ],
-            }
-        } else if global_rows <= 50_000 {
-            SolverChoice {
-                ksp_type: "preonly".into(),
-                pc_type: factor.into(),
-                // MUMPS's default 20 % workspace margin fails (DIVERGED_PC_FAILED)
-                // on contact-coupled packings: the 500-nut lattice on 2 ranks.
-                defaults: vec![
-                    opt("pc_factor_mat_solver_type", "mumps"),
-                    opt("mat_mumps_icntl_14", "200"),
-                ],
-            }
-        } else {
-            SolverChoice {
-                ksp_type: if symmetric { "cg" } else { "gmres" }.into(),
-                pc_type: "gamg".into(),
-                defaults: Vec::new(),
-            }
-        }
-    }
-}
-
 /// Krylov iterations per Newton iteration above which a radiating step's
 /// preconditioner is rebuilt at the next Jacobian (it is kept otherwise;
 /// `-snes_lag_preconditioner` sets a fixed lag instead).
@@ -170,6 +105,11 @@ enum Scheme<'p> {
         /// The system matrix; the KSP factorises it once.
         _a: Matrix<'p>,
         b: Matrix<'p>,
+        /// B's diagonal when B is diagonal (θ = 1, lumped capacity): the
+        /// right-hand side is then a pointwise product, not a product with
+        /// a matrix of the stiffness's pattern (72 us of a 680 us step on
+        /// the seed's slab at 6,561 unknowns).
+        b_diag: Option<Vector<'p>>,
         g: Vector<'p>,
         rhs: Vector<'p>,
         ksp: Box<Ksp<'p>>,
@@ -428,7 +368,9 @@ impl<'p> ThermalSystem<'p> {
                 a.set_symmetric(true)?;
             }
 
-            let choice = SolverChoice::auto(part.num_global(), part.size, symmetric);
+            let fourier = super::solver_choice::cell_fourier(&ops, &free_mask, theta * dt)?;
+            let choice =
+                super::SolverChoice::auto(part.num_global(), part.size, symmetric, fourier);
             for (k, v) in &choice.defaults {
                 petsc.set_own_default_option(k, Some(v))?;
             }
@@ -491,7 +433,7 @@ impl<'p> ThermalSystem<'p> {
                 // 1e-12 of the temperatures (round-off near a steady state).
                 snes.set_tolerances(1e-300, 1e-10, 1e-12, 50)?;
                 snes.set_from_options()?;
-                let name = snes.types()?;
+                let name = format!("{} (cell Fourier number {fourier:.3})", snes.types()?);
                 (Scheme::Newton { b, g, snes }, name, a0)
             } else {
                 let mut ksp = Box::new(Ksp::new(petsc)?);
@@ -507,6 +449,9 @@ impl<'p> ThermalSystem<'p> {
                 )?;
                 ksp.set_from_options()?;
                 let (kt, pt) = ksp.types()?;
+                if kt == "cg" && pt == "jacobi" && !petsc.has_option("ksp_norm_type")? {
+                    ksp.set_natural_norm()?;
+                }
                 // Warm start from the previous step (a direct solve ignores it).
                 if kt != "preonly" {
                     ksp.set_initial_guess_nonzero(true)?;
@@ -514,15 +459,24 @@ impl<'p> ThermalSystem<'p> {
                 }
                 ksp.set_up()?;
                 let rhs = t.duplicate()?;
+                let b_diag = if theta == 1.0 && model.thermal.capacity == CapacityKind::Lumped {
+                    let mut d = t.duplicate()?;
+                    d.pointwise_mult(&ops.capacity_rowsum, &free_mask)?;
+                    d.scale(1.0 / dt)?;
+                    Some(d)
+                } else {
+                    None
+                };
                 (
                     Scheme::Implicit {
                         _a: a,
                         b,
+                        b_diag,
                         g,
                         rhs,
                         ksp,
                     },
-                    format!("{kt}/{pt}"),
+                    format!("{kt}/{pt} (cell Fourier number {fourier:.3})"),
                     a0,
                 )
             }
@@ -695,8 +649,21 @@ impl<'p> ThermalSystem<'p> {
                     newton: 0,
                 }
             }
-            Scheme::Implicit { b, g, rhs, ksp, .. } => {
-                b.mult_add(&self.t, g, rhs)?;
+            Scheme::Implicit {
+                b,
+                b_diag,
+                g,
+                rhs,
+                ksp,
+                ..
+            } => {
+                match b_diag {
+                    Some(d) => {
+                        rhs.pointwise_mult(d, &self.t)?;
+                        rhs.axpy(1.0, g)?;
+                    }
+                    None => b.mult_add(&self.t, g, rhs)?,
+                }
                 if let Some(q) = friction {
                     rhs.axpy(1.0, q)?;
                 }

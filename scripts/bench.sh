@@ -270,3 +270,4 @@ echo "$joint_lines" >&2
   echo "- Contact detection near-linear in the number of bodies."
 } > "$DOC"
 echo "wrote $DOC" >&2
+bash scripts/bench-fenicsx.sh

@@ -305,19 +305,8 @@ pub fn de_cantilever(
     let (mass, inertia) = sphere_mass_inertia(beam.density, radius);
     let x0: Vec<Vector3<f64>> = lattice.centres.iter().map(|p| Vector3::from(*p)).collect();
     let count = x0.len();
-    // Bound on ω_max² by a Schur test over bonds: per bond 2k_n/m + k_s (2/m + 2(ℓ/2)²/I).
-    let mut bound = vec![0.0; count];
-    for b in &lattice.bonds {
-        let (i, j) = (b.i as usize, b.j as usize);
-        let half2 = 0.25 * (x0[j] - x0[i]).norm_squared();
-        let kind = b.kind as usize;
-        let lam = b.weight
-            * (2.0 * stiffness.normal[kind] / mass
-                + stiffness.tangential[kind] * (2.0 / mass + 2.0 * half2 / inertia));
-        bound[i] += lam;
-        bound[j] += lam;
-    }
-    let omega_max = bound.iter().copied().fold(0.0, f64::max).sqrt();
+    let omega_max =
+        super::fede_coupling::schur_bound(lattice.bonds.iter(), &stiffness, &x0, mass, inertia);
     let dt = 0.95 * 2.0 / omega_max;
     let nx = lattice.counts[0];
     let fixed: Vec<bool> = (0..count).map(|p| p % nx == 0).collect();

@@ -438,6 +438,17 @@ pub(crate) fn schur_bound<'a>(
     bound.iter().copied().fold(0.0, f64::max).sqrt()
 }
 
+/// The centres of `lattice`, and the interface normal (+x) of its first
+/// layer in x: the spheres that meet an FE region below them in x.
+pub fn x_interface(lattice: &Lattice) -> (Vec<Vector3<f64>>, Vec<Option<Vector3<f64>>>) {
+    let nx = lattice.counts[0];
+    let p0: Vec<Vector3<f64>> = lattice.centres.iter().map(|p| Vector3::from(*p)).collect();
+    let normal = (0..p0.len())
+        .map(|p| (p % nx == 0).then(Vector3::x))
+        .collect();
+    (p0, normal)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -468,11 +479,7 @@ mod tests {
             false,
         )
         .unwrap();
-        let nx = lattice.counts[0];
-        let p0: Vec<Vector3<f64>> = lattice.centres.iter().map(|p| Vector3::from(*p)).collect();
-        let normal: Vec<Option<Vector3<f64>>> = (0..p0.len())
-            .map(|p| (p % nx == 0).then(Vector3::x))
-            .collect();
+        let (p0, normal) = super::x_interface(&lattice);
         let locate = |p: &Vector3<f64>| {
             let c = [0, 1, 2].map(|a| ((p[a] / h).floor().max(0.0) as usize).min(1));
             c[0] + 2 * (c[1] + 2 * c[2])

@@ -69,15 +69,8 @@ pub fn fede_heat(
     coupling: Coupling,
 ) -> Result<HeatResult, FedeHeatError> {
     let (h, r, x1) = (bar.size, bar.radius, bar.interface);
-    if !(0.0 < x1 && x1 < bar.length) {
-        return Err(MeshError::InvalidParameter(format!(
-            "interface {x1} must lie inside the bar (0, {})",
-            bar.length
-        ))
-        .into());
-    }
+    let n = bar.fe_divisions()?;
     let exact = |x: f64| t1 + (t2 - t1) * x / bar.length;
-    let n = [x1, bar.width, bar.height].map(|d| ((d / h).round() as usize).max(1));
     let mesh = hex_box([0.0; 3], [x1, bar.width, bar.height], n)?;
     let x0: Vec<Vector3<f64>> = mesh.nodes.iter().map(|p| Vector3::from(*p)).collect();
     let mut refs = Vec::with_capacity(mesh.hexes.len());
@@ -95,10 +88,7 @@ pub fn fede_heat(
         false,
     )?;
     let nx = lattice.counts[0];
-    let p0: Vec<Vector3<f64>> = lattice.centres.iter().map(|p| Vector3::from(*p)).collect();
-    let normal: Vec<Option<Vector3<f64>>> = (0..p0.len())
-        .map(|p| (p % nx == 0).then(Vector3::x))
-        .collect();
+    let (p0, normal) = super::fede_coupling::x_interface(&lattice);
     let locate = |p: &Vector3<f64>| {
         let cell = [0, 1, 2].map(|a| ((p[a] / h).floor().max(0.0) as usize).min(n[a] - 1));
         cell[0] + n[0] * (cell[1] + n[1] * cell[2])

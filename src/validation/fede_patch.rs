@@ -64,6 +64,19 @@ pub struct PatchBar {
 }
 
 impl PatchBar {
+    /// Hex8 divisions of the FE region [0, x₁] along x, y, z; an error if
+    /// the interface is not inside the bar.
+    pub fn fe_divisions(&self) -> Result<[usize; 3], MeshError> {
+        let (h, x1) = (self.size, self.interface);
+        if !(0.0 < x1 && x1 < self.length) {
+            return Err(MeshError::InvalidParameter(format!(
+                "interface {x1} must lie inside the bar (0, {})",
+                self.length
+            )));
+        }
+        Ok([x1, self.width, self.height].map(|d| ((d / h).round() as usize).max(1)))
+    }
+
     /// 4 mm × 2 mm × 2 mm, FE half and DE half, with the seed 002 material,
     /// mesh (h = 0.5 mm) and spheres (r = 0.125 mm); ε = 1e-4.
     pub fn seed002() -> Self {
@@ -154,14 +167,7 @@ struct State {
 impl Model {
     fn new(bar: &PatchBar, coupling: Coupling) -> Result<Self, CantileverError> {
         let (h, r, x1) = (bar.size, bar.radius, bar.interface);
-        if !(0.0 < x1 && x1 < bar.length) {
-            return Err(MeshError::InvalidParameter(format!(
-                "interface {x1} must lie inside the bar (0, {})",
-                bar.length
-            ))
-            .into());
-        }
-        let n = [x1, bar.width, bar.height].map(|d| ((d / h).round() as usize).max(1));
+        let n = bar.fe_divisions()?;
         let mesh = hex_box([0.0; 3], [x1, bar.width, bar.height], n)?;
         let material = ElasticMaterial {
             young: bar.young,
@@ -196,10 +202,7 @@ impl Model {
         let stiffness = BondStiffness::seed002(bar.young, bar.poisson, r)?;
         let (pmass, inertia) = sphere_mass_inertia(bar.density, r);
         let nx = lattice.counts[0];
-        let p0: Vec<Vector3<f64>> = lattice.centres.iter().map(|p| Vector3::from(*p)).collect();
-        let normal: Vec<Option<Vector3<f64>>> = (0..p0.len())
-            .map(|p| (p % nx == 0).then(Vector3::x))
-            .collect();
+        let (p0, normal) = super::fede_coupling::x_interface(&lattice);
         let locate = |p: &Vector3<f64>| {
             let cell = [0, 1, 2].map(|a| ((p[a] / h).floor().max(0.0) as usize).min(n[a] - 1));
             cell[0] + n[0] * (cell[1] + n[1] * cell[2])

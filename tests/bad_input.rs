@@ -835,3 +835,31 @@ fn bad_ambient_keys_are_named() {
         }
     }
 }
+
+/// Issue 19: bodies from a checkpoint are jointed whole; a `fracture.set`
+/// or an `initial_crack` on them is refused, naming the key, before the
+/// checkpoint is read (it does not exist here).
+#[test]
+fn jointed_checkpoint_bodies_refuse_sets_and_initial_cracks() {
+    let scen = root().join("scenarios/deposited-thermal-shock.toml");
+    let cases: [(&str, &str, &str); 2] = [
+        ("set", "bodies.nut.fracture.set=\"core\"", "fracture.set"),
+        (
+            "crack",
+            "bodies.nut.fracture.initial_crack={ point = [0.0, 0.0, 0.0], normal = [0.0, 0.0, 1.0] }",
+            "fracture.initial_crack",
+        ),
+    ];
+    for (tag, set, key) in cases {
+        let out = scenario_dir(&format!("jointed-checkpoint-{tag}")).join("out");
+        let (_, err) = run_bad(1, &scen, &out, &["--set", set]);
+        assert!(
+            err.contains(key)
+                && err.contains("checkpoint")
+                && err.contains("deposited-thermal-shock.toml"),
+            "{tag}: {err}"
+        );
+        assert!(!err.contains("checkpoint file not found"), "{tag}: {err}");
+        assert_no_output(&out);
+    }
+}

@@ -425,3 +425,126 @@ fn high_conductivity_follows_the_lumped_network() {
     // network's, and the gap closes as k grows.
     assert!(finite_biot > local, "{finite_biot} vs {local}");
 }
+
+/// Issue 19: the deposited packing, its nuts jointed at load (bodies from a
+/// checkpoint made discontinuous) and turned to a ceramic at 20 °C in a
+/// container held at 300 °C, cracks where the container heats it. Asserted:
+/// each nut has one joint per face two of its saved tets share (counted
+/// here from the checkpoint); temperatures stay in [20, 300] °C and the heat
+/// balances; nuts crack, with at least G_I dissipated per unit of crack
+/// area; and 1 and 2 ranks break the same joints at the same moments.
+#[test]
+fn a_deposited_packing_jointed_at_load_cracks_where_it_is_heated() {
+    const G_I: f64 = 20.0;
+    let (ck_path, _) = packing();
+    let from = ck_path.parent().unwrap().to_str().unwrap();
+    let scen = root().join("scenarios/deposited-thermal-shock.toml");
+    let stem = "deposited-thermal-shock";
+    // Joints per nut: the faces two of its tets share (each interior face
+    // appears twice among the 4 faces of the tets).
+    let ck = Checkpoint::read(ck_path).unwrap();
+    let shared_faces = |b: usize| {
+        let [e0, e1] = ck.body_elems[b];
+        let mut seen = std::collections::HashMap::new();
+        for t in &ck.tets[e0 as usize..e1 as usize] {
+            for skip in 0..4 {
+                let mut f: Vec<u32> = (0..4).filter(|&i| i != skip).map(|i| t[i]).collect();
+                f.sort_unstable();
+                *seen.entry(f).or_insert(0u32) += 1;
+            }
+        }
+        seen.values().filter(|&&n| n == 2).count() as f64
+    };
+    let mut tables = Vec::new();
+    for ranks in [1, 2] {
+        let out = out_dir(&format!("packing/thermal-shock-{ranks}"));
+        let stdout = run_ok(ranks, &scen, &out, &["--from", from]);
+        let csv = std::fs::read_to_string(out.join(format!("{stem}_cracks.csv"))).unwrap();
+        let nuts = crack_table(&csv);
+        assert_eq!(nuts.len(), 50);
+        for (p, &b) in nuts.iter().zip(&ck.bodies_of("nut")) {
+            assert_eq!(p.name, ck.body_names[b]);
+            assert_eq!(p.joints, shared_faces(b), "joints of {}", p.name);
+        }
+        tables.push(nuts);
+        if ranks == 1 {
+            continue;
+        }
+        println!("{stdout}");
+        let (h, rows) = history(&out, stem);
+        let c = |n: &str| col(&h, n);
+        for r in &rows {
+            assert!(
+                r[c("nut_min_T")] >= 20.0 - 1e-9 && r[c("nut_max_T")] <= 300.0 + 1e-9,
+                "t = {}: nut temperatures {} .. {}",
+                r[1],
+                r[c("nut_min_T")],
+                r[c("nut_max_T")]
+            );
+        }
+        let last = rows.last().unwrap();
+        let stored = last[c("stored_heat")] - rows[0][c("stored_heat")];
+        let inflow = last[c("boundary_heat_in")];
+        assert!(inflow > 0.0 && (stored - inflow).abs() < 1e-6 * inflow);
+        let nuts = &tables[1];
+        let broken: f64 = nuts.iter().map(|p| p.broken).sum();
+        let area: f64 = nuts.iter().map(|p| p.area).sum();
+        assert_eq!(broken, last[c("broken_joints")], "table against history");
+        assert!(broken > 0.0, "no nut cracked");
+        let energy = last[c("fracture_energy")];
+        assert!(energy >= 0.99 * G_I * area, "{energy} J for {area} m^2");
+        let cracked = nuts.iter().filter(|p| p.first.is_some()).count();
+        eprintln!(
+            "{cracked} of 50 nuts cracked, {broken} joints, {area:.4e} m^2, {:.1} J/m^2",
+            energy / area
+        );
+        assert!(out.join(format!("{stem}_particle_cracks.png")).is_file());
+        // A nut lying on a hexagonal face (centre at half its 16 mm
+        // thickness) or standing on a flat side (half its 40 mm across the
+        // flats, within 0.05 mm: the sink under its weight) touches the hot
+        // floor with a whole face: each of these cracks, and no nut resting
+        // on an edge, a corner or other nuts cracks before them.
+        let face_down = |p: &&CrackRow| (p.z - 0.008).abs() < 5e-5 || (p.z - 0.020).abs() < 5e-5;
+        let (down, rest): (Vec<&CrackRow>, Vec<&CrackRow>) = nuts.iter().partition(face_down);
+        assert!(down.len() >= 10, "{} nuts face down", down.len());
+        let first = |v: &[&CrackRow]| {
+            v.iter()
+                .filter_map(|p| p.first)
+                .fold(f64::INFINITY, f64::min)
+        };
+        for p in &down {
+            assert!(
+                p.first.is_some(),
+                "{} lies on the floor and did not crack",
+                p.name
+            );
+        }
+        assert!(
+            first(&down) <= first(&rest),
+            "{} s against {} s",
+            first(&down),
+            first(&rest)
+        );
+        eprintln!(
+            "{} nuts face down crack from {} s; of the {} others, {} crack",
+            down.len(),
+            first(&down),
+            rest.len(),
+            rest.iter().filter(|p| p.first.is_some()).count()
+        );
+    }
+    for (a, b) in tables[0].iter().zip(&tables[1]) {
+        assert_eq!(
+            (&a.name, a.broken, a.area, a.first),
+            (&b.name, b.broken, b.area, b.first),
+            "1 against 2 ranks"
+        );
+        assert!(
+            (a.energy - b.energy).abs() <= 1e-8 * a.energy.abs(),
+            "{}: {} J against {} J",
+            a.name,
+            a.energy,
+            b.energy
+        );
+    }
+}

@@ -18,37 +18,6 @@ const T_HOT: f64 = 300.0;
 /// Lattice layer height.
 const LAYER: f64 = 0.0155;
 
-/// One row of `<stem>_cracks.csv`.
-struct Particle {
-    name: String,
-    broken: f64,
-    area: f64,
-    energy: f64,
-    first: Option<f64>,
-    z: f64,
-}
-
-fn table(text: &str) -> Vec<Particle> {
-    let mut lines = text.lines();
-    assert_eq!(
-        lines.next().unwrap(),
-        "body,name,joints,broken,crack_area,fracture_energy,first_break,x,y,z"
-    );
-    lines
-        .map(|l| {
-            let c: Vec<&str> = l.split(',').collect();
-            Particle {
-                name: c[1].to_string(),
-                broken: c[3].parse().unwrap(),
-                area: c[4].parse().unwrap(),
-                energy: c[5].parse().unwrap(),
-                first: (!c[6].is_empty()).then(|| c[6].parse().unwrap()),
-                z: c[9].parse().unwrap(),
-            }
-        })
-        .collect()
-}
-
 #[test]
 fn a_packing_of_ceramic_nuts_cracks_where_the_plate_heats_it() {
     let scen = root().join("scenarios/packing-thermal-shock.toml");
@@ -81,7 +50,7 @@ fn a_packing_of_ceramic_nuts_cracks_where_the_plate_heats_it() {
             (stored - inflow).abs() < 1e-6 * inflow,
             "heat stored {stored} against heat in {inflow}"
         );
-        let nuts = table(&csv[1]);
+        let nuts = crack_table(&csv[1]);
         assert_eq!(nuts.len(), 50);
         let broken: f64 = nuts.iter().map(|p| p.broken).sum();
         let area: f64 = nuts.iter().map(|p| p.area).sum();
@@ -97,7 +66,7 @@ fn a_packing_of_ceramic_nuts_cracks_where_the_plate_heats_it() {
         );
         assert!(energy >= 0.99 * G_I * area, "{energy} J for {area} m^2");
         // The bottom layer, on the hot plate, cracks first.
-        let (bottom, top): (Vec<&Particle>, Vec<&Particle>) =
+        let (bottom, top): (Vec<&CrackRow>, Vec<&CrackRow>) =
             nuts.iter().partition(|p| p.z < 0.5 * LAYER);
         assert_eq!((bottom.len(), top.len()), (25, 25));
         let first_top = top
@@ -128,7 +97,7 @@ fn a_packing_of_ceramic_nuts_cracks_where_the_plate_heats_it() {
     }
     // The same joints break at the same moments on 1 and 2 ranks (the
     // temperatures agree to the solver's tolerance, so the energies to 1e-8).
-    let (one, two) = (table(&csv[0]), table(&csv[1]));
+    let (one, two) = (crack_table(&csv[0]), crack_table(&csv[1]));
     for (a, b) in one.iter().zip(&two) {
         assert_eq!(
             (&a.name, a.broken, a.area, a.first),

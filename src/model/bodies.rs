@@ -125,7 +125,20 @@ pub enum BodySource {
         body: u32,
         /// Translation (m).
         offset: [f64; 3],
+        /// Made discontinuous at load, every tet jointed (issue 19).
+        joints: Option<SavedJoints>,
     },
+}
+
+/// The joints of a checkpoint body jointed at load: every face two of its
+/// tets share. What the model keeps of them is O(1) per body; the joints
+/// themselves are made by the rank that holds the body.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SavedJoints {
+    /// Fracture material (index into the model's materials).
+    pub material: u32,
+    /// How many joints the body has.
+    pub count: u64,
 }
 
 /// A rigid motion of a source mesh's nodes.
@@ -178,7 +191,7 @@ pub struct BodyMesh<'a> {
     /// The source mesh, for its named sets (none for a checkpoint body).
     pub source: Option<&'a TetMesh>,
     /// Its joints (body-local node and element numbers), if jointed.
-    pub joints: Option<&'a SourceJoints>,
+    pub joints: Option<std::borrow::Cow<'a, SourceJoints>>,
 }
 
 impl super::Model {
@@ -199,52 +212,36 @@ impl super::Model {
                     face_mask: std::borrow::Cow::Borrowed(&src.face_mask),
                     boundary_node: std::borrow::Cow::Borrowed(&src.boundary_node),
                     source: Some(&src.mesh),
-                    joints: src.joints.as_ref(),
+                    joints: src.joints.as_ref().map(std::borrow::Cow::Borrowed),
                 })
             }
-            BodySource::Saved { file, body, offset } => {
+            BodySource::Saved {
+                file,
+                body,
+                offset,
+                joints,
+            } => {
                 let f = &files[*file as usize];
-                let h = &f.head;
-                let [n0, n1] = h.body_nodes[*body as usize];
-                let [e0, e1] = h.body_elems[*body as usize];
-                let ids: Vec<u32> = (n0..n1).collect();
-                let name = if h.has_positions {
-                    "state/positions"
-                } else {
-                    "mesh/reference"
-                };
-                let err = |e: crate::io::IoError| e.to_string();
-                let x = f.node_rows3(name, &ids).map_err(err)?;
-                let tets = f.elem_tets(&(e0..e1).collect::<Vec<u32>>()).map_err(err)?;
-                let mut m = TetMesh {
-                    nodes: x
-                        .iter()
-                        .map(|p| [p[0] + offset[0], p[1] + offset[1], p[2] + offset[2]])
-                        .collect(),
-                    tets: Vec::with_capacity(tets.len()),
-                    body: vec![0; tets.len()],
-                    ..Default::default()
-                };
-                for (e, t) in tets.iter().enumerate() {
-                    if t.iter().any(|&n| n < n0 || n >= n1) {
-                        return Err(format!(
-                            "{}: element {} of body `{}` names a node outside the body",
-                            f.path().display(),
-                            e0 as usize + e,
-                            h.body_names[*body as usize]
-                        ));
-                    }
-                    m.tets.push(t.map(|n| n - n0));
-                }
-                m.validate().map_err(|e| {
-                    format!(
-                        "{}: body `{}`: {e}",
-                        f.path().display(),
-                        h.body_names[*body as usize]
-                    )
-                })?;
+                let m = saved_mesh(f, *body, *offset)?;
                 let material = vec![self.bodies[b].material as u32; m.tets.len()];
-                let src = SourceMesh::new(m, material);
+                let src = match joints {
+                    None => SourceMesh::new(m, material),
+                    Some(j) => {
+                        let all = vec![true; m.tets.len()];
+                        let src = SourceMesh::jointed(m, material, &all, j.material);
+                        let made = src.joints.as_ref().map_or(0, |s| s.faces.len() as u64);
+                        if made != j.count {
+                            return Err(format!(
+                                "{}: body `{}` has {made} joints, {} when the model was made \
+                                 (the file changed during the run?)",
+                                f.path().display(),
+                                f.head.body_names[*body as usize],
+                                j.count
+                            ));
+                        }
+                        src
+                    }
+                };
                 Ok(BodyMesh {
                     nodes: src.mesh.nodes,
                     tets: std::borrow::Cow::Owned(src.mesh.tets),
@@ -252,7 +249,7 @@ impl super::Model {
                     face_mask: std::borrow::Cow::Owned(src.face_mask),
                     boundary_node: std::borrow::Cow::Owned(src.boundary_node),
                     source: None,
-                    joints: None,
+                    joints: src.joints.map(std::borrow::Cow::Owned),
                 })
             }
         }
@@ -268,12 +265,13 @@ impl super::Model {
             .iter()
             .map(|b| {
                 let at = next;
-                if let BodySource::Mesh { mesh, .. } = b.source {
-                    next += self.meshes[mesh as usize]
+                next += match b.source {
+                    BodySource::Mesh { mesh, .. } => self.meshes[mesh as usize]
                         .joints
                         .as_ref()
-                        .map_or(0, |j| j.faces.len() as u64);
-                }
+                        .map_or(0, |j| j.faces.len() as u64),
+                    BodySource::Saved { joints, .. } => joints.map_or(0, |j| j.count),
+                };
                 at
             })
             .collect();
@@ -301,12 +299,62 @@ impl super::Model {
             BodySource::Mesh { mesh, motion } => {
                 Ok(motion.apply(self.meshes[*mesh as usize].mean_node()))
             }
-            BodySource::Saved { .. } => {
-                let m = self.body_mesh(b, files)?;
-                Ok(mean(&m.nodes))
-            }
+            BodySource::Saved {
+                file, body, offset, ..
+            } => Ok(mean(
+                &saved_mesh(&files[*file as usize], *body, *offset)?.nodes,
+            )),
         }
     }
+}
+
+/// Body `body` of checkpoint `f` as it was saved (its positions if the
+/// file has them, else its reference), translated by `offset`, checked.
+pub(super) fn saved_mesh(
+    f: &CheckpointFile,
+    body: u32,
+    offset: [f64; 3],
+) -> Result<TetMesh, String> {
+    let h = &f.head;
+    let [n0, n1] = h.body_nodes[body as usize];
+    let [e0, e1] = h.body_elems[body as usize];
+    let ids: Vec<u32> = (n0..n1).collect();
+    let name = if h.has_positions {
+        "state/positions"
+    } else {
+        "mesh/reference"
+    };
+    let err = |e: crate::io::IoError| e.to_string();
+    let x = f.node_rows3(name, &ids).map_err(err)?;
+    let tets = f.elem_tets(&(e0..e1).collect::<Vec<u32>>()).map_err(err)?;
+    let mut m = TetMesh {
+        nodes: x
+            .iter()
+            .map(|p| [p[0] + offset[0], p[1] + offset[1], p[2] + offset[2]])
+            .collect(),
+        tets: Vec::with_capacity(tets.len()),
+        body: vec![0; tets.len()],
+        ..Default::default()
+    };
+    for (e, t) in tets.iter().enumerate() {
+        if t.iter().any(|&n| n < n0 || n >= n1) {
+            return Err(format!(
+                "{}: element {} of body `{}` names a node outside the body",
+                f.path().display(),
+                e0 as usize + e,
+                h.body_names[body as usize]
+            ));
+        }
+        m.tets.push(t.map(|n| n - n0));
+    }
+    m.validate().map_err(|e| {
+        format!(
+            "{}: body `{}`: {e}",
+            f.path().display(),
+            h.body_names[body as usize]
+        )
+    })?;
+    Ok(m)
 }
 
 impl SourceMesh {

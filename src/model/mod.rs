@@ -11,7 +11,7 @@ mod bodies;
 mod contact;
 
 pub use bcs::{body_bcs, BodyBcs, MechanicsKind, SetTarget, ThermalKind};
-pub use bodies::{BodyMesh, BodySource, Motion, SourceJoints, SourceMesh};
+pub use bodies::{BodyMesh, BodySource, Motion, SavedJoints, SourceJoints, SourceMesh};
 pub use contact::ContactModel;
 
 use crate::error::{Error, Result};
@@ -282,6 +282,27 @@ impl Model {
             *n_elems += ne as u64;
             body
         };
+        // Snap-back is worst at the largest joint (f_t² h / (2 p_f) grows with h).
+        let snap_back = |body: &str, fm: u32, src: &SourceMesh| -> Result<()> {
+            let largest = src
+                .joints
+                .iter()
+                .flat_map(|j| &j.faces)
+                .map(|f| f.area)
+                .fold(0.0, f64::max);
+            if let Some(law) = materials[fm as usize].fracture {
+                if largest > 0.0 {
+                    law.law(crate::fracture::insert::joint_size(largest))
+                        .map_err(|e| {
+                            model_err(format!(
+                                "body `{body}`: material `{}` (at its largest joint): {e}",
+                                materials[fm as usize].name
+                            ))
+                        })?;
+                }
+            }
+            Ok(())
+        };
         for b in &s.bodies {
             let context = format!("{path}: body `{}`", b.name);
             if let MeshSpec::Checkpoint { file, template } = &b.mesh {
@@ -329,15 +350,50 @@ impl Model {
                         mesh::MAX_ELEMENTS
                     )));
                 }
+                let fracture = b
+                    .fracture
+                    .as_ref()
+                    .map(|f| material_index(f.material.as_deref().unwrap_or(&b.material)));
+                let offset = b.translate.unwrap_or([0.0; 3]);
                 for i in ids {
                     let (bn, be) = (h.body_nodes[i], h.body_elems[i]);
+                    let name = h.body_names[i].clone();
+                    let (mut nn, ne) = ((bn[1] - bn[0]) as usize, (be[1] - be[0]) as usize);
+                    // Jointed at load: each rank remakes the joints of the
+                    // bodies it holds; here only their count, made one body
+                    // at a time (O(body) memory), and the snap-back check.
+                    let joints = match fracture {
+                        None => None,
+                        Some(fm) => {
+                            let m = bodies::saved_mesh(&files[fi], i as u32, offset)
+                                .map_err(model_err)?;
+                            let material = vec![material_index(&b.material); m.tets.len()];
+                            let all = vec![true; m.tets.len()];
+                            let src = SourceMesh::jointed(m, material, &all, fm);
+                            snap_back(&name, fm, &src)?;
+                            let count = src.joints.as_ref().map_or(0, |j| j.faces.len() as u64);
+                            if count == 0 && ne > 1 {
+                                return Err(model_err(format!(
+                                    "body `{}`: fracture: body `{name}` of {} has {ne} elements \
+                                     and no face two of them share (already discontinuous: a \
+                                     checkpoint of a jointed run?)",
+                                    b.name,
+                                    files[fi].path().display()
+                                )));
+                            }
+                            nn = src.mesh.nodes.len();
+                            Some(bodies::SavedJoints {
+                                material: fm,
+                                count,
+                            })
+                        }
+                    };
                     let source = BodySource::Saved {
                         file: fi as u32,
                         body: i as u32,
-                        offset: b.translate.unwrap_or([0.0; 3]),
+                        offset,
+                        joints,
                     };
-                    let name = h.body_names[i].clone();
-                    let (nn, ne) = ((bn[1] - bn[0]) as usize, (be[1] - be[0]) as usize);
                     bodies.push(new_body(
                         b,
                         name,
@@ -489,24 +545,7 @@ impl Model {
                             )));
                         }
                     }
-                    // Snap-back is worst at the largest joint (f_t² h / (2 p_f) grows with h).
-                    let largest = src
-                        .joints
-                        .iter()
-                        .flat_map(|j| &j.faces)
-                        .map(|f| f.area)
-                        .fold(0.0, f64::max);
-                    if let Some(law) = materials[fm as usize].fracture {
-                        if largest > 0.0 {
-                            law.law(crate::fracture::insert::joint_size(largest))
-                                .map_err(|e| {
-                                    model_err(format!(
-                                        "body `{}`: material `{}` ({}): {e}",
-                                        b.name, materials[fm as usize].name, "at its largest joint"
-                                    ))
-                                })?;
-                        }
-                    }
+                    snap_back(&b.name, fm, &src)?;
                     src
                 }
             };
@@ -838,6 +877,15 @@ impl Model {
     /// Whether any body is jointed (issue 19).
     pub fn has_joints(&self) -> bool {
         self.meshes.iter().any(|m| m.joints.is_some())
+            || self.bodies.iter().any(|b| {
+                matches!(
+                    b.source,
+                    BodySource::Saved {
+                        joints: Some(_),
+                        ..
+                    }
+                )
+            })
     }
 
     /// Whether any body moves.

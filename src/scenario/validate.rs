@@ -622,7 +622,22 @@ impl Scenario {
                 return Err((key(""), "joints need a [mechanics] table".into()));
             }
             if matches!(b.mesh, MeshSpec::Checkpoint { .. }) {
-                return Err((key(""), "bodies from a checkpoint cannot be jointed".into()));
+                // A checkpoint body has no named sets, and one plane would
+                // miss most of the bodies of a packing.
+                if f.set.is_some() {
+                    return Err((
+                        key(".set"),
+                        "bodies from a checkpoint are jointed whole: they have no element sets"
+                            .into(),
+                    ));
+                }
+                if f.initial_crack.is_some() {
+                    return Err((
+                        key(".initial_crack"),
+                        "not for bodies from a checkpoint (they are jointed whole, uncracked)"
+                            .into(),
+                    ));
+                }
             }
             if let Some(c) = &f.initial_crack {
                 if !c.point.iter().all(|x| x.is_finite()) {

@@ -408,3 +408,38 @@ pub fn assert_energy_balance(h: &[String], rows: &[Vec<f64>], rtol: f64, what: &
         );
     }
 }
+
+/// One row of `<stem>_cracks.csv` (per-particle crack statistics).
+#[derive(Debug, Clone, PartialEq)]
+pub struct CrackRow {
+    pub name: String,
+    pub joints: f64,
+    pub broken: f64,
+    pub area: f64,
+    pub energy: f64,
+    pub first: Option<f64>,
+    pub z: f64,
+}
+
+/// The rows of a `<stem>_cracks.csv`, its header checked.
+pub fn crack_table(text: &str) -> Vec<CrackRow> {
+    let mut lines = text.lines();
+    assert_eq!(
+        lines.next().unwrap(),
+        "body,name,joints,broken,crack_area,fracture_energy,first_break,x,y,z"
+    );
+    lines
+        .map(|l| {
+            let c: Vec<&str> = l.split(',').collect();
+            CrackRow {
+                name: c[1].to_string(),
+                joints: c[2].parse().unwrap(),
+                broken: c[3].parse().unwrap(),
+                area: c[4].parse().unwrap(),
+                energy: c[5].parse().unwrap(),
+                first: (!c[6].is_empty()).then(|| c[6].parse().unwrap()),
+                z: c[9].parse().unwrap(),
+            }
+        })
+        .collect()
+}

@@ -636,6 +636,7 @@ impl ExplicitDomain {
             let (ta, tb) = (one(a, self), one(b, self));
             thermal_only.push((ta, tb));
         }
+        self.counters.candidates += candidates.len() as u64;
         self.candidates = candidates;
         self.pair_tets = pt.tets;
         self.pair_info = pt.info;

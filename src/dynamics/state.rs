@@ -81,6 +81,8 @@ pub struct MechanicsCounters {
     pub exact_overlaps: u64,
     /// Contact detections.
     pub detections: u64,
+    /// Candidate tet pairs the detections kept (this rank's).
+    pub candidates: u64,
     /// Seconds in contact detection and halo rebuilds.
     pub detect_time: f64,
     /// Substeps advanced by this process (not restored on restart) and the

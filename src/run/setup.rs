@@ -118,6 +118,8 @@ pub(super) struct Contacts {
     /// Contact searches this stage ran itself (a thermal run's), and their time (s).
     pub searches: u64,
     pub search_time: f64,
+    /// Candidate tet pairs of this rank's thermal searches.
+    pub candidates: u64,
     /// Time of the rest of the detections (s): surfaces, gathering,
     /// comparing (the mechanics' searches not included).
     pub surface_time: f64,
@@ -177,6 +179,7 @@ impl Contacts {
             detections: 0,
             searches: 0,
             search_time: 0.0,
+            candidates: 0,
             surface_time: 0.0,
         };
         if !matches!(contacts.source, Source::None) {
@@ -201,6 +204,7 @@ impl Contacts {
             detections: 0,
             searches: 0,
             search_time: 0.0,
+            candidates: 0,
             surface_time: 0.0,
         }
     }
@@ -211,6 +215,7 @@ impl Contacts {
         self.detections += earlier.detections;
         self.searches += earlier.searches;
         self.search_time += earlier.search_time;
+        self.candidates += earlier.candidates;
         self.surface_time += earlier.surface_time;
     }
 
@@ -298,6 +303,7 @@ impl Contacts {
                 };
                 let candidates = og.search(&mut ts.search, &tets, opts);
                 searched = t.elapsed().as_secs_f64();
+                self.candidates += candidates.len() as u64;
                 self.search_time += searched;
                 self.searches += 1;
                 if let Some(p) = ts.pinball {

@@ -134,6 +134,8 @@ pub struct RunSummary {
     pub detections: u64,
     /// Contact searches run (the mechanics' and a thermal run's).
     pub searches: u64,
+    /// Candidate tet pairs those searches found (sum over ranks).
+    pub candidates: u64,
     /// Times the thermal operator was assembled.
     pub assemblies: u64,
     /// Mechanics, when it ran.
@@ -190,8 +192,8 @@ impl std::fmt::Display for RunSummary {
         if self.searches > 0 {
             writeln!(
                 f,
-                "  search      {} contact search(es), {:.3} s (one search per detection, shared by the penalty and thermal contact)",
-                self.searches, t.search
+                "  search      {} contact search(es), {:.3} s, {} candidate tet pairs (one search per detection, shared by the penalty and thermal contact)",
+                self.searches, t.search, self.candidates
             )?;
         }
         if self.steps > 0 {
@@ -510,6 +512,13 @@ impl Stages<'_, '_> {
                 .mech
                 .as_ref()
                 .map_or(0, |m| m.domain.counters.detections);
+        let local_candidates = c.candidates
+            + self
+                .mech
+                .as_ref()
+                .map_or(0, |m| m.domain.counters.candidates);
+        let mut candidates = 0u64;
+        comm.all_reduce_into(&local_candidates, &mut candidates, SystemOperation::sum());
         let times = self.times.max_over_ranks(comm);
         let mechanics = self
             .mech
@@ -558,6 +567,7 @@ impl Stages<'_, '_> {
             ),
             detections: self.contacts.detections,
             searches,
+            candidates,
             assemblies: sys.map_or(0, |s| s.assemblies),
             mechanics,
             balance,

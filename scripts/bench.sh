@@ -53,22 +53,9 @@ run_case "two bars h=0.1 m in contact, 200,000 steps (seed 000 sec 4.2 FDEM)" 1 
 run_case "two bars h=0.05 m in contact, 200,000 steps" 1 scenarios/two-bars.toml \
   --set bodies.left.mesh.element_size=0.05 --set bodies.right.mesh.element_size=0.05
 
-# Contact detection against the number of bodies (regular overlapping lattice).
-crow=()
-for n in 2 4 8 16; do
-  for ranks in 1 2; do
-    cmd=("$BIN" run scenarios/bench-contact-lattice.toml --quiet --output "$OUT/lat" --set "bodies.cube.lattice.count=[$n,$n,$n]")
-    if [ "$ranks" -gt 1 ]; then cmd=(mpirun -n "$ranks" --oversubscribe "${cmd[@]}"); fi
-    echo "== lattice $n^3 on $ranks rank(s): ${cmd[*]}" >&2
-    log=$("${cmd[@]}")
-    echo "$log" >&2
-    ct=$(echo "$log" | sed -n 's/.*contact \([0-9.]*\) |.*/\1/p')
-    pairs=$(echo "$log" | awk '/^  contact / {print $2}')
-    tets=$(echo "$log" | awk '/^  mesh/ {print $4}')
-    bt=$(echo "$log" | sed -n 's/.*assembly+setup \([0-9.]*\) |.*/\1/p')
-    crow+=("| $((n*n*n)) | $ranks | $tets | $pairs | $ct | $(printf '%.0f' "$(echo "$pairs / $ct" | bc -l)") | $bt |")
-  done
-done
+# Contact detection against the number of bodies (regular overlapping
+# lattice, 8 to 32,768 bodies): docs/contact-measured.md, included below.
+FDEM=$BIN bash scripts/bench-contact.sh
 
 # Explicit mechanics: strong scaling and dense-pack contact (issue 4).
 mrow=()
@@ -189,14 +176,9 @@ echo "$joint_lines" >&2
   echo
   echo "## Contact detection"
   echo
-  echo "\`scenarios/bench-contact-lattice.toml\`: cubes of 48 tets on a regular lattice,"
-  echo "each overlapping its neighbours by 2 mm. Detection = BVH broad phase over all"
-  echo "tets, separating-axis test, face clipping both ways (the contact time of the"
-  echo "run summary, max over ranks). Pairs/s = contact pairs found per second."
+  echo "From \`scripts/bench-contact.sh\` (docs/contact-measured.md), run by this script:"
   echo
-  echo "| bodies | ranks | tets | contact pairs | detection + surfaces (s) | pairs/s | assembly + factorisation (s) |"
-  echo "|---|---|---|---|---|---|---|"
-  for r in "${crow[@]}"; do echo "$r"; done
+  sed -n '5,$p' docs/contact-measured.md
   echo
   echo "## Explicit mechanics (issue 4)"
   echo

@@ -471,33 +471,10 @@ fn a_deposited_packing_jointed_at_load_cracks_where_it_is_heated() {
             continue;
         }
         println!("{stdout}");
-        let (h, rows) = history(&out, stem);
-        let c = |n: &str| col(&h, n);
-        for r in &rows {
-            assert!(
-                r[c("nut_min_T")] >= 20.0 - 1e-9 && r[c("nut_max_T")] <= 300.0 + 1e-9,
-                "t = {}: nut temperatures {} .. {}",
-                r[1],
-                r[c("nut_min_T")],
-                r[c("nut_max_T")]
-            );
-        }
-        let last = rows.last().unwrap();
-        let stored = last[c("stored_heat")] - rows[0][c("stored_heat")];
-        let inflow = last[c("boundary_heat_in")];
-        assert!(inflow > 0.0 && (stored - inflow).abs() < 1e-6 * inflow);
         let nuts = &tables[1];
-        let broken: f64 = nuts.iter().map(|p| p.broken).sum();
-        let area: f64 = nuts.iter().map(|p| p.area).sum();
-        assert_eq!(broken, last[c("broken_joints")], "table against history");
-        assert!(broken > 0.0, "no nut cracked");
-        let energy = last[c("fracture_energy")];
-        assert!(energy >= 0.99 * G_I * area, "{energy} J for {area} m^2");
+        assert_cracked_packing(&out, stem, nuts, (20.0, 300.0), G_I);
         let cracked = nuts.iter().filter(|p| p.first.is_some()).count();
-        eprintln!(
-            "{cracked} of 50 nuts cracked, {broken} joints, {area:.4e} m^2, {:.1} J/m^2",
-            energy / area
-        );
+        eprintln!("{cracked} of 50 nuts cracked");
         assert!(out.join(format!("{stem}_particle_cracks.png")).is_file());
         // A nut lying on a hexagonal face (centre at half its 16 mm
         // thickness) or standing on a flat side (half its 40 mm across the
@@ -533,18 +510,5 @@ fn a_deposited_packing_jointed_at_load_cracks_where_it_is_heated() {
             rest.iter().filter(|p| p.first.is_some()).count()
         );
     }
-    for (a, b) in tables[0].iter().zip(&tables[1]) {
-        assert_eq!(
-            (&a.name, a.broken, a.area, a.first),
-            (&b.name, b.broken, b.area, b.first),
-            "1 against 2 ranks"
-        );
-        assert!(
-            (a.energy - b.energy).abs() <= 1e-8 * a.energy.abs(),
-            "{}: {} J against {} J",
-            a.name,
-            a.energy,
-            b.energy
-        );
-    }
+    assert_same_cracks(&tables[0], &tables[1]);
 }

@@ -443,3 +443,69 @@ pub fn crack_table(text: &str) -> Vec<CrackRow> {
         })
         .collect()
 }
+
+/// The same joints broke at the same moments in two runs (1 and 2 ranks):
+/// counts, areas and first-break times equal, energies to 1e-8 (the
+/// temperatures agree to the solver's tolerance).
+pub fn assert_same_cracks(one: &[CrackRow], two: &[CrackRow]) {
+    assert_eq!(one.len(), two.len());
+    for (a, b) in one.iter().zip(two) {
+        assert_eq!(
+            (&a.name, a.broken, a.area, a.first),
+            (&b.name, b.broken, b.area, b.first),
+            "1 against 2 ranks"
+        );
+        assert!(
+            (a.energy - b.energy).abs() <= 1e-8 * a.energy.abs(),
+            "{}: {} J against {} J",
+            a.name,
+            a.energy,
+            b.energy
+        );
+    }
+}
+
+/// A thermally shocked packing of jointed nuts, from its history and its
+/// per-particle table `nuts`: every nut temperature in [lo, hi] at every
+/// row (bounded conduction), heat stored = heat in to 1e-6, the table's
+/// broken joints and crack area those of the history, some joint broken,
+/// and at least G_I dissipated per unit of crack area (more in mixed mode
+/// and in joints damaged but not broken). Returns (broken, area, energy).
+pub fn assert_cracked_packing(
+    out: &Path,
+    stem: &str,
+    nuts: &[CrackRow],
+    (lo, hi): (f64, f64),
+    g_i: f64,
+) -> (f64, f64, f64) {
+    let (h, rows) = history(out, stem);
+    let c = |n: &str| col(&h, n);
+    for r in &rows {
+        assert!(
+            r[c("nut_min_T")] >= lo - 1e-9 && r[c("nut_max_T")] <= hi + 1e-9,
+            "t = {}: nut temperatures {} .. {}",
+            r[1],
+            r[c("nut_min_T")],
+            r[c("nut_max_T")]
+        );
+    }
+    let last = rows.last().unwrap();
+    let stored = last[c("stored_heat")] - rows[0][c("stored_heat")];
+    let inflow = last[c("boundary_heat_in")];
+    assert!(
+        inflow > 0.0 && (stored - inflow).abs() < 1e-6 * inflow,
+        "heat stored {stored} against heat in {inflow}"
+    );
+    let broken: f64 = nuts.iter().map(|p| p.broken).sum();
+    let area: f64 = nuts.iter().map(|p| p.area).sum();
+    assert_eq!(broken, last[c("broken_joints")], "table against history");
+    assert!((area - last[c("crack_area")]).abs() < 1e-9 * area.max(1e-12));
+    assert!(broken > 0.0, "no nut cracked");
+    let energy = last[c("fracture_energy")];
+    eprintln!(
+        "{broken} broken joints, crack area {area:.4e} m^2, {energy:.4e} J: {:.1} J/m^2",
+        energy / area
+    );
+    assert!(energy >= 0.99 * g_i * area, "{energy} J for {area} m^2");
+    (broken, area, energy)
+}

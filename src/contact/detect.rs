@@ -5,7 +5,7 @@
 
 use super::search::{BodyTets, Candidate, ContactSearch, SearchOptions};
 use super::{tet_tet_contact_surface, ContactPair};
-use crate::geometry::tet_tet_overlap;
+use crate::geometry::{shapes_overlap, TetShape};
 use crate::mesh::TetMesh;
 
 /// Up to four local face indices, held inline (no allocation in the
@@ -146,9 +146,19 @@ pub fn tet_pair_contact(
     (a, ca): (TetFaces, &[[f64; 3]; 4]),
     (b, cb): (TetFaces, &[[f64; 3]; 4]),
 ) -> Option<ContactPair> {
-    if !tet_tet_overlap(ca, cb) {
+    tet_shapes_contact((a, &TetShape::new(*ca)), (b, &TetShape::new(*cb)))
+}
+
+/// [`tet_pair_contact`] of two tets' shapes (a tet met in several
+/// candidate pairs makes its shape once).
+pub fn tet_shapes_contact(
+    (a, sa): (TetFaces, &TetShape),
+    (b, sb): (TetFaces, &TetShape),
+) -> Option<ContactPair> {
+    if !shapes_overlap(sa, sb) {
         return None;
     }
+    let (ca, cb) = (&sa.corners, &sb.corners);
     let ((t, ct), (c, cc)) = if a.id < b.id {
         ((a, ca), (b, cb))
     } else {

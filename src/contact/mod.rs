@@ -16,8 +16,8 @@ pub mod table;
 mod tets;
 
 pub use detect::{
-    contact_pairs, detect_contacts, tet_pair_contact, BoundaryTets, FaceList, TetFaces,
-    THERMAL_SEARCH,
+    contact_pairs, detect_contacts, tet_pair_contact, tet_shapes_contact, BoundaryTets, FaceList,
+    TetFaces, THERMAL_SEARCH,
 };
 pub use penalty::{pair_stiffness, tet_tet_penalty, PenaltyParams, PenaltyResult};
 pub use search::{finds_pair, BodyTets, Candidate, ContactSearch, SearchOptions, TetRole};

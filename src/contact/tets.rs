@@ -5,7 +5,8 @@
 //! position; and the search over own and ghost tets together.
 
 use super::search::{BodyTets, Candidate, ContactSearch, SearchOptions, TetRole};
-use super::{tet_pair_contact, ContactPair, PairDofs, TetFaces};
+use super::{tet_shapes_contact, ContactPair, PairDofs, TetFaces};
+use crate::geometry::TetShape;
 
 /// Tets with their nodes, as the contact search reads them: a rank's own
 /// part, or the ghost copies of other ranks' pieces.
@@ -159,14 +160,26 @@ impl OwnAndGhosts<'_> {
         candidates: &[Candidate],
         penetration: bool,
     ) -> Vec<(ContactPair, PairDofs)> {
+        // The search lists each searching tet's candidates together: its
+        // shape is made once for them.
+        let mut last: Option<(u32, TetShape)> = None;
         let mut out: Vec<(ContactPair, PairDofs)> = candidates
             .iter()
             .filter_map(|c| {
-                let (ca, cb) = (self.corners(c.a), self.corners(c.b));
-                let p = tet_pair_contact((self.faces(c.a), &ca), (self.faces(c.b), &cb))?;
+                let sa = match last {
+                    Some((h, s)) if h == c.a => s,
+                    _ => {
+                        let s = TetShape::new(self.corners(c.a));
+                        last = Some((c.a, s));
+                        s
+                    }
+                };
+                let sb = TetShape::new(self.corners(c.b));
+                let (ca, cb) = (&sa.corners, &sb.corners);
+                let p = tet_shapes_contact((self.faces(c.a), &sa), (self.faces(c.b), &sb))?;
                 let mut d = self.dofs(c.a, c.b);
                 if penetration {
-                    d.penetration = super::penetration(&ca, &cb, p.area());
+                    d.penetration = super::penetration(ca, cb, p.area());
                 }
                 Some((p, d))
             })

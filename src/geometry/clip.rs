@@ -146,8 +146,35 @@ pub fn triangle_in_tet_area(tri: &[[f64; 3]; 3], tet: &[[f64; 3]; 4]) -> f64 {
 /// by at least that depth, so the separating axes would find no gap. Only
 /// the other pairs run the 44 axes.
 pub fn tet_tet_overlap(a: &[[f64; 3]; 4], b: &[[f64; 3]; 4]) -> bool {
-    let eps = 1e-12 * tet_size(a).min(tet_size(b));
-    let (pa, pb) = (tet_planes(a), tet_planes(b));
+    shapes_overlap(&TetShape::new(*a), &TetShape::new(*b))
+}
+
+/// A tet's corners with what [`tet_tet_overlap`] derives from them (face
+/// planes, size), made once for a tet met in several candidate pairs.
+#[derive(Debug, Clone, Copy)]
+pub struct TetShape {
+    /// The corners.
+    pub corners: [[f64; 3]; 4],
+    planes: [([f64; 3], f64); 4],
+    size: f64,
+}
+
+impl TetShape {
+    /// The shape of the tet at `corners`.
+    pub fn new(corners: [[f64; 3]; 4]) -> TetShape {
+        TetShape {
+            planes: tet_planes(&corners),
+            size: tet_size(&corners),
+            corners,
+        }
+    }
+}
+
+/// [`tet_tet_overlap`] of two tets' shapes.
+pub fn shapes_overlap(sa: &TetShape, sb: &TetShape) -> bool {
+    let (a, b) = (&sa.corners, &sb.corners);
+    let eps = 1e-12 * sa.size.min(sb.size);
+    let (pa, pb) = (sa.planes, sb.planes);
     let scale = a
         .iter()
         .chain(b)

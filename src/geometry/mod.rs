@@ -9,7 +9,10 @@ pub mod placement;
 mod tet4;
 pub mod transform;
 
-pub use clip::{face_tet_clip, polygon_area, tet_tet_overlap, triangle_in_tet_area, Polygon};
+pub use clip::{
+    face_tet_clip, polygon_area, shapes_overlap, tet_tet_overlap, triangle_in_tet_area, Polygon,
+    TetShape,
+};
 pub use overlap::{
     face_planes, planes_within, separated_along, separating_axis, tet_tet_intersection,
     tet_tet_intersection_with, tets_within, FacePatch, Intersection, TetPlanes,

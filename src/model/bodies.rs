@@ -255,6 +255,20 @@ impl super::Model {
         }
     }
 
+    /// Whether any body is jointed (issue 19).
+    pub fn has_joints(&self) -> bool {
+        self.meshes.iter().any(|m| m.joints.is_some())
+            || self.bodies.iter().any(|b| {
+                matches!(
+                    b.source,
+                    BodySource::Saved {
+                        joints: Some(_),
+                        ..
+                    }
+                )
+            })
+    }
+
     /// Per body, the global number of its first joint (joints numbered
     /// body by body, each body's in its mesh's joint order), and the
     /// total: O(bodies), the same on every rank.

@@ -874,20 +874,6 @@ impl Model {
         self.bodies.iter().any(|b| b.heating.is_some())
     }
 
-    /// Whether any body is jointed (issue 19).
-    pub fn has_joints(&self) -> bool {
-        self.meshes.iter().any(|m| m.joints.is_some())
-            || self.bodies.iter().any(|b| {
-                matches!(
-                    b.source,
-                    BodySource::Saved {
-                        joints: Some(_),
-                        ..
-                    }
-                )
-            })
-    }
-
     /// Whether any body moves.
     pub fn has_motion(&self) -> bool {
         self.bodies.iter().any(|b| b.velocity != [0.0; 3])

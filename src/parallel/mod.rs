@@ -9,6 +9,7 @@
 
 mod build;
 pub mod exchange;
+mod fingerprint;
 pub mod ghosts;
 mod halo;
 mod part;
@@ -16,6 +17,7 @@ mod partition;
 pub mod rcb;
 
 pub use build::{element_work, Placement, IMBALANCE};
+pub use fingerprint::fingerprint;
 pub use halo::Halo;
 pub use part::{GlobalBcs, LocalBcs, Part, PartJoint, WholeMaps};
 pub use partition::{

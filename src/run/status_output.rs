@@ -189,14 +189,7 @@ impl StatusOutput {
     /// and gap links' faces (any rank's).
     fn statuses(&self, comm: &SimpleCommunicator, contacts: &ContactSet, sliding: f64) -> Vec<u8> {
         let rows = status_rows(contacts, sliding);
-        let hash = {
-            use std::hash::{Hash, Hasher};
-            let mut h = std::collections::hash_map::DefaultHasher::new();
-            for r in &rows {
-                r.map(f64::to_bits).hash(&mut h);
-            }
-            h.finish()
-        };
+        let hash = crate::parallel::fingerprint(rows.iter().flat_map(|r| r.map(f64::to_bits)));
         let mine = u8::from(self.last.borrow().as_ref().is_some_and(|(k, _)| *k == hash));
         let mut all = 0u8;
         comm.all_reduce_into(&mine, &mut all, SystemOperation::min());

@@ -27,16 +27,13 @@ pub struct Flows {
 
 /// The PETSc rows whose temperatures [`flows`] reads, in its order: each
 /// pair's 8, then each gap link's 6.
-pub fn flow_rows(contacts: &ContactSet) -> Vec<i32> {
+pub fn flow_rows(contacts: &ContactSet) -> impl Iterator<Item = i32> + '_ {
     let pairs = contacts.dofs.iter().flat_map(|d| d.petsc.map(|r| r as i32));
-    let gaps = contacts.gaps.iter().flat_map(|l| {
-        l.rows_a
-            .iter()
-            .chain(&l.rows_b)
-            .map(|&r| r as i32)
-            .collect::<Vec<_>>()
-    });
-    pairs.chain(gaps).collect()
+    let gaps = contacts
+        .gaps
+        .iter()
+        .flat_map(|l| l.rows_a.iter().chain(&l.rows_b).map(|&r| r as i32));
+    pairs.chain(gaps)
 }
 
 /// The flows of this rank's pairs and gap links at temperatures `t` (the

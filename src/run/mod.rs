@@ -214,7 +214,7 @@ impl<'a, 'p> Stages<'a, 'p> {
         }
         summary::trace_memory(rank, "mechanics");
         trace_held(rank, mech.as_ref());
-        let mut contacts = Contacts::new(comm, model, &part, restart, mech.as_mut())?;
+        let mut contacts = Contacts::new(comm, model, &part, restart, mech.as_mut(), true)?;
         summary::trace_memory(rank, "contacts");
         let mut balance = Balance::new(model, comm.size() as usize);
         rebalance::set_up_thermal_balance(

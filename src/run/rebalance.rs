@@ -191,51 +191,73 @@ pub(super) const THERMAL_PAIR_WORK: f64 = 0.25;
 /// the N = 2000 heat-up), the imbalance costs its share of every step.
 const SETUP_THRESHOLD: f64 = 1.05;
 
-/// Collective. Max/mean over the ranks of a thermal run's work: elements
-/// and [`THERMAL_PAIR_WORK`] per contact pair.
-pub(super) fn thermal_imbalance(
-    comm: &SimpleCommunicator,
-    part: &Part,
-    pairs: &crate::contact::ContactSet,
-) -> f64 {
-    let mine = part.elem_gid.len() as f64 + THERMAL_PAIR_WORK * pairs.local.len() as f64;
+/// Every how many candidates of a thermal run's first detection on several
+/// ranks one is made a pair to estimate the ranks' work before all are
+/// (the estimate of a rank's pairs is within about 1 % at the N = 2000
+/// heat-up's 185 k pairs a rank).
+const PROBE_SAMPLE: usize = 8;
+
+/// What a thermal run's first detection on several ranks found when the
+/// estimated work was past [`SETUP_THRESHOLD`] × the mean: the pair work
+/// of each whole body of this rank, and the max/mean work over the ranks.
+pub(super) struct Probe {
+    body_work: HashMap<u32, f64>,
+    ratio: f64,
+}
+
+/// Collective. Max/mean over the ranks of a thermal run's work:
+/// `elements` and [`THERMAL_PAIR_WORK`] per contact pair.
+fn thermal_imbalance(comm: &SimpleCommunicator, elements: usize, pairs: f64) -> f64 {
+    let mine = elements as f64 + THERMAL_PAIR_WORK * pairs;
     let (mut total, mut most) = (0.0f64, 0.0f64);
     comm.all_reduce_into(&mine, &mut total, SystemOperation::sum());
     comm.all_reduce_into(&mine, &mut most, SystemOperation::max());
     most * f64::from(comm.size()) / total.max(f64::MIN_POSITIVE)
 }
 
-/// Collective. A thermal run on several ranks, after its first
-/// detection: when the ranks' work (elements, and their thermal contact
-/// pairs) is past [`SETUP_THRESHOLD`] × the mean (a settled packing has
-/// far more contacts at its bottom), the centre and work of every whole
-/// body, for [`Part::build_placed`] to cut them again before the thermal
-/// system exists; with the max/mean work found. None when the cut stands.
-#[allow(clippy::type_complexity)]
-pub(super) fn thermal_placements(
+/// Collective. A thermal run's first detection on several ranks, from its
+/// `candidates` (over `og`) before their pairs are made: the pairs of
+/// every [`PROBE_SAMPLE`]-th candidate estimate each rank's work (its
+/// `elements` and pairs) and each whole body's. Some when the work is past
+/// [`SETUP_THRESHOLD`] × the mean (a settled packing has far more
+/// contacts at its bottom): the bodies are cut again before the pairs
+/// are made, which spares making them twice.
+pub(super) fn probe_work(
     comm: &SimpleCommunicator,
-    model: &Model,
-    part: &Part,
-    pairs: &crate::contact::ContactSet,
-) -> Option<(HashMap<u32, ([f64; 3], f64)>, f64)> {
-    if comm.size() < 2 || model.mechanics.is_some() {
-        return None;
-    }
-    let ratio = thermal_imbalance(comm, part, pairs);
+    elements: usize,
+    whole_bodies: &[u32],
+    og: &crate::contact::OwnAndGhosts,
+    candidates: &[crate::contact::Candidate],
+) -> Option<Probe> {
+    let sample: Vec<_> = candidates.iter().step_by(PROBE_SAMPLE).copied().collect();
+    let pairs = og.contact_pairs(&sample, false);
+    let scale = PROBE_SAMPLE as f64;
+    let ratio = thermal_imbalance(comm, elements, scale * pairs.len() as f64);
     if ratio <= SETUP_THRESHOLD {
         return None;
     }
     // Each pair's work to the body of its tet on this rank held whole.
-    let mut body_pairs: HashMap<u32, f64> = HashMap::new();
-    for d in &pairs.dofs {
+    let mut body_work: HashMap<u32, f64> = HashMap::new();
+    for (_, d) in &pairs {
         if let Some(&b) = d
             .bodies
             .iter()
-            .find(|b| part.whole_bodies.binary_search(b).is_ok())
+            .find(|b| whole_bodies.binary_search(b).is_ok())
         {
-            *body_pairs.entry(b).or_default() += THERMAL_PAIR_WORK;
+            *body_work.entry(b).or_default() += scale * THERMAL_PAIR_WORK;
         }
     }
+    Some(Probe { body_work, ratio })
+}
+
+/// Collective. The centre and work (elements, and `body_work` of their
+/// pairs) of every whole body of `part`, for [`Part::build_placed`].
+fn thermal_placements(
+    comm: &SimpleCommunicator,
+    model: &Model,
+    part: &Part,
+    body_work: &HashMap<u32, f64>,
+) -> HashMap<u32, ([f64; 3], f64)> {
     // Centres of the whole bodies: the mean of their elements' nodes.
     let mut sum: HashMap<u32, ([f64; 3], f64)> = HashMap::new();
     for (e, t) in part.mesh.tets.iter().enumerate() {
@@ -256,17 +278,17 @@ pub(super) fn thermal_placements(
         let (c, n) = sum.get(&b).copied().unwrap_or(([0.0; 3], 1.0));
         let body = &model.bodies[b as usize];
         let elements = f64::from(body.elem_range.1 - body.elem_range.0);
-        let work = elements + body_pairs.get(&b).copied().unwrap_or(0.0);
+        let work = elements + body_work.get(&b).copied().unwrap_or(0.0);
         (b, c.map(|v| v / n), work)
     });
-    Some((to_body_blocks(comm, model, loads), ratio))
+    to_body_blocks(comm, model, loads)
 }
 
-/// Collective. A thermal run on several ranks whose first detection left
-/// the work (elements + pairs / 4) past the set-up threshold on some rank:
-/// drop the contacts and the part, cut the whole bodies again weighted by
-/// that work, and detect again before the thermal system exists. Counted
-/// on the summary's `balance` line.
+/// Collective. A thermal run on several ranks whose first detection
+/// estimated the work (elements + pairs / 4) past the set-up threshold on
+/// some rank ([`probe_work`]): drop the part, cut the whole bodies again
+/// weighted by that work, and detect on the new parts before the thermal
+/// system exists. Counted on the summary's `balance` line.
 pub(super) fn set_up_thermal_balance(
     comm: &SimpleCommunicator,
     model: &Model,
@@ -277,10 +299,12 @@ pub(super) fn set_up_thermal_balance(
     balance: &mut Balance,
 ) -> Result<()> {
     let clock = Instant::now();
-    let Some((placed, ratio)) = thermal_placements(comm, model, part, &contacts.set) else {
+    let Some(probe) = contacts.probe.take() else {
         return Ok(());
     };
-    // The first detection and the old part go before the new ones are
+    let placed = thermal_placements(comm, model, part, &probe.body_work);
+    drop(probe.body_work);
+    // The probe's search and the old part go before the new ones are
     // made (their memory is reused).
     let earlier = std::mem::replace(contacts, Contacts::empty());
     let mut counts = Contacts::empty();
@@ -291,10 +315,11 @@ pub(super) fn set_up_thermal_balance(
     *part = Part::build_placed(comm, model, Placement::Moved(&placed))?;
     drop(placed);
     let moved = bodies_moved(comm, &before, part);
-    *contacts = Contacts::new(comm, model, part, restart, mech)?;
+    *contacts = Contacts::new(comm, model, part, restart, mech, false)?;
     contacts.add_counts(&counts);
-    let after = thermal_imbalance(comm, part, &contacts.set);
-    balance.set_up_repartition(moved, ratio, after, clock.elapsed().as_secs_f64());
+    let after = thermal_imbalance(comm, part.elem_gid.len(), contacts.set.local.len() as f64);
+    let time = clock.elapsed().as_secs_f64();
+    balance.set_up_repartition(moved, probe.ratio, after, time);
     super::summary::trace_memory(comm.rank(), "contacts after the set-up repartition");
     Ok(())
 }
@@ -420,7 +445,7 @@ impl Stages<'_, '_> {
         mech.domain.set_friction_work(friction_work);
         self.times.mechanics += clock.elapsed().as_secs_f64();
 
-        let mut contacts = Contacts::new(comm, model, part, None, Some(&mut mech))?;
+        let mut contacts = Contacts::new(comm, model, part, None, Some(&mut mech), false)?;
         contacts.add_counts(&self.contacts);
         let clock = Instant::now();
         let mut sys = setup::thermal_system(self.petsc, comm, model, part, &contacts.set)?;

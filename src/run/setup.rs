@@ -123,17 +123,28 @@ pub(super) struct Contacts {
     /// Time of the rest of the detections (s): surfaces, gathering,
     /// comparing (the mechanics' searches not included).
     pub surface_time: f64,
+    /// Until the first detection: this rank's elements and whole bodies,
+    /// when that detection first estimates the ranks' work
+    /// ([`super::rebalance::probe_work`]).
+    probing: Option<(usize, Vec<u32>)>,
+    /// The first detection's estimate, when it asks for a new cut (its
+    /// pairs were not made).
+    pub probe: Option<super::rebalance::Probe>,
 }
 
 impl Contacts {
     /// Collective. The first detection (at the checkpoint's positions on a
-    /// restart), when the thermal problem is solved.
+    /// restart), when the thermal problem is solved. With `probe`, a
+    /// thermal run on several ranks first estimates the ranks' work from
+    /// its candidates, and when a new cut is due leaves [`Contacts::probe`]
+    /// instead of pairs ([`super::rebalance::set_up_thermal_balance`]).
     pub fn new(
         comm: &SimpleCommunicator,
         model: &Model,
         part: &Part,
         restart: Option<&Restart>,
         mut mech: Option<&mut Mechanics>,
+        probe: bool,
     ) -> Result<Contacts> {
         let source = if !(model.thermal_active && model.contact.is_some()) {
             Source::None
@@ -173,6 +184,8 @@ impl Contacts {
                 pinball,
             }))
         };
+        let probing = (probe && comm.size() > 1 && matches!(source, Source::Search(_)))
+            .then(|| (part.elem_gid.len(), part.whole_bodies.clone()));
         let mut contacts = Contacts {
             source,
             set: ContactSet::default(),
@@ -181,10 +194,12 @@ impl Contacts {
             search_time: 0.0,
             candidates: 0,
             surface_time: 0.0,
+            probing,
+            probe: None,
         };
         if !matches!(contacts.source, Source::None) {
             contacts.set = contacts.find(comm, model, mech)?;
-            contacts.detections = 1;
+            contacts.detections = u64::from(contacts.probe.is_none());
         }
         // A run that never detects again frees its search (the tets'
         // copy, the kept trees) before the thermal system is built.
@@ -206,6 +221,8 @@ impl Contacts {
             search_time: 0.0,
             candidates: 0,
             surface_time: 0.0,
+            probing: None,
+            probe: None,
         }
     }
 
@@ -306,6 +323,14 @@ impl Contacts {
                 self.candidates += candidates.len() as u64;
                 self.search_time += searched;
                 self.searches += 1;
+                if let Some((elements, whole)) = self.probing.take() {
+                    self.probe =
+                        super::rebalance::probe_work(comm, elements, &whole, &og, &candidates);
+                    if self.probe.is_some() {
+                        self.surface_time += clock.elapsed().as_secs_f64() - searched;
+                        return Ok(ContactSet::default());
+                    }
+                }
                 if let Some(p) = ts.pinball {
                     gaps = og.gap_links(&candidates, gap_range(model, p));
                 }

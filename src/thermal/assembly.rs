@@ -410,9 +410,14 @@ pub fn assemble<'p>(
         }
         match mode {
             DeltaT::Local => {
+                // The target's and the contactor's own 4 × 4 blocks are
+                // their elements' (above, on the rank of each): a pair adds
+                // its two cross blocks (half the entries of its 8 × 8).
                 for d in &contacts.dofs {
                     let idx = d.petsc.map(|n| n as i32);
-                    p.add(&idx, &idx)?;
+                    let (target, contactor) = idx.split_at(4);
+                    p.add(target, contactor)?;
+                    p.add(contactor, target)?;
                 }
             }
             DeltaT::Average => {

@@ -247,6 +247,36 @@ impl StatusOutput {
         time: f64,
     ) -> Result<StatusCounts> {
         let status = self.statuses(comm, contacts, sliding);
+        // No node moved on any rank (a heat-up): the displacements are zero
+        // and nothing is sent.
+        let moved = positions
+            .iter()
+            .zip(&part.mesh.nodes)
+            .any(|(x, x0)| x != x0);
+        let mut any = 0u8;
+        comm.all_reduce_into(&u8::from(moved), &mut any, SystemOperation::max());
+        let u = if any == 0 {
+            vec![0.0; 9 * self.block.faces()]
+        } else {
+            self.displacements(comm, part, positions)
+        };
+        let s: Vec<f64> = status.iter().map(|&v| f64::from(v)).collect();
+        self.writer.write_step(
+            time,
+            &[("displacement", 3, &u[..])],
+            &[("status", 1, &s[..])],
+        )?;
+        Ok(count(comm, &status))
+    }
+
+    /// Collective. The displacements of the block's faces' corners (9 a
+    /// face, in block order), sent by the elements' owners.
+    fn displacements(
+        &self,
+        comm: &SimpleCommunicator,
+        part: &Part,
+        positions: &[[f64; 3]],
+    ) -> Vec<f64> {
         let rows = (0..part.num_elements())
             .filter(|&e| part.face_mask[e] != 0)
             .map(|e| {
@@ -283,15 +313,7 @@ impl StatusOutput {
                 }
             }
         }
-        drop(got_rows);
-        drop(got);
-        let s: Vec<f64> = status.iter().map(|&v| f64::from(v)).collect();
-        self.writer.write_step(
-            time,
-            &[("displacement", 3, &u[..])],
-            &[("status", 1, &s[..])],
-        )?;
-        Ok(count(comm, &status))
+        u
     }
 
     /// Collective. Close the series.

@@ -153,8 +153,10 @@ pub fn hex8_size(x: &[Vector3<f64>; 8]) -> f64 {
 /// Natural coordinates ξ of the physical point `p` in the Hex8 with nodes
 /// `x` (seed 002 eqs 8–11), starting from the centre ξ = 0.
 ///
-/// The tolerance ε of eq 11 is 1e-14 times the longest edge; the iteration
-/// also stops once the Newton step is below 1e-15 (round-off). `elem` only
+/// The tolerance ε of eq 11 is 1e-14 times the longest edge plus the
+/// round-off of the coordinates (8 ulps of the largest |coordinate|: an
+/// element far from the origin cannot resolve 1e-14 of its own size); the
+/// iteration also stops once the Newton step is below 1e-15 (round-off). `elem` only
 /// names the element in errors. Errors: [`InverseMapError::Outside`] if a
 /// coordinate exceeds 1 + [`INVERSE_MAP_OUTSIDE_TOL`] in magnitude,
 /// [`InverseMapError::Singular`] for a singular Jacobian,
@@ -164,7 +166,8 @@ pub fn hex8_inverse_map(
     p: &Vector3<f64>,
     elem: usize,
 ) -> Result<Vector3<f64>, InverseMapError> {
-    let tolerance = 1e-14 * hex8_size(x);
+    let scale = x.iter().chain([p]).map(|v| v.amax()).fold(0.0, f64::max);
+    let tolerance = 1e-14 * hex8_size(x) + 8.0 * f64::EPSILON * scale;
     let mut xi = Vector3::zeros();
     let mut residual = f64::INFINITY;
     for _ in 0..INVERSE_MAP_MAX_ITERATIONS {
@@ -377,6 +380,23 @@ mod tests {
         // Far away: still a clean error, not a panic.
         let far = Vector3::new(100.0, -50.0, 3.0);
         assert!(hex8_inverse_map(&x, &far, 1).is_err());
+    }
+
+    #[test]
+    fn hex8_inverse_map_far_from_the_origin() {
+        // Elements of side h at 30 and 200 h from the origin: round-off of the coordinates
+        // exceeds 1e-14 h there (issue 21's wave bar found it at 15 mm with h = 0.5 mm).
+        let mut rng = Pcg64::seed_from_u64(7);
+        let h = 0.5e-3;
+        for offset in [30.0 * h, 200.0 * h] {
+            let x = HEX8_NATURAL
+                .map(|c| Vector3::new(offset, 0.3 * h, -2.0 * h) + Vector3::from(c) * (0.5 * h));
+            for _ in 0..200 {
+                let xi = Vector3::from_fn(|_, _| rng.gen_range(-1.0..1.0));
+                let got = hex8_inverse_map(&x, &hex8_map(&x, &xi), 0).unwrap();
+                assert!((got - xi).amax() < 1e-12, "{offset}: {got} vs {xi}");
+            }
+        }
     }
 
     #[test]

@@ -4,6 +4,7 @@ pub mod ambient;
 pub mod cantilever;
 pub mod cantilever_plot;
 pub mod coupled_cantilever;
+pub mod fede_bar;
 pub mod fede_coupling;
 pub mod fede_heat;
 pub mod fede_patch;

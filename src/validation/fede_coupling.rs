@@ -211,6 +211,19 @@ impl GhostLayer {
         self.bonds.iter().chain(&self.link_bonds)
     }
 
+    /// Energy stored in the bonds (J): lattice bonds and, for
+    /// [`Coupling::Interface`], the links (the spheres' halves of the
+    /// ghost–sphere bonds), each ½ k_n d_n² + ½ k_s |d_t|² with its weight.
+    pub fn stored_energy(&self, stiffness: &BondStiffness) -> f64 {
+        let lattice: f64 = (self.bonds.iter().zip(&self.state))
+            .map(|(b, s)| s.energy(stiffness, b))
+            .sum();
+        let links: f64 = (self.link_bonds.iter().zip(&self.link_state))
+            .map(|(b, s)| s.energy(stiffness, b))
+            .sum();
+        lattice + links
+    }
+
     /// Each bond's force on its particle i (weights included), with i and j:
     /// lattice bonds first, then links (i = sphere, j = ghost).
     pub fn bond_force_list(&self, stiffness: &BondStiffness) -> Vec<(usize, usize, Vector3<f64>)> {

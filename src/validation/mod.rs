@@ -8,6 +8,7 @@ pub mod fede_bar;
 pub mod fede_coupling;
 pub mod fede_heat;
 pub mod fede_patch;
+pub mod fede_wave;
 pub mod lumped;
 pub mod pipe_network;
 pub mod semidiscrete;

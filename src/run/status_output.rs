@@ -188,15 +188,14 @@ impl StatusOutput {
     /// Collective. The status of each face of the block, from the pairs'
     /// and gap links' faces (any rank's).
     fn statuses(&self, comm: &SimpleCommunicator, contacts: &ContactSet, sliding: f64) -> Vec<u8> {
-        let rows = status_rows(contacts, sliding);
-        let hash = crate::parallel::fingerprint(rows.iter().copied());
+        let hash = crate::parallel::fingerprint(status_words(contacts, sliding));
         let mine = u8::from(self.last.borrow().as_ref().is_some_and(|(k, _)| *k == hash));
         let mut all = 0u8;
         comm.all_reduce_into(&mine, &mut all, SystemOperation::min());
         if all == 1 {
             return self.last.borrow().as_ref().expect("kept").1.clone();
         }
-        let out = self.compute_statuses(comm, rows);
+        let out = self.compute_statuses(comm, status_rows(contacts, sliding));
         *self.last.borrow_mut() = Some((hash, out.clone()));
         out
     }
@@ -340,30 +339,33 @@ fn count(comm: &SimpleCommunicator, status: &[u8]) -> StatusCounts {
 }
 
 /// The faces that this rank's pairs and gap links touch, one word per
-/// element (ascending): its id in the high 32 bits, then its closed,
-/// sliding and near-field face bits in bytes 0, 1 and 2. (Rows of four
-/// floats a pair's tet, sent unmerged, were the peak of the N = 2000
-/// heat-up on 8 ranks.)
-fn status_rows(contacts: &ContactSet, sliding: f64) -> Vec<u64> {
+/// pair's tet and gap link's side: the element id in the high 32 bits,
+/// then its closed, sliding and near-field face bits in bytes 0, 1 and 2.
+fn status_words(contacts: &ContactSet, sliding: f64) -> impl Iterator<Item = u64> + '_ {
     let word = |gid: u32, closed: u8, slides: u8, near: u8| {
         u64::from(gid) << 32 | u64::from(closed) | u64::from(slides) << 8 | u64::from(near) << 16
     };
-    let mut rows = Vec::with_capacity(2 * (contacts.local.len() + contacts.gaps.len()));
-    for (p, d) in contacts.local.iter().zip(&contacts.dofs) {
-        let slides = d.slip > sliding;
-        for (gid, faces) in [
-            (p.target, p.surface.faces_target),
-            (p.contactor, p.surface.faces_contactor),
-        ] {
-            let s = if slides { faces } else { 0 };
-            rows.push(word(gid, faces, s, 0));
-        }
-    }
-    for l in &contacts.gaps {
-        for k in 0..2 {
-            rows.push(word(l.tets[k], 0, 0, 1u8 << l.faces[k]));
-        }
-    }
+    let pairs = contacts
+        .local
+        .iter()
+        .zip(&contacts.dofs)
+        .flat_map(move |(p, d)| {
+            let s = |faces: u8| if d.slip > sliding { faces } else { 0 };
+            let (t, c) = (p.surface.faces_target, p.surface.faces_contactor);
+            [word(p.target, t, s(t), 0), word(p.contactor, c, s(c), 0)]
+        });
+    let gaps = contacts
+        .gaps
+        .iter()
+        .flat_map(move |l| [0, 1].map(|k| word(l.tets[k], 0, 0, 1u8 << l.faces[k])));
+    pairs.chain(gaps)
+}
+
+/// [`status_words`] merged to one word per element, ascending (rows of
+/// four floats a pair's tet, sent unmerged, were the peak of the N = 2000
+/// heat-up on 8 ranks).
+fn status_rows(contacts: &ContactSet, sliding: f64) -> Vec<u64> {
+    let mut rows: Vec<u64> = status_words(contacts, sliding).collect();
     rows.sort_unstable();
     // One word per element: the bits of its rows or'ed.
     rows.dedup_by(|next, kept| {

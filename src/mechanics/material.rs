@@ -22,6 +22,17 @@ pub struct ElasticMaterial {
 }
 
 impl ElasticMaterial {
+    /// A purely elastic material: no thermal expansion, no viscosity.
+    pub fn elastic(young: f64, poisson: f64, density: f64) -> Self {
+        ElasticMaterial {
+            young,
+            poisson,
+            density,
+            expansion: 0.0,
+            viscosity: 0.0,
+        }
+    }
+
     /// Lamé constants `(mu, lambda)` (Pa).
     pub fn lame(&self) -> (f64, f64) {
         let (e, nu) = (self.young, self.poisson);

@@ -94,13 +94,7 @@ impl Cantilever {
 
     /// The material (no expansion, no viscosity).
     pub fn material(&self) -> ElasticMaterial {
-        ElasticMaterial {
-            young: self.young,
-            poisson: self.poisson,
-            density: self.density,
-            expansion: 0.0,
-            viscosity: 0.0,
-        }
+        ElasticMaterial::elastic(self.young, self.poisson, self.density)
     }
 
     /// Second moment of area I = W H³/12 (m⁴).

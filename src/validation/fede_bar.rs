@@ -184,20 +184,16 @@ impl CoupledBar {
     /// moments `s.pf`, `s.pm`, over a step `dt`; records each element's
     /// strain energy.
     pub fn forces(&mut self, s: &mut BarState, dt: f64) -> Result<(), CantileverError> {
-        for (e, (h, r)) in self.hexes.iter().zip(&self.refs).enumerate() {
-            let res = hex8_forces(
-                r,
-                &self.material,
-                &h.map(|p| s.x[p as usize]),
-                &h.map(|p| s.v[p as usize]),
-                ThermalState::default(),
-            )
-            .map_err(|err| err.at_element(e))?;
-            for (p, fe) in h.iter().zip(res.forces) {
-                s.f[*p as usize] += fe;
-            }
-            self.strain_energy[e] = res.strain_energy;
-        }
+        let energy = &mut self.strain_energy;
+        add_hex_forces(
+            &self.hexes,
+            &self.refs,
+            &self.material,
+            &s.x,
+            &s.v,
+            &mut s.f,
+            |e, w| energy[e] = w,
+        )?;
         s.pf.iter_mut().for_each(|z| *z = Vector3::zeros());
         s.pm.iter_mut().for_each(|z| *z = Vector3::zeros());
         self.layer.add_forces(
@@ -224,4 +220,33 @@ impl CoupledBar {
             .sum::<f64>()
             / 8.0
     }
+}
+
+/// Adds the elastic forces of the Hex8 elements `hexes` (references
+/// `refs`) at positions `x` and velocities `v` to `f`, handing each
+/// element's strain energy to `energy`.
+pub(super) fn add_hex_forces(
+    hexes: &[[u32; 8]],
+    refs: &[Hex8Reference],
+    material: &ElasticMaterial,
+    x: &[Vector3<f64>],
+    v: &[Vector3<f64>],
+    f: &mut [Vector3<f64>],
+    mut energy: impl FnMut(usize, f64),
+) -> Result<(), CantileverError> {
+    for (e, (h, r)) in hexes.iter().zip(refs).enumerate() {
+        let res = hex8_forces(
+            r,
+            material,
+            &h.map(|p| x[p as usize]),
+            &h.map(|p| v[p as usize]),
+            ThermalState::default(),
+        )
+        .map_err(|err| err.at_element(e))?;
+        for (p, fe) in h.iter().zip(res.forces) {
+            f[*p as usize] += fe;
+        }
+        energy(e, res.strain_energy);
+    }
+    Ok(())
 }

@@ -251,19 +251,15 @@ impl Model {
         s.f.iter_mut().for_each(|a| *a = Vector3::zeros());
         s.pf.iter_mut().for_each(|a| *a = Vector3::zeros());
         s.pm.iter_mut().for_each(|a| *a = Vector3::zeros());
-        for (e, (hx, re)) in self.hexes.iter().zip(&self.refs).enumerate() {
-            let res = hex8_forces(
-                re,
-                &self.material,
-                &hx.map(|p| s.x[p as usize]),
-                &hx.map(|p| s.v[p as usize]),
-                ThermalState::default(),
-            )
-            .map_err(|err| err.at_element(e))?;
-            for (p, fe) in hx.iter().zip(res.forces) {
-                s.f[*p as usize] += fe;
-            }
-        }
+        super::fede_bar::add_hex_forces(
+            &self.hexes,
+            &self.refs,
+            &self.material,
+            &s.x,
+            &s.v,
+            &mut s.f,
+            |_, _| {},
+        )?;
         self.layer.add_forces(
             &self.stiffness,
             &self.hexes,

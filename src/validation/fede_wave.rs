@@ -103,13 +103,7 @@ impl WaveBar {
 
     /// The material (no expansion, no viscosity).
     pub fn material(&self) -> ElasticMaterial {
-        ElasticMaterial {
-            young: self.young,
-            poisson: self.poisson,
-            density: self.density,
-            expansion: 0.0,
-            viscosity: 0.0,
-        }
+        ElasticMaterial::elastic(self.young, self.poisson, self.density)
     }
 
     /// Start and end (m) of region 0 (FE), 1 (DE) and 2 (FE).

@@ -53,16 +53,20 @@ pub struct Lattice {
     pub radius: f64,
     /// Spheres per axis.
     pub counts: [usize; 3],
-    /// Sphere centres (m); sphere (i, j, k) has index i + n0 (j + n1 k).
+    /// Sphere centres (m); on a whole box, sphere (i, j, k) has index
+    /// i + n0 (j + n1 k).
     pub centres: Vec<[f64; 3]>,
+    /// Per cell i + n0 (j + n1 k) of the box, its sphere, or `u32::MAX`
+    /// where [`cubic_lattice_where`] left the cell empty.
+    pub grid: Vec<u32>,
     /// Bonds, each once.
     pub bonds: Vec<LatticeBond>,
 }
 
 impl Lattice {
-    /// Index of sphere (i, j, k).
+    /// Index of sphere (i, j, k) (`u32::MAX` as usize for an empty cell).
     pub fn index(&self, i: usize, j: usize, k: usize) -> usize {
-        i + self.counts[0] * (j + self.counts[1] * k)
+        self.grid[i + self.counts[0] * (j + self.counts[1] * k)] as usize
     }
 
     /// Volume of the cube of side 2r each sphere stands for (m³).
@@ -80,6 +84,20 @@ pub fn cubic_lattice(
     hi: [f64; 3],
     radius: f64,
     corners: bool,
+) -> Result<Lattice, MeshError> {
+    cubic_lattice_where(lo, hi, radius, corners, |_| true)
+}
+
+/// The spheres of [`cubic_lattice`]`(lo, hi, radius, corners)` whose
+/// centres `keep` accepts, numbered in the box's cell order, each bonded to
+/// its kept neighbours; a bond's boundary weight counts a missing
+/// neighbour as outside the body (module docs).
+pub fn cubic_lattice_where(
+    lo: [f64; 3],
+    hi: [f64; 3],
+    radius: f64,
+    corners: bool,
+    keep: impl Fn([f64; 3]) -> bool,
 ) -> Result<Lattice, MeshError> {
     if !(radius.is_finite() && radius > 0.0) {
         return Err(MeshError::InvalidParameter(format!(
@@ -103,13 +121,18 @@ pub fn cubic_lattice(
         counts.iter().map(|&c| c as u128).product(),
     )?;
     let mut centres = Vec::with_capacity(counts[0] * counts[1] * counts[2]);
+    let mut grid = Vec::with_capacity(counts[0] * counts[1] * counts[2]);
     for k in 0..counts[2] {
         for j in 0..counts[1] {
             for i in 0..counts[0] {
                 let c = [i, j, k];
-                centres.push(std::array::from_fn(|a| {
-                    lo[a] + radius * (2 * c[a] + 1) as f64
-                }));
+                let x = std::array::from_fn(|a| lo[a] + radius * (2 * c[a] + 1) as f64);
+                if keep(x) {
+                    grid.push(centres.len() as u32);
+                    centres.push(x);
+                } else {
+                    grid.push(u32::MAX);
+                }
             }
         }
     }
@@ -128,15 +151,23 @@ pub fn cubic_lattice(
     }
     let mut bonds = Vec::new();
     let n = counts.map(|c| c as i64);
+    // The sphere of cell c, if the cell is in the box and kept.
+    let sphere = |c: [i64; 3]| {
+        ((0..3).all(|a| c[a] >= 0 && c[a] < n[a]))
+            .then(|| grid[(c[0] + n[0] * (c[1] + n[1] * c[2])) as usize])
+            .filter(|&g| g != u32::MAX)
+    };
     for k in 0..n[2] {
         for j in 0..n[1] {
             for i in 0..n[0] {
-                let a = (i + n[0] * (j + n[1] * k)) as u32;
+                let Some(a) = sphere([i, j, k]) else {
+                    continue;
+                };
                 for o in &offsets {
                     let (p, q, r) = (i + o[0], j + o[1], k + o[2]);
-                    if p < 0 || q < 0 || r < 0 || p >= n[0] || q >= n[1] || r >= n[2] {
+                    let Some(b) = sphere([p, q, r]) else {
                         continue;
-                    }
+                    };
                     let kind = match o.iter().map(|c| c * c).sum::<i64>() {
                         1 => BondKind::Face,
                         2 => BondKind::Edge,
@@ -145,12 +176,10 @@ pub fn cubic_lattice(
                     if kind == BondKind::Corner && !corners {
                         continue;
                     }
-                    let b = (p + n[0] * (q + n[1] * r)) as u32;
                     // Neighbours along ±o of a sphere: the bond itself plus the opposite one if present.
-                    let inside = |c: [i64; 3]| (0..3).all(|a| c[a] >= 0 && c[a] < n[a]);
                     let share = |c: [i64; 3], sign: i64| {
                         let back = [c[0] + sign * o[0], c[1] + sign * o[1], c[2] + sign * o[2]];
-                        if inside(back) {
+                        if sphere(back).is_some() {
                             1.0
                         } else {
                             2.0
@@ -171,8 +200,88 @@ pub fn cubic_lattice(
         radius,
         counts,
         centres,
+        grid,
         bonds,
     })
+}
+
+/// "This part of the body is particles" (issue 21): the lattice of spheres
+/// of radius `radius` whose centres lie in the elements of set `set` of
+/// `mesh`, on the grid of diameters from the set's lowest corner (its box
+/// rounded up to whole diameters). An error names a missing set (with the
+/// sets there are) or a set too thin for one sphere.
+pub fn lattice_in_element_set(
+    mesh: &super::TetMesh,
+    set: &str,
+    radius: f64,
+    corners: bool,
+) -> Result<Lattice, MeshError> {
+    let elements = mesh.elem_sets.get(set).ok_or_else(|| {
+        let known: Vec<&str> = mesh.elem_sets.keys().map(String::as_str).collect();
+        MeshError::InvalidParameter(format!(
+            "no element set `{set}` for the lattice (sets: {})",
+            known.join(", ")
+        ))
+    })?;
+    let corners_of = |e: u32| mesh.tets[e as usize].map(|v| mesh.nodes[v as usize]);
+    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    for &e in elements {
+        for x in corners_of(e) {
+            for a in 0..3 {
+                lo[a] = lo[a].min(x[a]);
+                hi[a] = hi[a].max(x[a]);
+            }
+        }
+    }
+    let d = 2.0 * radius;
+    if !(radius.is_finite() && radius > 0.0) || elements.is_empty() {
+        return Err(MeshError::InvalidParameter(format!(
+            "lattice in element set `{set}`: radius {radius} m on {} elements",
+            elements.len()
+        )));
+    }
+    let hi: [f64; 3] = std::array::from_fn(|a| lo[a] + d * ((hi[a] - lo[a]) / d).ceil().max(1.0));
+    // Each element marks the cells whose centres it holds (its box's cells only).
+    let n: [usize; 3] = std::array::from_fn(|a| ((hi[a] - lo[a]) / d).round() as usize);
+    let mut held = vec![false; n[0] * n[1] * n[2]];
+    for &e in elements {
+        let t = corners_of(e);
+        let planes = crate::geometry::TetPlanes::new(&t);
+        let range = |a: usize| {
+            let (mut l, mut h) = (f64::INFINITY, f64::NEG_INFINITY);
+            for x in &t {
+                l = l.min(x[a]);
+                h = h.max(x[a]);
+            }
+            let first = (((l - lo[a]) / d - 0.5).ceil().max(0.0)) as usize;
+            let last = (((h - lo[a]) / d - 0.5).floor() as i64).min(n[a] as i64 - 1);
+            (first, last)
+        };
+        let (rx, ry, rz) = (range(0), range(1), range(2));
+        for k in rz.0 as i64..=rz.1 {
+            for j in ry.0 as i64..=ry.1 {
+                for i in rx.0 as i64..=rx.1 {
+                    let c = [i, j, k].map(|v| v as usize);
+                    let x = std::array::from_fn(|a| lo[a] + radius * (2 * c[a] + 1) as f64);
+                    // A centre on a face shared by two elements counts once either way.
+                    if planes.contains(x, 1e-12 * d) {
+                        held[c[0] + n[0] * (c[1] + n[1] * c[2])] = true;
+                    }
+                }
+            }
+        }
+    }
+    let cell = |x: [f64; 3]| -> usize {
+        let c: [usize; 3] = std::array::from_fn(|a| ((x[a] - lo[a]) / d - 0.5).round() as usize);
+        c[0] + n[0] * (c[1] + n[1] * c[2])
+    };
+    let lattice = cubic_lattice_where(lo, hi, radius, corners, |x| held[cell(x)])?;
+    if lattice.centres.is_empty() {
+        return Err(MeshError::InvalidParameter(format!(
+            "lattice in element set `{set}`: no sphere of radius {radius} m has its centre in the set"
+        )));
+    }
+    Ok(lattice)
 }
 
 #[cfg(test)]
@@ -219,5 +328,94 @@ mod tests {
             .find(|b| b.i == corner && b.j == next)
             .unwrap();
         assert_eq!(edge.weight, 1.5);
+    }
+
+    /// The lattice of an element set that is a box is that box's lattice;
+    /// an L-shaped set keeps the spheres whose centres it holds, bonded to
+    /// their kept neighbours with weights from the kept neighbours alone.
+    #[test]
+    fn a_lattice_fills_an_element_set() {
+        let mut mesh = crate::mesh::generate::box_mesh([0.0; 3], [2.0, 1.0, 1.0], 0.25).unwrap();
+        mesh.add_box_set("right", [1.0, 0.0, 0.0], [2.0, 1.0, 1.0])
+            .unwrap();
+        let got = lattice_in_element_set(&mesh, "right", 0.125, true).unwrap();
+        let want = cubic_lattice([1.0, 0.0, 0.0], [2.0, 1.0, 1.0], 0.125, true).unwrap();
+        assert_eq!(got.centres.len(), 4 * 4 * 4);
+        for (a, b) in got.centres.iter().zip(&want.centres) {
+            assert!((0..3).all(|k| (a[k] - b[k]).abs() < 1e-12), "{a:?} {b:?}");
+        }
+        assert_eq!(got.bonds, want.bonds);
+
+        // L: the bottom half in y over the whole length, and the top half over x < 1.
+        let centroid = |e: usize| {
+            let t = mesh.tets[e].map(|v| mesh.nodes[v as usize]);
+            [0, 1, 2].map(|a| t.iter().map(|x| x[a]).sum::<f64>() / 4.0)
+        };
+        let l: Vec<u32> = (0..mesh.tets.len())
+            .filter(|&e| {
+                let c = centroid(e);
+                c[1] < 0.5 || c[0] < 1.0
+            })
+            .map(|e| e as u32)
+            .collect();
+        mesh.elem_sets.insert("L".into(), l);
+        let r = 0.125;
+        let got = lattice_in_element_set(&mesh, "L", r, true).unwrap();
+        // 8 × 2 × 4 spheres below y = 0.5 and 4 × 2 × 4 above it.
+        assert_eq!(got.centres.len(), 64 + 32);
+        let in_l = |x: [f64; 3]| {
+            (0.0..2.0).contains(&x[0])
+                && (0.0..1.0).contains(&x[1])
+                && (0.0..1.0).contains(&x[2])
+                && (x[1] < 0.5 || x[0] < 1.0)
+        };
+        assert!(got.centres.iter().all(|&x| in_l(x)));
+        // Every pair at 2r, 2√2 r, 2√3 r is bonded once, with the weight
+        // of its spheres' kept neighbours along the bond.
+        let mut want = Vec::new();
+        let d = 2.0 * r;
+        for (i, a) in got.centres.iter().enumerate() {
+            for (j, b) in got.centres.iter().enumerate().skip(i + 1) {
+                let o = [0, 1, 2].map(|k| ((b[k] - a[k]) / d).round() as i64);
+                let n2: i64 = o.iter().map(|c| c * c).sum();
+                if o.iter().any(|c| c.abs() > 1) {
+                    continue;
+                }
+                let kind = [BondKind::Face, BondKind::Edge, BondKind::Corner][n2 as usize - 1];
+                let share = |x: &[f64; 3], sign: f64| {
+                    let back = [0, 1, 2].map(|k| x[k] + sign * d * o[k] as f64);
+                    if in_l(back) {
+                        1.0
+                    } else {
+                        2.0
+                    }
+                };
+                let weight = 0.5 * (share(a, -1.0) + share(b, 1.0));
+                want.push((i as u32, j as u32, kind, weight));
+            }
+        }
+        let mut have: Vec<_> = got
+            .bonds
+            .iter()
+            .map(|b| (b.i, b.j, b.kind, b.weight))
+            .collect();
+        have.sort_by_key(|p| (p.0, p.1));
+        want.sort_by_key(|p| (p.0, p.1));
+        assert_eq!(have, want);
+        // Cells outside the L have no sphere.
+        assert_eq!(got.index(7, 3, 0), u32::MAX as usize);
+
+        let e = lattice_in_element_set(&mesh, "left", r, true)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("no element set `left`") && e.contains("right"),
+            "{e}"
+        );
+        mesh.elem_sets.insert("one".into(), vec![0]);
+        let e = lattice_in_element_set(&mesh, "one", 10.0, true)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("no sphere"), "{e}");
     }
 }

@@ -55,10 +55,11 @@ pub enum MeshError {
         version: String,
     },
 
-    /// A 3D element that is not a linear tetrahedron.
+    /// A 3D element of a type the reader does not take (a Tet4 reader meets
+    /// a hexahedron, a Hex8 reader a prism, either a quadratic element).
     #[error(
         "'{}': element with gmsh tag {gmsh_tag} (volume entity {entity}) has Gmsh type \
-         {type_code} ({type_name}); only linear tetrahedra (Gmsh type 4) are supported",
+         {type_code} ({type_name}); only {supported} are supported",
         .path.display()
     )]
     UnsupportedElement {
@@ -72,6 +73,8 @@ pub enum MeshError {
         type_code: i32,
         /// mshio's name of the element type (e.g. `Tet10`).
         type_name: String,
+        /// What the reader takes, e.g. `linear tetrahedra (Gmsh type 4)`.
+        supported: &'static str,
     },
 
     /// The Gmsh file is well-formed but its content cannot be turned into a

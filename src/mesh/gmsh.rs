@@ -28,6 +28,10 @@
 //! `$Nodes` section by a small scanner here, so dense tags in any block
 //! order are handled correctly.
 //!
+//! # Hex8 import ([`read_msh_hex8`])
+//! 8-node hexahedra for the FE–DE kernels, on the same parsing and errors;
+//! see the `hex` submodule.
+//!
 //! # Export ([`write_msh_ascii`])
 //! Writes MSH 4.1 ASCII: one volume entity and physical volume per body,
 //! one surface entity and physical surface per face set, `$PhysicalNames`.
@@ -61,15 +65,20 @@ pub fn read_msh(path: &Path) -> Result<TetMesh, MeshError> {
 /// Errors name the file, and where possible the line (ASCII) or byte offset
 /// (binary), the Gmsh element tag or the physical group.
 pub fn read_msh_with(path: &Path, opts: &ReadOptions) -> Result<TetMesh, MeshError> {
-    let bytes = std::fs::read(path).map_err(|source| MeshError::Read {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let bytes = read_bytes(path)?;
     let reader = Reader {
         path,
         bytes: &bytes,
     };
     reader.read(opts)
+}
+
+/// The bytes of the file at `path`.
+fn read_bytes(path: &Path) -> Result<Vec<u8>, MeshError> {
+    std::fs::read(path).map_err(|source| MeshError::Read {
+        path: path.to_path_buf(),
+        source,
+    })
 }
 
 /// Layout of the file as given by `$MeshFormat`.
@@ -78,6 +87,52 @@ struct Format {
     binary: bool,
     size_t: usize,
     big_endian: bool,
+}
+
+/// A parsed file: mshio's data plus what this module reads itself.
+struct Parsed {
+    msh: MshFile<u64, i32, f64>,
+    /// `$PhysicalNames`: (dim, physical tag) -> name.
+    names: HashMap<(i32, i32), String>,
+    fmt: Format,
+}
+
+/// The nodes kept by [`Reader::compact_nodes`].
+struct CompactNodes {
+    nodes: Vec<[f64; 3]>,
+    /// Gmsh tag of each kept node.
+    tags: Vec<u64>,
+    /// New index per index of the tag-sorted list (`u32::MAX`: dropped).
+    new_id: Vec<u32>,
+}
+
+/// Name of physical group (dim, tag): from `$PhysicalNames`, else
+/// `physical_<dim>_<tag>`.
+fn group_name(names: &HashMap<(i32, i32), String>, dim: i32, tag: i32) -> String {
+    names
+        .get(&(dim, tag))
+        .cloned()
+        .unwrap_or_else(|| format!("physical_{dim}_{tag}"))
+}
+
+/// Physical tags per (entity dim, entity tag).
+fn physical_tags(msh: &MshFile<u64, i32, f64>) -> HashMap<(i32, i32), Vec<i32>> {
+    let mut phys = HashMap::new();
+    if let Some(ent) = &msh.data.entities {
+        for p in &ent.points {
+            phys.insert((0, p.tag), p.physical_tags.clone());
+        }
+        for c in &ent.curves {
+            phys.insert((1, c.tag), c.physical_tags.clone());
+        }
+        for s in &ent.surfaces {
+            phys.insert((2, s.tag), s.physical_tags.clone());
+        }
+        for v in &ent.volumes {
+            phys.insert((3, v.tag), v.physical_tags.clone());
+        }
+    }
+    phys
 }
 
 struct Reader<'a> {
@@ -168,6 +223,12 @@ impl<'a> Reader<'a> {
     }
 
     fn read(&self, opts: &ReadOptions) -> Result<TetMesh, MeshError> {
+        let p = self.parse()?;
+        self.convert(p.msh, &p.names, p.fmt, opts)
+    }
+
+    /// The header, `$PhysicalNames` and mshio's parse of the whole file.
+    fn parse(&self) -> Result<Parsed, MeshError> {
         let fmt = self.read_format()?;
         let names = self.read_physical_names()?;
         let bytes = self.bytes;
@@ -187,7 +248,7 @@ impl<'a> Reader<'a> {
                 ))
             }
         };
-        self.convert(msh, &names, fmt, opts)
+        Ok(Parsed { msh, names, fmt })
     }
 
     /// Parses `$MeshFormat` ourselves: mshio's version error does not say
@@ -365,40 +426,13 @@ impl<'a> Reader<'a> {
         Ok(out)
     }
 
-    fn convert(
+    /// All nodes of `$Nodes` as (Gmsh tag, coordinates), sorted by tag;
+    /// an error if a tag is defined twice.
+    fn sorted_nodes(
         &self,
-        msh: MshFile<u64, i32, f64>,
-        names: &HashMap<(i32, i32), String>,
+        msh: &MshFile<u64, i32, f64>,
         fmt: Format,
-        opts: &ReadOptions,
-    ) -> Result<TetMesh, MeshError> {
-        let group_name = |dim: i32, tag: i32| {
-            names
-                .get(&(dim, tag))
-                .cloned()
-                .unwrap_or_else(|| format!("physical_{dim}_{tag}"))
-        };
-
-        // Physical tags per (entity dim, entity tag).
-        let mut phys: HashMap<(i32, i32), Vec<i32>> = HashMap::new();
-        if let Some(ent) = &msh.data.entities {
-            for p in &ent.points {
-                phys.insert((0, p.tag), p.physical_tags.clone());
-            }
-            for c in &ent.curves {
-                phys.insert((1, c.tag), c.physical_tags.clone());
-            }
-            for s in &ent.surfaces {
-                phys.insert((2, s.tag), s.physical_tags.clone());
-            }
-            for v in &ent.volumes {
-                phys.insert((3, v.tag), v.physical_tags.clone());
-            }
-        }
-        let no_phys: Vec<i32> = Vec::new();
-        let phys_of = |dim: i32, tag: i32| phys.get(&(dim, tag)).unwrap_or(&no_phys);
-
-        // ---- Nodes: (tag, coords), sorted by tag.
+    ) -> Result<Vec<(u64, [f64; 3])>, MeshError> {
         let nodes_sec = msh
             .data
             .nodes
@@ -452,15 +486,67 @@ impl<'a> Reader<'a> {
         if let Some(w) = all.windows(2).find(|w| w[0].0 == w[1].0) {
             return Err(self.invalid(format!("node tag {} is defined more than once", w[0].0)));
         }
+        Ok(all)
+    }
+
+    /// Index (into the tag-sorted node list) of node `tag`, used by the
+    /// element with Gmsh tag `elem_tag`.
+    fn node_index(&self, index: &TagIndex, tag: u64, elem_tag: u64) -> Result<u32, MeshError> {
+        index.get(tag).ok_or_else(|| {
+            self.invalid(format!(
+                "element with gmsh tag {elem_tag} refers to node tag {tag}, \
+                 which is not defined in $Nodes"
+            ))
+        })
+    }
+
+    /// Keeps the nodes marked `used`, renumbered 0-based in tag order:
+    /// (coordinates, Gmsh tags, new index per old index or `u32::MAX`).
+    /// Errors on a non-finite coordinate of a kept node.
+    fn compact_nodes(
+        &self,
+        all: &[(u64, [f64; 3])],
+        used: &[bool],
+    ) -> Result<CompactNodes, MeshError> {
+        let mut new_id = vec![u32::MAX; all.len()];
+        let mut nodes = Vec::new();
+        let mut node_tags = Vec::new();
+        for (i, id) in new_id.iter_mut().enumerate() {
+            if used[i] {
+                let (tag, x) = all[i];
+                if !x.iter().all(|c| c.is_finite()) {
+                    return Err(self.invalid(format!(
+                        "node with gmsh tag {tag} has a non-finite coordinate ({}, {}, {})",
+                        x[0], x[1], x[2]
+                    )));
+                }
+                *id = u32::try_from(nodes.len())
+                    .map_err(|_| MeshError::TooLarge(format!("more than {} nodes", u32::MAX)))?;
+                nodes.push(x);
+                node_tags.push(tag);
+            }
+        }
+        Ok(CompactNodes {
+            nodes,
+            tags: node_tags,
+            new_id,
+        })
+    }
+
+    fn convert(
+        &self,
+        msh: MshFile<u64, i32, f64>,
+        names: &HashMap<(i32, i32), String>,
+        fmt: Format,
+        opts: &ReadOptions,
+    ) -> Result<TetMesh, MeshError> {
+        let group_name = |dim: i32, tag: i32| group_name(names, dim, tag);
+        let phys = physical_tags(&msh);
+        let no_phys: Vec<i32> = Vec::new();
+        let phys_of = |dim: i32, tag: i32| phys.get(&(dim, tag)).unwrap_or(&no_phys);
+        let all = self.sorted_nodes(&msh, fmt)?;
         let index = TagIndex::new(&all);
-        let lookup = |tag: u64, elem_tag: u64| {
-            index.get(tag).ok_or_else(|| {
-                self.invalid(format!(
-                    "element with gmsh tag {elem_tag} refers to node tag {tag}, \
-                     which is not defined in $Nodes"
-                ))
-            })
-        };
+        let lookup = |tag: u64, elem_tag: u64| self.node_index(&index, tag, elem_tag);
 
         // ---- Elements.
         struct RawTet {
@@ -496,6 +582,7 @@ impl<'a> Reader<'a> {
                                 entity: etag,
                                 type_code: block.element_type as i32,
                                 type_name: format!("{:?}", block.element_type),
+                                supported: "linear tetrahedra (Gmsh type 4)",
                             });
                         }
                         continue;
@@ -631,24 +718,11 @@ impl<'a> Reader<'a> {
                 used[v as usize] = true;
             }
         }
-        let mut new_id = vec![u32::MAX; all.len()];
-        let mut nodes = Vec::new();
-        let mut node_tags = Vec::new();
-        for (i, id) in new_id.iter_mut().enumerate() {
-            if used[i] {
-                let (tag, x) = all[i];
-                if !x.iter().all(|c| c.is_finite()) {
-                    return Err(self.invalid(format!(
-                        "node with gmsh tag {tag} has a non-finite coordinate ({}, {}, {})",
-                        x[0], x[1], x[2]
-                    )));
-                }
-                *id = u32::try_from(nodes.len())
-                    .map_err(|_| MeshError::TooLarge(format!("more than {} nodes", u32::MAX)))?;
-                nodes.push(x);
-                node_tags.push(tag);
-            }
-        }
+        let CompactNodes {
+            nodes,
+            tags: node_tags,
+            new_id,
+        } = self.compact_nodes(&all, &used)?;
         let tets: Vec<[u32; 4]> = raw_tets
             .iter()
             .map(|t| t.nodes.map(|v| new_id[v as usize]))
@@ -902,7 +976,9 @@ fn describe_parse_error(bytes: &[u8], e: &mshio::MshParserError<&[u8]>) -> (Opti
     (offset_of(input), msg)
 }
 
+mod hex;
 mod write;
+pub use hex::read_msh_hex8;
 pub use write::write_msh_ascii;
 
 #[cfg(test)]

@@ -1,8 +1,9 @@
 //! Tet4 meshes: storage, boundary faces, orientation/quality checks, Gmsh
 //! import and structured generators (box, cylinders, nut, container).
 //!
-//! Self-contained: depends only on std, nalgebra, mshio and thiserror, so it
-//! unit-tests without MPI or PETSc. Node and element indices are `u32`
+//! Self-contained: depends only on std, nalgebra, mshio and thiserror (and
+//! the pure Hex8 shape functions of `crate::mechanics::hex8` for the Gmsh
+//! Hex8 reader), so it unit-tests without MPI or PETSc. Node and element indices are `u32`
 //! and 0-based; a mesh has at most [`MAX_ELEMENTS`] elements.
 //!
 //! Submodules:
@@ -15,8 +16,9 @@
 //! - `sets`: node sets from face sets ([`TetMesh::nodes_of_face_set`],
 //!   [`TetMesh::set_nodes`]) and [`TetMesh::append`] for multi-body models.
 //! - [`generate`]: structured generators ([`generate::box_mesh`]).
-//! - [`gmsh`]: MSH 4.1 import (ASCII and binary, [`gmsh::read_msh`]) and
-//!   ASCII export ([`gmsh::write_msh_ascii`]).
+//! - [`gmsh`]: MSH 4.1 import (ASCII and binary, [`gmsh::read_msh`]; Hex8
+//!   for seed 002, [`gmsh::read_msh_hex8`]) and ASCII export
+//!   ([`gmsh::write_msh_ascii`]).
 //! - [`nut`]: structured hexagonal-nut particle ([`nut::nut_mesh`], the
 //!   144-tet default for seed 000 sec 6 [`nut::nut_mesh_default`]; template
 //!   file `scenarios/meshes/nut-144.msh`).

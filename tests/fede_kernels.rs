@@ -7,8 +7,12 @@ use nalgebra::Vector3;
 
 use fdem::mechanics::bond::{sphere_mass_inertia, BondStiffness};
 
+use fdem::mechanics::hex8::hex8_jacobian;
+use fdem::mechanics::hex8_element::Hex8Reference;
+use fdem::mesh::gmsh::read_msh_hex8;
+use fdem::mesh::hex8::{hex_box, HexMesh};
 use fdem::validation::cantilever::{
-    de_cantilever, fe_cantilever, Cantilever, Relaxation, StaticSolution,
+    de_cantilever, fe_cantilever, fe_cantilever_on, Cantilever, Relaxation, StaticSolution,
 };
 use fdem::validation::cantilever_plot::write_fig8;
 use fdem::validation::coupled_cantilever::coupled_cantilever;
@@ -585,4 +589,85 @@ fn wave_case(coupling: Coupling) {
     }
     assert!(worst < 0.03, "arrival from X = 0: {worst}");
     assert!(fe_de < 0.05 && all < 0.05, "{fe_de} {all}");
+}
+
+/// `mesh` as an ASCII MSH 4.1 file: one volume entity; node tags 1.. and
+/// element tags 1.. in mesh order, but written in two node blocks and with
+/// the elements in reverse, so the reader's sorting is exercised. Gmsh's
+/// hexahedron node order equals seed 002 Table 1 (Gmsh reference manual,
+/// "Node ordering"), so the connectivity is written as stored.
+fn write_hex_msh(path: &std::path::Path, mesh: &HexMesh) {
+    use std::fmt::Write as _;
+    let (nn, ne) = (mesh.nodes.len(), mesh.hexes.len());
+    let mut s = String::from("$MeshFormat\n4.1 0 8\n$EndMeshFormat\n");
+    s += "$Entities\n0 0 0 1\n1 0 0 0 1 1 1 0 0\n$EndEntities\n";
+    let _ = writeln!(s, "$Nodes\n2 {nn} 1 {nn}");
+    let half = nn / 2;
+    for range in [half..nn, 0..half] {
+        let _ = writeln!(s, "3 1 0 {}", range.len());
+        for p in range.clone() {
+            let _ = writeln!(s, "{}", p + 1);
+        }
+        for p in range {
+            let x = mesh.nodes[p];
+            let _ = writeln!(s, "{} {} {}", x[0], x[1], x[2]);
+        }
+    }
+    let _ = writeln!(s, "$EndNodes\n$Elements\n1 {ne} 1 {ne}\n3 1 5 {ne}");
+    for (e, h) in mesh.hexes.iter().enumerate().rev() {
+        let tags: Vec<String> = h.iter().map(|&p| (p + 1).to_string()).collect();
+        let _ = writeln!(s, "{} {}", e + 1, tags.join(" "));
+    }
+    s += "$EndElements\n";
+    std::fs::write(path, s).unwrap();
+}
+
+#[test]
+fn gmsh_hex8_cantilever_matches_hex_box() {
+    // CI size: the seed's section on L = 10 mm, 1 mm cubes.
+    let beam = Cantilever {
+        length: 10e-3,
+        ..Cantilever::seed002()
+    };
+    let mesh = hex_box([0.0; 3], [beam.length, beam.width, beam.height], [10, 4, 2]).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("beam.msh");
+    write_hex_msh(&path, &mesh);
+    let read = read_msh_hex8(&path).unwrap();
+    assert_eq!(read.nodes, mesh.nodes);
+    assert_eq!(read.hexes, mesh.hexes);
+    let rel = |a: f64, b: f64| ((a - b) / b).abs();
+    for e in 0..mesh.hexes.len() {
+        let r0 = Hex8Reference::from_coords(&mesh.element_coords(e)).unwrap();
+        let r1 = Hex8Reference::from_coords(&read.element_coords(e)).unwrap();
+        let v = |m: &HexMesh| {
+            let x = m.element_coords(e).map(Vector3::from);
+            8.0 * hex8_jacobian(&x, &Vector3::zeros()).determinant()
+        };
+        assert!(rel(v(&read), v(&mesh)) < 1e-12, "element {e} volume");
+        let (m0, m1) = (
+            r0.lumped_masses(beam.density),
+            r1.lumped_masses(beam.density),
+        );
+        for (a, b) in m1.iter().zip(&m0) {
+            assert!(rel(*a, *b) < 1e-12, "element {e} lumped mass");
+        }
+    }
+    let relax = Relaxation {
+        tolerance: 1e-5,
+        ..Relaxation::default()
+    };
+    let s0 = fe_cantilever(&beam, 1e-3, &relax).unwrap();
+    let s1 = fe_cantilever_on(&beam, &read, &relax).unwrap();
+    eprintln!(
+        "Gmsh Hex8 beam: tip {:.6e} m vs hex_box {:.6e} m, {} steps",
+        s1.tip, s0.tip, s1.steps
+    );
+    assert_eq!(s1.tip_x, s0.tip_x);
+    assert!(rel(s1.tip, s0.tip) < 1e-12, "{} vs {}", s1.tip, s0.tip);
+    assert_eq!(s1.profile.len(), s0.profile.len());
+    for (a, b) in s1.profile.iter().zip(&s0.profile) {
+        assert_eq!(a.0, b.0);
+        assert!((a.1 - b.1).abs() <= 1e-12 * s0.tip, "{a:?} vs {b:?}");
+    }
 }

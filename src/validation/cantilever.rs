@@ -29,7 +29,7 @@ use crate::mechanics::bond::{
 };
 use crate::mechanics::hex8_element::{hex8_forces, Hex8Reference};
 use crate::mechanics::{ElasticMaterial, MechanicsError, ThermalState};
-use crate::mesh::hex8::hex_box;
+use crate::mesh::hex8::{hex_box, HexMesh};
 use crate::mesh::lattice::cubic_lattice;
 use crate::mesh::MeshError;
 
@@ -187,8 +187,8 @@ pub(crate) fn relax(
     Err(CantileverError::NotSettled { steps, change })
 }
 
-/// The beam meshed with cubes of side `size` (Hex8), relaxed to its static
-/// deflection.
+/// The beam meshed with cubes of side `size` (Hex8, [`hex_box`]), relaxed
+/// to its static deflection by [`fe_cantilever_on`].
 pub fn fe_cantilever(
     beam: &Cantilever,
     size: f64,
@@ -196,6 +196,22 @@ pub fn fe_cantilever(
 ) -> Result<StaticSolution, CantileverError> {
     let n = [beam.length, beam.width, beam.height].map(|d| ((d / size).round() as usize).max(1));
     let mesh = hex_box([0.0; 3], [beam.length, beam.width, beam.height], n)?;
+    fe_cantilever_on(beam, &mesh, relaxation)
+}
+
+/// The beam as the given Hex8 mesh (e.g. read from Gmsh), relaxed to its
+/// static deflection. The mesh is taken as a box aligned with the axes:
+/// the nodes at the smallest x are clamped, the load goes to the nodes at
+/// the largest x (the tip), weighted ½ on the faces y or z = min or max of
+/// the tip face (¼ at its corners); a cross-section of the profile is the
+/// set of nodes of one x value, as in a structured mesh. `beam` gives the
+/// material, the load and the damping (its first frequency); the mesh
+/// should span the beam.
+pub fn fe_cantilever_on(
+    beam: &Cantilever,
+    mesh: &HexMesh,
+    relaxation: &Relaxation,
+) -> Result<StaticSolution, CantileverError> {
     let material = beam.material();
     let x0: Vec<Vector3<f64>> = mesh.nodes.iter().map(|p| Vector3::from(*p)).collect();
     let mut refs = Vec::with_capacity(mesh.hexes.len());
@@ -209,19 +225,26 @@ pub fn fe_cantilever(
         dt = dt.min(0.9 * r.critical_dt(&material));
         refs.push(r);
     }
-    let mut fixed = vec![false; x0.len()];
-    for &p in &mesh.node_sets["xmin"] {
-        fixed[p as usize] = true;
-    }
-    let np = [n[0] + 1, n[1] + 1, n[2] + 1];
-    let tip_nodes = &mesh.node_sets["xmax"];
+    let lo: [f64; 3] =
+        std::array::from_fn(|a| x0.iter().map(|p| p[a]).fold(f64::INFINITY, f64::min));
+    let hi: [f64; 3] =
+        std::array::from_fn(|a| x0.iter().map(|p| p[a]).fold(f64::NEG_INFINITY, f64::max));
+    let fixed: Vec<bool> = x0.iter().map(|p| p[0] == lo[0]).collect();
+    let tip_nodes: Vec<u32> = (0..x0.len() as u32)
+        .filter(|&p| x0[p as usize][0] == hi[0])
+        .collect();
     let weights: Vec<f64> = tip_nodes
         .iter()
         .map(|&p| {
-            let p = p as usize;
-            let (j, k) = ((p / np[0]) % np[1], p / (np[0] * np[1]));
-            let edge = |c: usize, m: usize| if c == 0 || c == m { 0.5 } else { 1.0 };
-            edge(j, n[1]) * edge(k, n[2])
+            let edge = |a: usize| {
+                let c = x0[p as usize][a];
+                if c == lo[a] || c == hi[a] {
+                    0.5
+                } else {
+                    1.0
+                }
+            };
+            edge(1) * edge(2)
         })
         .collect();
     let wsum: f64 = weights.iter().sum();
@@ -261,19 +284,23 @@ pub fn fe_cantilever(
             .sum();
         Ok(u / wsum)
     })?;
-    let mut sums = vec![(0.0, 0usize); np[0]];
+    let mut sections: Vec<f64> = x0.iter().map(|p| p[0]).collect();
+    sections.sort_by(f64::total_cmp);
+    sections.dedup();
+    let mut sums = vec![(0.0, 0usize); sections.len()];
     for p in 0..x.len() {
-        let s = &mut sums[p % np[0]];
+        let i = sections.partition_point(|&s| s < x0[p][0]);
+        let s = &mut sums[i];
         s.0 += x0[p][2] - x[p][2];
         s.1 += 1;
     }
-    let profile = sums
+    let profile = sections
         .iter()
-        .enumerate()
-        .map(|(i, (s, c))| (x0[i][0], s / *c as f64))
+        .zip(&sums)
+        .map(|(&xs, (s, c))| (xs, s / *c as f64))
         .collect();
     Ok(StaticSolution {
-        tip_x: beam.length,
+        tip_x: hi[0],
         tip,
         profile,
         steps,

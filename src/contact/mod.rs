@@ -1,6 +1,7 @@
 //! Contact between bodies: the one contact search (`search`: candidate
 //! pairs and who finds them), the thermal narrow phase and contact surface
-//! of seed 000 sec 3.1 (`detect`, `surface`), the contact conductance
+//! of seed 000 sec 3.1 (`detect`, `surface`), the search of a body's tets
+//! against its own (`self_search`, self-contact of jointed bodies), the contact conductance
 //! blocks of eqs 24–30, and the penalty contact (`penalty`).
 //!
 //! Pure: no MPI or PETSc. The caller says which tets it owns, so that
@@ -11,6 +12,7 @@ mod detect;
 pub mod gap;
 pub mod penalty;
 pub mod search;
+pub mod self_search;
 mod surface;
 pub mod table;
 mod tets;

@@ -328,7 +328,8 @@ impl ExplicitDomain {
         };
         let (held, fixed) = (&self.body_held, &self.body_fixed);
         let tets = og.body_tets(|b| held[b as usize], |b| fixed[b as usize]);
-        let found = og.search(&mut self.search, &tets, opts);
+        let mut found = og.search(&mut self.search, &tets, opts);
+        found.extend(self.self_contact.candidates(og, &tets, margin));
         // Not in the seeds: the penalty potential sums over pairs of
         // boundary tets (a face on the surface), like the contact
         // surface of seed 000 sec 3.1; a tet that meets the surface only

@@ -162,6 +162,8 @@ pub struct ExplicitDomain {
     pub(super) strain_energy: f64,
     /// Cohesive joints of the jointed bodies held here.
     pub(super) joints: super::joints::DomainJoints,
+    /// Self-contact of the jointed bodies held here.
+    pub(super) self_contact: super::self_contact::SelfContact,
     pub(super) contact_energy: f64,
     /// Energy dissipated by contact damping and friction and by the mass
     /// damping, this rank's share (J).
@@ -268,6 +270,7 @@ impl ExplicitDomain {
             comm,
             super::joints::DomainJoints::new(model, part, &body_held),
         )?;
+        let self_contact = super::self_contact::SelfContact::new(part, &body_held);
         let mut dom = ExplicitDomain {
             n_owned,
             node_gid: part.node_gid.clone(),
@@ -384,6 +387,7 @@ impl ExplicitDomain {
             touching: vec![0; model.bodies.len()],
             strain_energy: 0.0,
             joints,
+            self_contact,
             contact_energy: 0.0,
             dissipated: 0.0,
             external_work: 0.0,

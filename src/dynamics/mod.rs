@@ -24,7 +24,8 @@
 //! need. A contact pair joins two boundary tets of different bodies and is
 //! found by the rank owning one of them, `a` (the free body's tet against
 //! a held body, else the lower body's), so every pair is counted once over
-//! the ranks; the found pairs are then shared out so every rank has about
+//! the ranks (a jointed body's pair with itself, from its lower tet, on the
+//! one rank that holds the body: `self_contact`); the found pairs are then shared out so every rank has about
 //! the same contact work (`balance_pairs`). With `free_damping`, step 3
 //! first agrees (one all-reduce over the bodies) on which bodies touch.
 //!
@@ -44,6 +45,8 @@
 //! - `pair_sum`: the touching pairs' share of it, routed each substep to
 //!   the nodes' owners with their keys;
 //! - `state`: energies, output fields, checkpoint save and restore;
+//! - `self_contact`: which jointed bodies search themselves, and which of
+//!   their tets shared a vertex (those never pair);
 //! - `joints`: the cohesive joints of the jointed bodies (issue 19),
 //!   whose forces are added to the owned nodes after the force sum, the
 //!   crack faces they leave, and their rows of the joint output.
@@ -55,6 +58,7 @@ mod force_sum;
 mod gaps;
 mod joints;
 mod pair_sum;
+mod self_contact;
 mod state;
 mod substep;
 mod time_step;

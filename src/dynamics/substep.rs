@@ -168,8 +168,11 @@ impl ExplicitDomain {
                         self.friction_work += r.friction_power * self.dt;
                     }
                     self.active_pairs += 1;
-                    self.touching[c.body_a as usize] = 1;
-                    self.touching[c.body_b as usize] = 1;
+                    // A body touching only itself still touches no other body.
+                    if c.body_a != c.body_b {
+                        self.touching[c.body_a as usize] = 1;
+                        self.touching[c.body_b as usize] = 1;
+                    }
                 }
             }
             self.dissipated += power * self.dt;

@@ -2,7 +2,8 @@
 //! tets of a body ([`insert`]), the cohesive law with damage ([`law`]) and
 //! the 6-node joint element's forces ([`joint`]), the contact of a broken
 //! joint's faces ([`crack`]), a rank's joints advanced
-//! together with their totals ([`set`]). Physics kernels only: no MPI, no
+//! together with their totals ([`set`]), the continuous mesh's vertex of
+//! each node copy ([`vertices`], for self-contact). Physics kernels only: no MPI, no
 //! PETSc.
 
 pub mod crack;
@@ -10,6 +11,7 @@ pub mod insert;
 pub mod joint;
 pub mod law;
 pub mod set;
+pub mod vertices;
 
 pub use crack::{crack_forces, CrackResult, CrackState};
 pub use insert::{joint_size, make_discontinuous, JointFaces, Jointed};

@@ -10,7 +10,9 @@
 //! the swelling can make, yet touch; the arms bent apart store about the
 //! energy of two cantilevers pushed back by the excess closure; the
 //! self-contact forces sum to zero and momentum stays zero (no external
-//! force); 1 and 2 ranks give bitwise the same trajectories.
+//! force); 1 and 2 ranks give bitwise the same trajectories. Thermal
+//! variant: the two tips at different temperatures conduct only once they
+//! touch, and only with a `[contact]` table.
 
 mod common;
 
@@ -277,4 +279,153 @@ fn out_dir_of(contact: bool, ranks: usize) -> std::path::PathBuf {
         .join("target")
         .join("test-output")
         .join(format!("self-contact-{contact}-{ranks}"))
+}
+
+/// The thermal variant: the C of the test above with conduction; the
+/// upper tip's top face (face set `hot`) held at 100 °C heats the upper
+/// tip, which alone swells (α ΔT h / 2 = 2 × the slot at 100 °C) until it
+/// presses on the lower tip. Diffusivity 0.1 m²/s: the upper tip warms in
+/// about h² / D = 0.4 s, while heat through the arms and spine (1.4 m)
+/// would take 20 s. With a `[contact]` table the pressed tips conduct
+/// S / Rc; `contact` false leaves the table out (no contact conduction).
+fn thermal_scenario(contact: bool) -> String {
+    let table = if contact {
+        "[contact]\nresistance = 1e-4\nevery = 1\n"
+    } else {
+        ""
+    };
+    format!(
+        r#"
+[time]
+dt = 2e-3
+end_time = 0.6
+
+[[materials]]
+name = "rubber"
+density = {RHO}
+young = {E:e}
+poisson = {NU}
+conductivity = 100.0
+specific_heat = 1.0
+tensile_strength = 1e8
+cohesion = 1e8
+friction_angle = 30.0
+g_i = 1e8
+g_ii = 1e8
+fracture_penalty = 1e8
+
+[[materials]]
+name = "swelling"
+density = {RHO}
+young = {E:e}
+poisson = {NU}
+conductivity = 100.0
+specific_heat = 1.0
+expansion = 0.008
+
+[[bodies]]
+name = "c"
+material = "rubber"
+mesh = {{ kind = "gmsh", file = "c.msh" }}
+initial_temperature = 0.0
+element_sets = {{ tips = {{ min = [{TIPS}, -1.0, -1.0], max = [2.0, 2.0, 2.0] }} }}
+regions = {{ tips = "swelling" }}
+fracture = {{}}
+
+{table}
+[thermal]
+theta = 1.0
+
+[[thermal.bc]]
+kind = "temperature"
+set = "hot"
+value = 100.0
+ramp = 0.3
+
+[mechanics]
+damping = 40.0
+
+[mechanics.contact]
+penalty = {PENALTY:e}
+friction = 0.3
+
+[output]
+every = 25
+"#
+    )
+}
+
+/// Two parts of one body at different temperatures conduct only while
+/// they touch: the lower tip stays at 0 °C until the swelling upper tip
+/// presses on it, then warms through the contact; without the `[contact]`
+/// table it stays near 0 °C though pressed (only what creeps along the
+/// arms and the spine).
+#[test]
+fn touching_parts_of_one_body_conduct_heat() {
+    let mut mesh = c_mesh();
+    let top = 2.0 * H + GAP;
+    let hot: Vec<[u32; 3]> = mesh
+        .boundary_faces()
+        .into_iter()
+        .map(|f| f.nodes)
+        .filter(|f| {
+            f.iter().all(|&n| {
+                let p = mesh.nodes[n as usize];
+                (p[2] - top).abs() < 1e-9 && p[0] > TIPS - 1e-9
+            })
+        })
+        .collect();
+    assert_eq!(hot.len(), 4);
+    mesh.face_sets.insert("hot".into(), hot);
+    let mut lower_warmed = Vec::new();
+    for contact in [true, false] {
+        let out = out_dir(&format!("self-contact-thermal-{contact}"));
+        fdem::mesh::gmsh::write_msh_ascii(&mesh, &out.join("c.msh")).unwrap();
+        let scen = out.join("c.toml");
+        std::fs::write(&scen, thermal_scenario(contact)).unwrap();
+        run_ok(1, &scen, &out, &[]);
+        let m = read_mech(&out, "c");
+        // Touching: the run's penalty pairs that overlap (history, every step).
+        let (h, rows) = history(&out, "c");
+        let first_touch = rows
+            .iter()
+            .find(|r| r[col(&h, "mech_contacts")] > 0.0)
+            .map_or(f64::INFINITY, |r| r[col(&h, "time")]);
+        // The lower tip's slot face: its warmest node copy, per output.
+        let lower: Vec<usize> = (0..m.coords.len())
+            .filter(|&n| (m.coords[n][2] - H).abs() < 1e-9 && m.coords[n][0] > TIPS + 1e-9)
+            .collect();
+        let touched = first_touch.is_finite();
+        let mut warmest = 0.0f64;
+        for k in 0..m.times.len() {
+            let t = lower
+                .iter()
+                .map(|&n| m.temperature[k][n])
+                .fold(f64::MIN, f64::max);
+            eprintln!(
+                "contact table {contact}: t = {:.3}: lower tip {t:.4e} (first touch {first_touch})",
+                m.times[k]
+            );
+            // Before the tips touch, no heat has reached the lower tip
+            // (through the arms and the spine, 1e-10 of the range).
+            if m.times[k] < first_touch {
+                assert!(
+                    t.abs() < 1e-6,
+                    "t = {}: lower tip at {t} before touching",
+                    m.times[k]
+                );
+            }
+            warmest = warmest.max(t);
+        }
+        assert!(touched, "the tips never met");
+        lower_warmed.push(warmest);
+    }
+    eprintln!(
+        "lower tip: {:.3e} with contact heat, {:.3e} without",
+        lower_warmed[0], lower_warmed[1]
+    );
+    // Through the contact: degrees; without it, only what diffuses along
+    // the arms and the spine in 0.6 s (below 1e-3 °C).
+    assert!(lower_warmed[0] > 1.0, "no heat through the contact");
+    assert!(lower_warmed[1].abs() < 1e-3, "heat without a contact table");
 }

@@ -863,3 +863,52 @@ fn jointed_checkpoint_bodies_refuse_sets_and_initial_cracks() {
         assert_no_output(&out);
     }
 }
+
+/// Issue 21: a `particles` key naming a set the body lacks, a radius no
+/// sphere of which fits the set, a radius that is not positive, and a body
+/// kind that cannot have particles are refused, naming the key, on one and
+/// two ranks.
+#[test]
+fn bad_particles_are_named() {
+    let scen = root().join("scenarios/fede-bar.toml");
+    let cases: [(&str, &[&str], &[&str]); 5] = [
+        (
+            "unknown-set",
+            &["--set", "bodies.bar.particles.set=\"nowhere\""],
+            &["particles.set", "nowhere", "middle"],
+        ),
+        (
+            "too-large",
+            &["--set", "bodies.bar.particles.radius=2e-3"],
+            &["particles", "`middle`", "radius too large"],
+        ),
+        (
+            "not-positive",
+            &["--set", "bodies.bar.particles.radius=-1.0"],
+            &["particles.radius", "positive"],
+        ),
+        (
+            "fixed",
+            &["--set", "bodies.bar.fixed=true"],
+            &["particles", "held body"],
+        ),
+        (
+            "whole-body",
+            &["--set", "bodies.bar.particles.set=\"all\""],
+            &["particles.set", "every element"],
+        ),
+    ];
+    for (tag, extra, words) in cases {
+        for ranks in [1, 2] {
+            let out = scenario_dir(&format!("particles-{tag}-{ranks}")).join("out");
+            let (_, err) = run_bad(ranks, &scen, &out, extra);
+            for w in words {
+                assert!(
+                    err.contains(w) && err.contains("fede-bar.toml"),
+                    "{tag}: `{w}` in {err}"
+                );
+            }
+            assert_no_output(&out);
+        }
+    }
+}

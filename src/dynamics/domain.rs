@@ -164,6 +164,10 @@ pub struct ExplicitDomain {
     pub(super) joints: super::joints::DomainJoints,
     /// Self-contact of the jointed bodies held here.
     pub(super) self_contact: super::self_contact::SelfContact,
+    /// Bonded particles of the bodies held here (issue 21), and their
+    /// kinetic energy after the last substep.
+    pub(super) particles: super::particles::DomainParticles,
+    pub(super) particle_kinetic: f64,
     pub(super) contact_energy: f64,
     /// Energy dissipated by contact damping and friction and by the mass
     /// damping, this rank's share (J).
@@ -257,14 +261,27 @@ impl ExplicitDomain {
             )
         });
         let pn = penalty.as_ref().map(|(_, pn)| *pn);
-        let (dt, substeps, min_len_all) =
-            time_step(comm, model, part, &materials, &free, pn, coupling_dt)?;
+        let n_owned = part.num_owned();
+        let particles = crate::parallel::agree(
+            comm,
+            super::particles::DomainParticles::new(model, part, n_owned),
+        )?;
+        let particle_w2 = particles.frequencies(&mass);
+        let (dt, substeps, min_len_all) = time_step(
+            comm,
+            model,
+            part,
+            &materials,
+            &free,
+            pn,
+            coupling_dt,
+            &particle_w2,
+        )?;
         let margin = mm
             .contact
             .as_ref()
             .and_then(|c| c.margin)
             .unwrap_or(0.5 * min_len_all);
-        let n_owned = part.num_owned();
         let np = part.node_gid.len();
         let joints = crate::parallel::agree(
             comm,
@@ -388,6 +405,8 @@ impl ExplicitDomain {
             strain_energy: 0.0,
             joints,
             self_contact,
+            particles,
+            particle_kinetic: 0.0,
             contact_energy: 0.0,
             dissipated: 0.0,
             external_work: 0.0,
@@ -499,6 +518,11 @@ impl ExplicitDomain {
     /// This rank's joints for the joint output grid.
     pub fn joint_rows(&self) -> super::JointRows {
         self.joints.output_rows(&self.x, &self.x0)
+    }
+
+    /// This rank's particles for the particle output (issue 21).
+    pub fn particle_rows(&self) -> super::ParticleRows {
+        self.particles.rows()
     }
 
     /// Whether the cracks whose faces touch changed since the last call

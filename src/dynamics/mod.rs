@@ -49,7 +49,10 @@
 //!   their tets shared a vertex (those never pair);
 //! - `joints`: the cohesive joints of the jointed bodies (issue 19),
 //!   whose forces are added to the owned nodes after the force sum, the
-//!   crack faces they leave, and their rows of the joint output.
+//!   crack faces they leave, and their rows of the joint output;
+//! - `particles`: the bonded particles of bodies with an element set made
+//!   particles (issue 21), their links to the elements, advanced after
+//!   the force sum, and their rows of the particle output.
 
 mod balance;
 mod candidates;
@@ -58,6 +61,7 @@ mod force_sum;
 mod gaps;
 mod joints;
 mod pair_sum;
+mod particles;
 mod self_contact;
 mod state;
 mod substep;
@@ -69,6 +73,7 @@ mod tests;
 pub use balance::BodyLoad;
 pub use domain::ExplicitDomain;
 pub use joints::JointRows;
+pub use particles::ParticleRows;
 pub use state::{MechanicsCounters, MechanicsState, SavedMotion};
 
 /// Marks an absent local index or slot.

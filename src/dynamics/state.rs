@@ -112,7 +112,7 @@ impl ExplicitDomain {
             }
         }
         let local = [
-            kin,
+            kin + self.particle_kinetic,
             self.strain_energy,
             self.contact_energy,
             self.dissipated,

@@ -280,6 +280,20 @@ impl ExplicitDomain {
             self.joints.add_forces(&self.x, t, &mut self.f);
             self.mark_cracks();
         }
+        if !self.particles.is_empty() {
+            // Bonds and links after the element sum, in each body's fixed order (its rank holds it whole).
+            let (x, v) = (&self.x, &self.v);
+            self.strain_energy += self.particles.add_forces(x, v, self.dt, &mut self.f);
+            match self.particles.advance(self.dt, self.damping, &self.gravity) {
+                Ok((kinetic, damped)) => {
+                    self.particle_kinetic = kinetic;
+                    self.dissipated += damped;
+                }
+                Err(e) => {
+                    error.get_or_insert(e);
+                }
+            }
+        }
         let no = self.n_owned;
         let p = NodeUpdate {
             dt: self.dt,

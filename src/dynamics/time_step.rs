@@ -20,7 +20,9 @@ use crate::parallel::Part;
 /// Collective. The explicit step of the free elements `free` (local
 /// indices) of this rank's part (`pn` the contact penalty, if any): the
 /// scenario's, checked against the critical one, or safety × critical, cut
-/// to fill `coupling_dt`.
+/// to fill `coupling_dt`. `particle_w2`: per body, the square of the
+/// highest frequency its particles add (issue 21), added to the body's
+/// like the joints'.
 /// Returns (Δt, substeps per thermal step, the smallest characteristic
 /// element length over the ranks).
 pub(super) fn time_step(
@@ -31,6 +33,7 @@ pub(super) fn time_step(
     free: &[usize],
     pn: Option<f64>,
     coupling_dt: f64,
+    particle_w2: &[(u32, f64)],
 ) -> Result<(f64, u64, f64)> {
     let mm = model.mechanics.as_ref().expect("mechanics model");
     let mesh = &part.mesh;
@@ -46,7 +49,10 @@ pub(super) fn time_step(
     }
     let mut shapes: Vec<(BodyShape, f64)> = Vec::new();
     let mut local_error = None;
-    let joint_w2 = joint_frequencies(model, part);
+    let mut joint_w2 = joint_frequencies(model, part);
+    for &(b, w2) in particle_w2 {
+        *joint_w2.entry(b).or_insert(0.0) += w2;
+    }
     for (&b, owned) in &body_elems {
         for &e in owned {
             min_len = min_len.min(characteristic_length(&to_vectors(&mesh.element_coords(e))));

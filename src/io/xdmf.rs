@@ -102,7 +102,11 @@ impl XdmfModel {
     fn mesh_block(&self, indent: &str) -> String {
         let h5 = escape(&self.h5_name);
         let (n, e, npc) = (self.nodes, self.cells, self.nodes_per_cell);
-        let kind = if npc == 3 { "Triangle" } else { "Tetrahedron" };
+        let kind = match npc {
+            1 => "Polyvertex",
+            3 => "Triangle",
+            _ => "Tetrahedron",
+        };
         let mut s = String::new();
         let _ = writeln!(
             s,

@@ -38,6 +38,7 @@ pub mod frequency;
 pub mod ghost;
 pub mod hex8;
 pub mod hex8_element;
+pub mod interface_link;
 pub mod material;
 
 pub use element::{element_response, ElementResponse, Kinematics, Tet4Reference, ThermalState};

@@ -40,9 +40,11 @@ pub mod gmsh;
 pub mod hex8;
 pub mod lattice;
 pub mod nut;
+pub mod particle_region;
 mod sets;
 #[cfg(test)]
 pub(crate) mod testutil;
+pub mod without;
 
 pub use boundary::{sorted_face, BoundaryFace, LOCAL_FACES};
 pub use closed::CLOSED_VOLUME_REL_TOL;

@@ -23,6 +23,8 @@ pub struct SourceMesh {
     pub boundary_node: Vec<bool>,
     /// The cohesive joints of a jointed mesh (issue 19).
     pub joints: Option<SourceJoints>,
+    /// The particles of an element set taken out of the mesh (issue 21).
+    pub particles: Option<super::particles::SourceParticles>,
 }
 
 /// The joints of a source mesh made discontinuous: faces in its node and
@@ -46,6 +48,7 @@ impl SourceMesh {
             material,
             mesh,
             joints: None,
+            particles: None,
         }
     }
 
@@ -76,6 +79,7 @@ impl SourceMesh {
                 faces: j.joints,
                 material: fracture,
             }),
+            particles: None,
         }
     }
 }

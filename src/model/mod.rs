@@ -9,10 +9,12 @@ pub mod ambient;
 mod bcs;
 mod bodies;
 mod contact;
+mod particles;
 
 pub use bcs::{body_bcs, BodyBcs, MechanicsKind, SetTarget, ThermalKind};
 pub use bodies::{BodyMesh, BodySource, Motion, SavedJoints, SourceJoints, SourceMesh};
 pub use contact::ContactModel;
+pub use particles::SourceParticles;
 
 use crate::error::{Error, Result};
 use crate::geometry::transform::{rotate_points, rotation_xyz_degrees, translate_points};
@@ -520,8 +522,9 @@ impl Model {
                     mat_of_elem[e as usize] = material_index(mat);
                 }
             }
-            let material_vec = mat_of_elem;
-            let source = match &b.fracture {
+            let (m, material_vec, particles) =
+                particles::split_off(b, m, mat_of_elem).map_err(model_err)?;
+            let mut source = match &b.fracture {
                 None => SourceMesh::new(m, material_vec),
                 Some(f) => {
                     let in_set = match &f.set {
@@ -549,6 +552,7 @@ impl Model {
                     src
                 }
             };
+            source.particles = particles;
             let m = &source.mesh;
             // The body itself, its copies on a lattice, or a pack of
             // particles: refused before they are placed if the model would

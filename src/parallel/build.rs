@@ -216,6 +216,7 @@ fn split_bodies(model: &Model, size: usize) -> Vec<bool> {
                 size > 1
                     && users[mesh as usize] == 1
                     && model.meshes[mesh as usize].joints.is_none()
+                    && model.meshes[mesh as usize].particles.is_none()
                     && (model.mechanics.is_none()
                         || (b.node_range.1 - b.node_range.0) as usize > BODY_EIGEN_MAX_NODES)
             }

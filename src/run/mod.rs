@@ -13,6 +13,7 @@
 mod checkpoint;
 mod joint_output;
 mod output;
+mod particle_output;
 mod rebalance;
 mod schedule;
 mod settle;
@@ -85,6 +86,11 @@ pub fn run(
         ..PhaseTimes::default()
     };
     let restart = match &opts.restart {
+        Some(_) if model.has_particles() => {
+            return Err(crate::error::Error::Mechanics(
+                "--restart: checkpoints do not hold the particles' state yet (issue 21)".into(),
+            ))
+        }
         Some(p) => Some(Restart::read(p, &model)?),
         None => None,
     };
@@ -365,6 +371,9 @@ impl Stages<'_, '_> {
                 &out.stem,
                 m,
                 continue_after,
+            )?;
+            out.particles = particle_output::ParticleOutput::open(
+                self.comm, self.model, &out.dir, &out.stem, m,
             )?;
         }
         Ok(out)

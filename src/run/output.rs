@@ -53,6 +53,8 @@ pub(super) struct Output {
     heat: Vec<[f64; 11]>,
     /// The joint output grid, when the model has joints.
     pub joints: Option<super::joint_output::JointOutput>,
+    /// The particle point set, when the model has particles (issue 21).
+    pub particles: Option<super::particle_output::ParticleOutput>,
     /// The boundary faces' contact status, in runs with thermal contact.
     status: Option<super::status_output::StatusOutput>,
 }
@@ -232,6 +234,7 @@ impl Output {
             cracks: Vec::new(),
             heat: Vec::new(),
             joints: None,
+            particles: None,
             status,
         })
     }
@@ -316,6 +319,9 @@ impl Output {
         self.writer.write_step(time, &nf, &cf)?;
         if let (Some(j), Some(m)) = (self.joints.as_mut(), mech) {
             j.write(comm, time, m)?;
+        }
+        if let (Some(p), Some(m)) = (self.particles.as_mut(), mech) {
+            p.write(comm, time, m)?;
         }
         if let Some(st) = self.status.as_mut() {
             let positions = match mech {
@@ -511,6 +517,9 @@ impl Output {
         if let Some(j) = &self.joints {
             particle_files.push(j.xdmf.clone());
         }
+        if let Some(p) = &self.particles {
+            particle_files.push(p.xdmf.clone());
+        }
         if let Some(st) = &self.status {
             particle_files.push(st.xdmf.clone());
         }
@@ -553,6 +562,9 @@ impl Output {
         self.writer.close()?;
         if let Some(j) = self.joints {
             j.close()?;
+        }
+        if let Some(p) = self.particles {
+            p.close()?;
         }
         if let Some(st) = self.status {
             st.close()?;

@@ -343,7 +343,9 @@ impl Stages<'_, '_> {
     /// current positions, measure the balance, and repartition when it is
     /// past the threshold.
     pub(super) fn rebalance(&mut self, step: u64, out: &mut Output) -> Result<()> {
-        if !self.balance.due(step) {
+        // Particles (issue 21) do not travel with a repartition yet: such a
+        // model keeps its first partition.
+        if !self.balance.due(step) || self.model.has_particles() {
             return Ok(());
         }
         let Some(mech) = self.mech.as_mut() else {

@@ -342,6 +342,21 @@ pub struct BodySpec {
     /// (mechanics only, issue 19): `{ set = "...", material = "..." }`.
     #[serde(default)]
     pub fracture: Option<FractureSpec>,
+    /// This element set of the body is a bonded sphere lattice joined to
+    /// the rest by ghost particles (mechanics only, issue 21):
+    /// `{ set = "...", radius = ... }`.
+    #[serde(default)]
+    pub particles: Option<ParticlesSpec>,
+}
+
+/// An element set of a body made particles (issue 21, seed 002).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ParticlesSpec {
+    /// Element set of the body's mesh.
+    pub set: String,
+    /// Sphere radius r (m); the lattice spacing is 2r.
+    pub radius: f64,
 }
 
 /// A prescribed uniform temperature ramp.

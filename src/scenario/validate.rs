@@ -365,6 +365,7 @@ impl Scenario {
             self.validate_mechanics(m)?;
         }
         self.validate_fracture()?;
+        self.validate_particles()?;
         if let Some(r) = self.solver.rtol {
             if !(r > 0.0 && r < 1.0) {
                 return bad("solver.rtol", format!("must be in (0, 1), got {r}"));
@@ -675,6 +676,45 @@ impl Scenario {
         for (m, mat) in self.materials.iter().enumerate() {
             if let Err((k, msg)) = mat.fracture() {
                 return Err((format!("materials[{m}].{k}"), msg));
+            }
+        }
+        Ok(())
+    }
+
+    /// The bodies' `particles` tables (issue 21): what the model cannot
+    /// check without the mesh (the set, the radius against it) it checks.
+    fn validate_particles(&self) -> Result<(), (String, String)> {
+        for (i, b) in self.bodies.iter().enumerate() {
+            let Some(p) = &b.particles else { continue };
+            let key = |k: &str| format!("bodies[{i}].particles{k}");
+            let refuse = |why: &str| Err((key(""), format!("body `{}`: {why}", b.name)));
+            if !(p.radius.is_finite() && p.radius > 0.0) {
+                return Err((
+                    key(".radius"),
+                    format!("must be positive, got {}", p.radius),
+                ));
+            }
+            if self.mechanics.is_none() {
+                return refuse("particles need a [mechanics] table");
+            }
+            if self.thermal.is_some() {
+                return refuse(
+                    "particles carry no temperature yet: no [thermal] table with particles",
+                );
+            }
+            if matches!(b.mesh, MeshSpec::Checkpoint { .. }) {
+                return refuse("a body from a checkpoint has no element sets");
+            }
+            if b.lattice.is_some() || b.pack.is_some() {
+                return refuse(
+                    "particles are for a body of its own mesh, not lattice or pack copies",
+                );
+            }
+            if b.fracture.is_some() {
+                return refuse("a body with particles cannot have joints (fracture) too");
+            }
+            if b.fixed || b.velocity.is_some() {
+                return refuse("a held body (fixed, velocity) cannot have particles");
             }
         }
         Ok(())

@@ -112,9 +112,9 @@ pub(super) fn check_tiling(
 pub(super) fn check_mesh_local(mesh: &MeshPart) -> Result<(), String> {
     let n = mesh.coords.len() as u64;
     let npc = mesh.nodes_per_cell;
-    if !(npc == 3 || npc == 4) || !mesh.cells.len().is_multiple_of(npc) {
+    if !(npc == 1 || npc == 3 || npc == 4) || !mesh.cells.len().is_multiple_of(npc) {
         return Err(format!(
-            "cells of {npc} nodes ({} entries): only triangles (3) and Tet4 (4)",
+            "cells of {npc} nodes ({} entries): only points (1), triangles (3) and Tet4 (4)",
             mesh.cells.len()
         ));
     }

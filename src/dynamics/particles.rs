@@ -1,0 +1,324 @@
+//! The bonded particles of a rank's bodies (issue 21, seed 002) in the
+//! explicit loop. A body with particles is held whole by one rank
+//! (`parallel::build` never splits it), so its spheres, bonds, ghosts and
+//! links live there: each substep, after the owned nodes' forces are
+//! summed, the bonds (eqs 12–15, `mechanics::bond`) and the links to the
+//! elements (`mechanics::interface_link`) are evaluated in the body's
+//! fixed bond and link order, the links' forces go to the element nodes
+//! with N_I at the bond midpoint (eq 17 there), and the spheres advance by
+//! the damped central difference with the same mass-proportional damping
+//! as the nodes. The sums do not depend on the rank count.
+
+use nalgebra::Vector3;
+
+use crate::error::{Error, Result};
+use crate::mechanics::bond::{
+    bond_forces, sphere_mass_inertia, update_particles, BondState, BondStiffness,
+};
+use crate::mechanics::interface_link::{advance_link, LinkEnds};
+use crate::mesh::lattice::LatticeBond;
+use crate::model::Model;
+use crate::parallel::Part;
+
+/// A link with the element nodes as local node numbers.
+#[derive(Debug, Clone)]
+struct DomainLink {
+    sphere: u32,
+    ghost_nodes: [u32; 4],
+    ghost_shape: [f64; 4],
+    point_nodes: [u32; 4],
+    point_shape: [f64; 4],
+    kn: f64,
+    ks: f64,
+    /// (ℓ/2)² of the reference bond (time-step bound).
+    half2: f64,
+}
+
+/// One body's particles.
+#[derive(Debug, Clone)]
+pub(super) struct BodyParticles {
+    /// Global body id.
+    body: u32,
+    /// Global number of its first particle.
+    first: u64,
+    stiffness: BondStiffness,
+    mass: f64,
+    inertia: f64,
+    x0: Vec<Vector3<f64>>,
+    x: Vec<Vector3<f64>>,
+    v: Vec<Vector3<f64>>,
+    w: Vec<Vector3<f64>>,
+    force: Vec<Vector3<f64>>,
+    moment: Vec<Vector3<f64>>,
+    fixed: Vec<bool>,
+    bonds: Vec<LatticeBond>,
+    state: Vec<BondState>,
+    links: Vec<DomainLink>,
+    link_state: Vec<BondState>,
+}
+
+/// The particles of one rank.
+#[derive(Debug, Clone, Default)]
+pub(super) struct DomainParticles {
+    pub(super) bodies: Vec<BodyParticles>,
+}
+
+/// This rank's particles for the output: global numbers, reference
+/// positions, displacements and velocities (flat, 3 per particle).
+#[derive(Debug, Clone, Default)]
+pub struct ParticleRows {
+    pub gid: Vec<u64>,
+    pub reference: Vec<f64>,
+    pub displacement: Vec<f64>,
+    pub velocity: Vec<f64>,
+}
+
+fn interpolate(shape: &[f64; 4], nodes: &[u32; 4], a: &[Vector3<f64>]) -> Vector3<f64> {
+    // seed 002 eq 16: Σ N_I a_I.
+    (0..4).map(|k| a[nodes[k] as usize] * shape[k]).sum()
+}
+
+impl DomainParticles {
+    /// The particles of the bodies `part` holds; their link nodes must be
+    /// owned (`n_owned`). Errors name the body.
+    pub(super) fn new(model: &Model, part: &Part, n_owned: usize) -> Result<DomainParticles> {
+        let (offsets, _) = model.particle_offsets();
+        let mut out = DomainParticles::default();
+        for (b, body) in model.bodies.iter().enumerate() {
+            let Some(p) = model.body_particles(body) else {
+                continue;
+            };
+            let local = |src_elem: u32| {
+                part.elem_gid
+                    .binary_search(&(body.elem_range.0 + src_elem))
+                    .ok()
+            };
+            let region = &p.region;
+            if local(region.links[0].point_elem).is_none() {
+                continue;
+            }
+            let err =
+                |msg: String| Error::Mechanics(format!("body `{}`: particles: {msg}", body.name));
+            let nodes_of = |src_elem: u32| -> Result<[u32; 4]> {
+                let e = local(src_elem)
+                    .ok_or_else(|| err(format!("element {} is not on this rank", src_elem)))?;
+                let t = part.mesh.tets[e];
+                if t.iter().any(|&l| l as usize >= n_owned) {
+                    return Err(err(format!("element {src_elem} has nodes of another rank")));
+                }
+                Ok(t)
+            };
+            let mat = &model.materials[p.material as usize];
+            let el = mat
+                .elastic
+                .ok_or_else(|| err(format!("material `{}` has no elastic constants", mat.name)))?;
+            let stiffness = BondStiffness::seed002(el.young, el.poisson, region.radius)
+                .map_err(|e| err(format!("material `{}`: {e}", mat.name)))?;
+            let (mass, inertia) = sphere_mass_inertia(el.density, region.radius);
+            let x0: Vec<Vector3<f64>> = region.centres.iter().map(|&c| Vector3::from(c)).collect();
+            let n = x0.len();
+            let mut links = Vec::with_capacity(region.links.len());
+            for l in &region.links {
+                let k = l.kind as usize;
+                links.push(DomainLink {
+                    sphere: l.sphere,
+                    ghost_nodes: nodes_of(l.ghost_elem)?,
+                    ghost_shape: l.ghost_shape,
+                    point_nodes: nodes_of(l.point_elem)?,
+                    point_shape: l.point_shape,
+                    kn: stiffness.normal[k] * l.weight,
+                    ks: stiffness.tangential[k] * l.weight,
+                    half2: 0.0,
+                });
+            }
+            let x_nodes: Vec<Vector3<f64>> =
+                part.mesh.nodes.iter().map(|&q| Vector3::from(q)).collect();
+            for l in &mut links {
+                let g = interpolate(&l.ghost_shape, &l.ghost_nodes, &x_nodes);
+                l.half2 = 0.25 * (g - x0[l.sphere as usize]).norm_squared();
+            }
+            let link_state = links
+                .iter()
+                .map(|l| {
+                    let g = interpolate(&l.ghost_shape, &l.ghost_nodes, &x_nodes);
+                    BondState::new(&x0[l.sphere as usize], &g)
+                })
+                .collect();
+            let state = region
+                .bonds
+                .iter()
+                .map(|bd| BondState::new(&x0[bd.i as usize], &x0[bd.j as usize]))
+                .collect();
+            out.bodies.push(BodyParticles {
+                body: b as u32,
+                first: offsets[b],
+                stiffness,
+                mass,
+                inertia,
+                x: x0.clone(),
+                x0,
+                v: vec![Vector3::from(body.initial_velocity); n],
+                w: vec![Vector3::zeros(); n],
+                force: vec![Vector3::zeros(); n],
+                moment: vec![Vector3::zeros(); n],
+                fixed: vec![false; n],
+                bonds: region.bonds.clone(),
+                state,
+                links,
+                link_state,
+            });
+        }
+        Ok(out)
+    }
+
+    pub(super) fn is_empty(&self) -> bool {
+        self.bodies.is_empty()
+    }
+
+    /// Per body here, a bound on the square of the highest frequency the
+    /// particles add (Gershgorin: per sphere over its bonds and links
+    /// 2k_n/m + k_s (2/m + 2(ℓ/2)²/I); per element node over the links at
+    /// it, k |N_I| (1 + Σ|N_J|)/m_I with k the larger stiffness), given the
+    /// owned nodes' masses.
+    pub(super) fn frequencies(&self, node_mass: &[f64]) -> Vec<(u32, f64)> {
+        self.bodies
+            .iter()
+            .map(|p| {
+                let mut sphere = vec![0.0; p.x0.len()];
+                let (m, inertia) = (p.mass, p.inertia);
+                let lam = |kn: f64, ks: f64, half2: f64| {
+                    2.0 * kn / m + ks * (2.0 / m + 2.0 * half2 / inertia)
+                };
+                for b in &p.bonds {
+                    let k = b.kind as usize;
+                    let half2 = 0.25 * (p.x0[b.j as usize] - p.x0[b.i as usize]).norm_squared();
+                    let l = b.weight * lam(p.stiffness.normal[k], p.stiffness.tangential[k], half2);
+                    sphere[b.i as usize] += l;
+                    sphere[b.j as usize] += l;
+                }
+                let mut node: std::collections::BTreeMap<u32, f64> = Default::default();
+                for l in &p.links {
+                    sphere[l.sphere as usize] += lam(l.kn, l.ks, l.half2);
+                    let k = l.kn.max(l.ks);
+                    let sum: f64 = l.point_shape.iter().map(|v| v.abs()).sum();
+                    for (q, nq) in l.point_nodes.iter().zip(&l.point_shape) {
+                        *node.entry(*q).or_insert(0.0) += k * nq.abs() * (1.0 + sum);
+                    }
+                }
+                let s_max = sphere.iter().copied().fold(0.0, f64::max);
+                let n_max = node
+                    .iter()
+                    .map(|(&q, &k)| k / node_mass[q as usize])
+                    .fold(0.0, f64::max);
+                (p.body, s_max.max(n_max))
+            })
+            .collect()
+    }
+
+    /// One substep's forces: bonds and links at the spheres' and the
+    /// nodes' positions `x` and velocities `v` (local nodes) over `dt`;
+    /// the links' forces on the elements are added to `f`. Returns the
+    /// energy stored in the bonds and links.
+    pub(super) fn add_forces(
+        &mut self,
+        x: &[Vector3<f64>],
+        v: &[Vector3<f64>],
+        dt: f64,
+        f: &mut [Vector3<f64>],
+    ) -> f64 {
+        let mut energy = 0.0;
+        for p in &mut self.bodies {
+            p.force.iter_mut().for_each(|a| *a = Vector3::zeros());
+            p.moment.iter_mut().for_each(|a| *a = Vector3::zeros());
+            bond_forces(
+                &p.bonds,
+                &mut p.state,
+                &p.stiffness,
+                &p.x,
+                &p.v,
+                &p.w,
+                dt,
+                &mut p.force,
+                &mut p.moment,
+            );
+            for (b, s) in p.bonds.iter().zip(&p.state) {
+                energy += s.energy(&p.stiffness, b);
+            }
+            for (l, s) in p.links.iter().zip(p.link_state.iter_mut()) {
+                let i = l.sphere as usize;
+                let ends = LinkEnds {
+                    sphere_x: p.x[i],
+                    sphere_v: p.v[i],
+                    sphere_w: p.w[i],
+                    ghost_x: interpolate(&l.ghost_shape, &l.ghost_nodes, x),
+                    ghost_v: interpolate(&l.ghost_shape, &l.ghost_nodes, v),
+                    point_v: interpolate(&l.point_shape, &l.point_nodes, v),
+                };
+                let (fs, ms) = advance_link(s, l.kn, l.ks, &ends, dt);
+                p.force[i] += fs;
+                p.moment[i] += ms;
+                for (q, nq) in l.point_nodes.iter().zip(&l.point_shape) {
+                    // seed 002 eq 17 at the midpoint: the element's point takes −f with N_I.
+                    f[*q as usize] -= fs * *nq;
+                }
+                let dn = s.d.dot(&s.n);
+                let dt2 = (s.d.norm_squared() - dn * dn).max(0.0);
+                energy += 0.5 * (l.kn * dn * dn + l.ks * dt2);
+            }
+        }
+        energy
+    }
+
+    /// Advance the spheres over `dt` with mass damping `damping` (1/s) and
+    /// `gravity`. Returns the kinetic energy at the end (J, translation
+    /// and rotation at the new velocities) and the energy the damping
+    /// took; an error names a particle that became non-finite.
+    pub(super) fn advance(
+        &mut self,
+        dt: f64,
+        damping: f64,
+        gravity: &Vector3<f64>,
+    ) -> Result<(f64, f64)> {
+        let (mut kinetic, mut damped) = (0.0, 0.0);
+        for p in &mut self.bodies {
+            let weight = gravity * p.mass;
+            p.force.iter_mut().for_each(|a| *a += weight);
+            let (v_old, w_old) = (p.v.clone(), p.w.clone());
+            update_particles(
+                p.mass, p.inertia, damping, dt, &p.fixed, &p.force, &p.moment, &mut p.x, &mut p.v,
+                &mut p.w,
+            );
+            for k in 0..p.x.len() {
+                if !(p.x[k].iter().all(|c| c.is_finite()) && p.w[k].iter().all(|c| c.is_finite())) {
+                    return Err(Error::Mechanics(format!(
+                        "particle {} became non-finite (NaN or infinite): the explicit step \
+                         is unstable; reduce mechanics.dt or mechanics.safety",
+                        p.first + k as u64
+                    )));
+                }
+                let (vm, wm) = ((p.v[k] + v_old[k]) * 0.5, (p.w[k] + w_old[k]) * 0.5);
+                damped +=
+                    damping * dt * (p.mass * vm.norm_squared() + p.inertia * wm.norm_squared());
+                kinetic +=
+                    0.5 * (p.mass * p.v[k].norm_squared() + p.inertia * p.w[k].norm_squared());
+            }
+        }
+        Ok((kinetic, damped))
+    }
+
+    /// This rank's particles for the output, bodies in global order.
+    pub fn rows(&self) -> ParticleRows {
+        let mut r = ParticleRows::default();
+        for p in &self.bodies {
+            for k in 0..p.x.len() {
+                let (x, x0, v) = (p.x[k], p.x0[k], p.v[k]);
+                r.gid.push(p.first + k as u64);
+                r.reference.extend_from_slice(&[x0.x, x0.y, x0.z]);
+                r.displacement
+                    .extend_from_slice(&[x.x - x0.x, x.y - x0.y, x.z - x0.z]);
+                r.velocity.extend_from_slice(&[v.x, v.y, v.z]);
+            }
+        }
+        r
+    }
+}

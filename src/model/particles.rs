@@ -1,0 +1,106 @@
+//! A body's element set made particles (issue 21, seed 002): at load the
+//! set's elements leave the body's FE mesh and become a bonded sphere
+//! lattice ([`crate::mesh::particle_region`]) linked to the remaining
+//! elements by ghost particles. The lattice is part of the body's source
+//! mesh, like a jointed body's joints; a body with particles is never
+//! split over ranks, so its particles, bonds and links live with it.
+
+use super::{BodySource, Model};
+use crate::mesh::particle_region::{particle_region, ParticleRegion};
+use crate::mesh::without::without_elements;
+use crate::mesh::TetMesh;
+use crate::scenario::BodySpec;
+
+/// The particles of a source mesh: the lattice and its links (element
+/// numbers of the source mesh, which no longer has the set), and the
+/// particles' material (index into the model's materials).
+#[derive(Debug, Clone)]
+pub struct SourceParticles {
+    pub region: ParticleRegion,
+    pub material: u32,
+}
+
+/// The body `b`'s mesh `m` (element materials `material`) without the
+/// element set of its `particles` key, and the particles; unchanged
+/// without the key. Errors name the body and the key.
+pub(super) fn split_off(
+    b: &BodySpec,
+    m: TetMesh,
+    material: Vec<u32>,
+) -> Result<(TetMesh, Vec<u32>, Option<SourceParticles>), String> {
+    let Some(p) = &b.particles else {
+        return Ok((m, material, None));
+    };
+    let elems = super::bodies::elements_of(&m, &p.set, &b.name, "particles.set")?;
+    let mut in_set = vec![false; m.tets.len()];
+    elems.iter().for_each(|&e| in_set[e as usize] = true);
+    if elems.len() == m.tets.len() {
+        return Err(format!(
+            "body `{}`: particles.set: `{}` is every element of the body; \
+             the body needs finite elements beside its particles",
+            b.name, p.set
+        ));
+    }
+    let mat = material[elems[0] as usize];
+    if elems.iter().any(|&e| material[e as usize] != mat) {
+        return Err(format!(
+            "body `{}`: particles.set: the elements of `{}` have more than one material (regions)",
+            b.name, p.set
+        ));
+    }
+    let (fe, index) = without_elements(&m, &in_set);
+    let region = particle_region(&m, &p.set, &in_set, &index, p.radius)
+        .map_err(|e| format!("body `{}`: particles: {e}", b.name))?;
+    if region.links.is_empty() {
+        return Err(format!(
+            "body `{}`: particles.set: no sphere of `{}` borders the body's finite elements",
+            b.name, p.set
+        ));
+    }
+    let material = (0..m.tets.len())
+        .filter(|&e| !in_set[e])
+        .map(|e| material[e])
+        .collect();
+    Ok((
+        fe,
+        material,
+        Some(SourceParticles {
+            region,
+            material: mat,
+        }),
+    ))
+}
+
+impl Model {
+    /// Per body, the global number of its first particle (particles
+    /// numbered body by body, each body's in its lattice's order), and the
+    /// total: O(bodies), the same on every rank.
+    pub fn particle_offsets(&self) -> (Vec<u64>, u64) {
+        let mut next = 0u64;
+        let offsets = self
+            .bodies
+            .iter()
+            .map(|b| {
+                let at = next;
+                next += self
+                    .body_particles(b)
+                    .map_or(0, |p| p.region.centres.len() as u64);
+                at
+            })
+            .collect();
+        (offsets, next)
+    }
+
+    /// The particles of body `b`, if it has any.
+    pub fn body_particles(&self, b: &super::Body) -> Option<&SourceParticles> {
+        match b.source {
+            BodySource::Mesh { mesh, .. } => self.meshes[mesh as usize].particles.as_ref(),
+            BodySource::Saved { .. } => None,
+        }
+    }
+
+    /// Whether any body has particles.
+    pub fn has_particles(&self) -> bool {
+        self.meshes.iter().any(|m| m.particles.is_some())
+    }
+}

@@ -62,7 +62,11 @@ fn mean(v: impl Iterator<Item = f64>) -> f64 {
 fn bar_in_tension_is_uniform_in_both_regions() {
     let out = out_dir("fede-run-bar");
     let scen = root().join("scenarios/fede-bar.toml");
-    run_ok(1, &scen, &out, &[]);
+    let stdout = run_ok(1, &scen, &out, &[]);
+    assert!(
+        stdout.contains("1152 Tet4, 64 bonded particles"),
+        "{stdout}"
+    );
     let m = read_mech(&out, "fede-bar");
     let p = read_particles(&out, "fede-bar");
     let k = m.times.len() - 1;
@@ -180,6 +184,12 @@ fn one_and_two_ranks_give_bitwise_the_same_particles() {
     let (o1, o2) = (dir.join("one"), dir.join("two"));
     run_ok(1, &path, &o1, &[]);
     run_ok(2, &path, &o2, &[]);
+    // Each rank holds one bar: the particle rows come from both.
+    let owners = fdem::io::read_cell_field_step(&o2.join("two-bars.h5"), "owner_rank", 0).unwrap();
+    assert!(
+        owners.contains(&0.0) && owners.contains(&1.0),
+        "one rank held both bars"
+    );
     let (p1, p2) = (
         read_particles(&o1, "two-bars"),
         read_particles(&o2, "two-bars"),

@@ -25,6 +25,7 @@ use crate::parallel::Part;
 /// like the joints'.
 /// Returns (Δt, substeps per thermal step, the smallest characteristic
 /// element length over the ranks).
+#[allow(clippy::too_many_arguments)]
 pub(super) fn time_step(
     comm: &SimpleCommunicator,
     model: &Model,

@@ -219,6 +219,8 @@ pub fn particle_region(
             (false, true) => (j, i),
             _ => continue,
         };
+        // seed 002 eq 5: the ghost x_g = x_b − 2 r n is the cell one step from sphere b along
+        // the bond's direction n out of the set, when a remaining element holds its centre.
         let Cell::Fe(ghost_elem, 1) = cells[at(member[g])] else {
             continue;
         };

@@ -106,6 +106,8 @@ pub struct RunSummary {
     pub nodes: usize,
     /// Elements.
     pub elements: usize,
+    /// Bonded particles (issue 21).
+    pub particles: u64,
     /// Steps taken.
     pub steps: u64,
     /// Total Krylov iterations.
@@ -160,8 +162,14 @@ impl std::fmt::Display for RunSummary {
         writeln!(f, "fdem run summary")?;
         writeln!(
             f,
-            "  mesh        {} nodes, {} Tet4 on {} rank(s)",
-            self.nodes, self.elements, self.ranks
+            "  mesh        {} nodes, {} Tet4{} on {} rank(s)",
+            self.nodes,
+            self.elements,
+            match self.particles {
+                0 => String::new(),
+                n => format!(", {n} bonded particles"),
+            },
+            self.ranks
         )?;
         writeln!(f, "  solver      {}", self.solver)?;
         writeln!(
@@ -543,6 +551,7 @@ impl Stages<'_, '_> {
             ranks: self.part.size,
             nodes: self.model.totals().0 as usize,
             elements: self.model.totals().1 as usize,
+            particles: self.model.particle_offsets().1,
             steps: step - start_step,
             ksp_iterations: sys.map_or(0, |s| s.iterations),
             newton_iterations: sys.map_or(0, |s| s.newton_iterations),

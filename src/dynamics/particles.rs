@@ -55,6 +55,9 @@ pub(super) struct BodyParticles {
     state: Vec<BondState>,
     links: Vec<DomainLink>,
     link_state: Vec<BondState>,
+    /// The links' force on the spheres in the last substep (the
+    /// elements took its opposite).
+    link_total: Vector3<f64>,
 }
 
 /// The particles of one rank.
@@ -166,6 +169,7 @@ impl DomainParticles {
                 state,
                 links,
                 link_state,
+                link_total: Vector3::zeros(),
             });
         }
         Ok(out)
@@ -228,6 +232,7 @@ impl DomainParticles {
     ) -> f64 {
         let mut energy = 0.0;
         for p in &mut self.bodies {
+            p.link_total = Vector3::zeros();
             p.force.iter_mut().for_each(|a| *a = Vector3::zeros());
             p.moment.iter_mut().for_each(|a| *a = Vector3::zeros());
             bond_forces(
@@ -257,6 +262,7 @@ impl DomainParticles {
                 let (fs, ms) = advance_link(s, l.kn, l.ks, &ends, dt);
                 p.force[i] += fs;
                 p.moment[i] += ms;
+                p.link_total += fs;
                 for (q, nq) in l.point_nodes.iter().zip(&l.point_shape) {
                     // seed 002 eq 17 at the midpoint: the element's point takes −f with N_I.
                     f[*q as usize] -= fs * *nq;
@@ -304,6 +310,13 @@ impl DomainParticles {
             }
         }
         Ok((kinetic, damped))
+    }
+
+    /// Per body here, the links' force on its spheres in the last substep
+    /// (the bonds' cancel): with the nodes' forces it sums to the contact
+    /// force on the body.
+    pub(super) fn link_totals(&self) -> impl Iterator<Item = (u32, Vector3<f64>)> + '_ {
+        self.bodies.iter().map(|p| (p.body, p.link_total))
     }
 
     /// This rank's particles for the output, bodies in global order.

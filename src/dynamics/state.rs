@@ -275,8 +275,8 @@ impl ExplicitDomain {
 
     /// Collective. Per group of bodies (`group_of_body[b]`, `groups` of
     /// them), the sum of the last substep's node forces over the group's
-    /// nodes, over all ranks (N): element and joint forces cancel within a
-    /// body, so this is the contact force the other bodies exert on the
+    /// nodes (and particles), over all ranks (N): element, joint, bond and
+    /// link forces cancel within a body, so this is the contact force the other bodies exert on the
     /// group (the load on a platen or a container). Gravity, tractions and
     /// the reactions of prescribed velocities are not in it.
     pub fn group_forces(
@@ -287,6 +287,13 @@ impl ExplicitDomain {
     ) -> Vec<[f64; 3]> {
         let mut local = vec![0.0; 3 * groups];
         for (f, &b) in self.f[..self.n_owned].iter().zip(&self.owned_body) {
+            let g = group_of_body[b as usize];
+            for d in 0..3 {
+                local[3 * g + d] += f[d];
+            }
+        }
+        // The particles' share (issue 21): the links' reaction on the spheres.
+        for (b, f) in self.particles.link_totals() {
             let g = group_of_body[b as usize];
             for d in 0..3 {
                 local[3 * g + d] += f[d];

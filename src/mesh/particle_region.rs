@@ -337,6 +337,96 @@ mod tests {
         assert!(face.iter().all(|l| l.weight == 2.0));
     }
 
+    /// Patch test of the links: under the uniform strain of uniaxial stress,
+    /// every sphere with all its neighbours (bonds or links) is in
+    /// equilibrium: each link, the sphere's half of a bond of twice the
+    /// stiffness to the element's point at the midpoint, carries exactly the
+    /// force of the lattice bond it replaces.
+    #[test]
+    fn links_balance_the_bonds_under_uniform_strain() {
+        use crate::mechanics::bond::{bond_forces, BondState, BondStiffness};
+        use crate::mechanics::interface_link::{advance_link, LinkEnds};
+        let r = 1e-3;
+        let mut m = box_mesh([0.0; 3], [12.0 * r; 3], r).unwrap();
+        m.add_box_set("middle", [4.0 * r, 0.0, 0.0], [8.0 * r, 12.0 * r, 12.0 * r])
+            .unwrap();
+        let mut in_set = vec![false; m.tets.len()];
+        m.elem_sets["middle"]
+            .iter()
+            .for_each(|&e| in_set[e as usize] = true);
+        let (fe, index) = without_elements(&m, &in_set);
+        let region = particle_region(&m, "middle", &in_set, &index, r).unwrap();
+        assert_eq!(region.centres.len(), 72);
+        let (e, nu) = (1e-4, 0.23);
+        let u = |x: &Vector3<f64>| Vector3::new(e * x.x, -nu * e * x.y, -nu * e * x.z);
+        let k = BondStiffness::seed002(1e9, nu, r).unwrap();
+        let p0: Vec<Vector3<f64>> = region.centres.iter().map(|&c| Vector3::from(c)).collect();
+        let px: Vec<Vector3<f64>> = p0.iter().map(|p| p + u(p)).collect();
+        // One step of dt = 1 from the reference: velocities are the displacements.
+        let pv: Vec<Vector3<f64>> = p0.iter().map(u).collect();
+        let pw = vec![Vector3::zeros(); p0.len()];
+        let mut state: Vec<BondState> = (region.bonds.iter())
+            .map(|b| BondState::new(&p0[b.i as usize], &p0[b.j as usize]))
+            .collect();
+        let (mut f, mut mom) = (
+            vec![Vector3::zeros(); p0.len()],
+            vec![Vector3::zeros(); p0.len()],
+        );
+        bond_forces(
+            &region.bonds,
+            &mut state,
+            &k,
+            &px,
+            &pv,
+            &pw,
+            1.0,
+            &mut f,
+            &mut mom,
+        );
+        let x0: Vec<Vector3<f64>> = fe.nodes.iter().map(|&c| Vector3::from(c)).collect();
+        let at = |elem: u32, shape: &[f64; 4], a: &dyn Fn(&Vector3<f64>) -> Vector3<f64>| {
+            let t = fe.tets[elem as usize];
+            (0..4)
+                .map(|q| a(&x0[t[q] as usize]) * shape[q])
+                .sum::<Vector3<f64>>()
+        };
+        let mut linked = vec![false; p0.len()];
+        for l in &region.links {
+            let s = l.sphere as usize;
+            linked[s] = true;
+            let g0 = at(l.ghost_elem, &l.ghost_shape, &|x| *x);
+            let mut st = BondState::new(&p0[s], &g0);
+            let ends = LinkEnds {
+                sphere_x: px[s],
+                sphere_v: pv[s],
+                sphere_w: Vector3::zeros(),
+                ghost_x: at(l.ghost_elem, &l.ghost_shape, &|x| x + u(x)),
+                ghost_v: at(l.ghost_elem, &l.ghost_shape, &u),
+                point_v: at(l.point_elem, &l.point_shape, &u),
+            };
+            let kind = l.kind as usize;
+            let (kn, ks) = (k.normal[kind] * l.weight, k.tangential[kind] * l.weight);
+            f[s] += advance_link(&mut st, kn, ks, &ends, 1.0).0;
+        }
+        // The spheres of the inner columns that have links. (Within two rows of a lateral face
+        // the lattice's surface weights leave a sphere unbalanced under uniform strain, links
+        // or not: they make the cells' energy right, not each sphere's equilibrium.)
+        let scale = k.normal[0] * e * 2.0 * r;
+        let mut checked = 0;
+        for (s, c) in p0.iter().enumerate() {
+            let inner = (1..3).all(|a| c[a] > 4.0 * r && c[a] < 8.0 * r);
+            if inner && linked[s] {
+                assert!(
+                    f[s].norm() < 1e-9 * scale,
+                    "sphere {s} at {c:?}: {:?}",
+                    f[s]
+                );
+                checked += 1;
+            }
+        }
+        assert_eq!(checked, 8);
+    }
+
     #[test]
     fn radius_too_large_is_an_error_naming_the_set() {
         let r = 1e-3;

@@ -251,6 +251,7 @@ impl ExplicitDomain {
         crate::run::trace_memory(comm.rank(), "detect halo");
         self.build_assembly(comm);
         crate::run::trace_memory(comm.rank(), "detect assembly");
+        crate::run::release_fragmented_memory();
         self.x_detect = self.x[..self.n_owned].to_vec();
         self.detected_at = Some(self.counters.substeps);
         self.counters.detections += 1;

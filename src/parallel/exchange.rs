@@ -161,8 +161,49 @@ pub fn to_blocks<C: Communicator>(
 ) -> (u64, Vec<f64>) {
     let size = comm.size() as usize;
     let me = comm.rank() as usize;
-    // Rows packed by destination in one array (a counting sort): the
-    // output's only copies are this, what arrives and the block.
+    let (lo, hi) = block(total, size, me);
+    let mut out = vec![0.0; (hi - lo) as usize * width];
+    // In rounds of at most ROUND_BYTES sent per rank, so that what is
+    // packed and what arrives stay small beside the block itself (a
+    // field's whole send and receive copies were the peak of the N = 2000
+    // deposition on 8 ranks, at its outputs).
+    let per_round = (ROUND_BYTES / (8 * (width + 1))).max(1);
+    let mine = ids.len().div_ceil(per_round) as u64;
+    let mut rounds = 0u64;
+    comm.all_reduce_into(&mine, &mut rounds, mpi::collective::SystemOperation::max());
+    for k in 0..rounds.max(1) as usize {
+        let from = (k * per_round).min(ids.len());
+        let to = ((k + 1) * per_round).min(ids.len());
+        let got = to_blocks_round(
+            comm,
+            &ids[from..to],
+            &values[width * from..width * to],
+            width,
+            total,
+        );
+        for rec in got.chunks_exact(width + 1) {
+            let row = (rec[0] as u64 - lo) as usize;
+            out[width * row..width * (row + 1)].copy_from_slice(&rec[1..]);
+        }
+    }
+    (lo, out)
+}
+
+/// Bytes a rank sends per round of [`to_blocks`].
+const ROUND_BYTES: usize = 1 << 18;
+
+/// Collective. One round of [`to_blocks`]: these rows, packed by
+/// destination in one array (a counting sort), sent to their block
+/// owners; returns what arrived, `width + 1` values per row (the id
+/// first).
+fn to_blocks_round<C: Communicator>(
+    comm: &C,
+    ids: &[u32],
+    values: &[f64],
+    width: usize,
+    total: u64,
+) -> Vec<f64> {
+    let size = comm.size() as usize;
     let owners: Vec<u32> = ids
         .iter()
         .map(|&g| block_owner(u64::from(g), total, size) as u32)
@@ -180,15 +221,7 @@ pub fn to_blocks<C: Communicator>(
         *p += width + 1;
     }
     drop(owners);
-    let (got, _) = all_to_all_flat(comm, &flat, &counts);
-    drop(flat);
-    let (lo, hi) = block(total, size, me);
-    let mut out = vec![0.0; (hi - lo) as usize * width];
-    for rec in got.chunks_exact(width + 1) {
-        let row = (rec[0] as u64 - lo) as usize;
-        out[width * row..width * (row + 1)].copy_from_slice(&rec[1..]);
-    }
-    (lo, out)
+    all_to_all_flat(comm, &flat, &counts).0
 }
 
 /// Collective. The rows `ids` (global ids) read from the blocks that

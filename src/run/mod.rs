@@ -44,8 +44,8 @@ use schedule::Schedule;
 use settle::Settling;
 use setup::Contacts;
 pub use summary::{
-    allocator_settings, peak_rss, release_free_memory, trace_memory, BalanceSummary,
-    MechanicsSummary, PhaseTimes, RunSummary, Settled,
+    allocator_settings, peak_rss, release_fragmented_memory, release_free_memory, trace_memory,
+    BalanceSummary, MechanicsSummary, PhaseTimes, RunSummary, Settled,
 };
 
 /// How to run.

@@ -272,20 +272,27 @@ impl Output {
             Some(s) => Some(s.node_temperatures(part)?),
             None => None,
         };
+        // Each field goes to its block of global rows as soon as it is
+        // made, so no rank holds its own rows and the blocks of every field
+        // at once (the output was the peak of the N = 2000 runs on 8 ranks).
         let mut node_fields: Vec<(&str, usize, Vec<f64>)> = Vec::new();
         let mut cell_fields: Vec<(&str, usize, Vec<f64>)> = Vec::new();
+        let mut node =
+            |n, c, v: Vec<f64>| node_fields.push((n, c, node_block(comm, model, part, &v, c)));
         if let Some(t) = &t {
-            node_fields.push(("temperature", 1, t.clone()));
+            node("temperature", 1, t.clone());
         }
         if let Some(Mechanics { domain: m, .. }) = mech {
-            node_fields.push(("displacement", 3, m.displacement()));
-            node_fields.push(("velocity", 3, m.velocity()));
+            node("displacement", 3, m.displacement());
+            node("velocity", 3, m.velocity());
+            let mut cell =
+                |n, c, v: Vec<f64>| cell_fields.push((n, c, cell_block(comm, model, part, &v, c)));
             // Cell fields in name order (the writer indexes fields by name anyway).
             if self.owners_move {
                 let rank = f64::from(comm.rank());
-                cell_fields.push(("owner_rank", 1, vec![rank; part.num_elements()]));
+                cell("owner_rank", 1, vec![rank; part.num_elements()]);
             }
-            cell_fields.push(("stress", 6, m.stress_tensor6(&part.elem_gid)));
+            cell("stress", 6, m.stress_tensor6(&part.elem_gid));
         } else if model.has_motion() {
             // Rigid displacement of each owned node (ParaView: Warp By Vector).
             let u: Vec<f64> = part
@@ -297,17 +304,8 @@ impl Output {
                         .map(|v| v * time)
                 })
                 .collect();
-            node_fields.push(("displacement", 3, u));
+            node("displacement", 3, u);
         }
-        // In global id order: each rank its block of rows.
-        let node_fields: Vec<(&str, usize, Vec<f64>)> = node_fields
-            .into_iter()
-            .map(|(n, c, v)| (n, c, node_block(comm, model, part, &v, c)))
-            .collect();
-        let cell_fields: Vec<(&str, usize, Vec<f64>)> = cell_fields
-            .into_iter()
-            .map(|(n, c, v)| (n, c, cell_block(comm, model, part, &v, c)))
-            .collect();
         let nf: Vec<(&str, usize, &[f64])> = node_fields
             .iter()
             .map(|(n, c, v)| (*n, *c, v.as_slice()))

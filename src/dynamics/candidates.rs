@@ -223,6 +223,7 @@ impl ExplicitDomain {
             self.count_pair_work(&og, &kept, &weights);
             let (here, received) = self.balance_pairs(comm, &og, &kept, &weights);
             crate::run::trace_memory(r, "detect balanced");
+            crate::run::release_fragmented_memory();
             self.install(&og, &here, &received, &thermal);
             crate::run::trace_memory(r, "detect installed");
             self.part_tets = own;

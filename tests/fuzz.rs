@@ -1183,6 +1183,12 @@ fn mutated_meshes_end_in_an_error_or_a_model() {
             false,
             vec!["ymin"],
         ),
+        (
+            "c-shape.msh".into(),
+            std::fs::read(root().join("scenarios/meshes/c-shape.msh")).unwrap(),
+            false,
+            vec![],
+        ),
     ];
     // Every shipped mesh is among the bases.
     for e in std::fs::read_dir(root().join("scenarios/meshes")).unwrap() {

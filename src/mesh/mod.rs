@@ -66,7 +66,7 @@ pub const MAX_ELEMENTS: usize = 20_000_000;
 pub(crate) fn check_element_count(what: &str, count: u128) -> Result<(), MeshError> {
     if count > MAX_ELEMENTS as u128 {
         return Err(MeshError::TooLarge(format!(
-            "{what} would have {count} Tet4, more than fdem's limit of {MAX_ELEMENTS} \
+            "{what} would have {count} elements, more than fdem's limit of {MAX_ELEMENTS} \
              (the mesh is kept on every rank); increase the element size"
         )));
     }

@@ -264,6 +264,10 @@ impl Halo {
                     let (msg, status) = comm.process_at_rank(*r).matched_probe_with_tag(SIZED_TAG);
                     let n = status.count(f64::equivalent_datatype()) as usize;
                     buf.clear();
+                    // An eighth of headroom, not doubling: held all run.
+                    if n > buf.capacity() {
+                        buf.reserve_exact(n + n / 8);
+                    }
                     buf.resize(n, 0.0);
                     msg.matched_receive_into(&mut buf[..]);
                 }

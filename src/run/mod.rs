@@ -301,6 +301,7 @@ impl Stages<'_, '_> {
             // The substeps' message buffers are free: give their pages back
             // before the output allocates its blocks.
             release_free_memory();
+            summary::trace_memory(self.comm.rank(), "trimmed for output");
             self.write(out, step)?;
         } else if at.schedule.is_history(step) {
             self.write_history(out, step)?;

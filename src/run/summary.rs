@@ -426,6 +426,11 @@ pub fn trace_memory(rank: i32, stage: &str) {
             stage,
             rss_mib = rss as f64 / 1024.0,
             peak_mib = hwm as f64 / 1024.0,
+            // Resident pages by kind: the process's own (anonymous), mapped
+            // files (libraries), shared memory (Open MPI's segments).
+            anon_mib = status_kib("RssAnon:") as f64 / 1024.0,
+            file_mib = status_kib("RssFile:") as f64 / 1024.0,
+            shmem_mib = status_kib("RssShmem:") as f64 / 1024.0,
             heap_used_mib = mib(m.uordblks),
             heap_free_mib = mib(m.fordblks),
             heap_top_free_mib = mib(m.keepcost),

@@ -214,3 +214,55 @@ fn one_and_two_ranks_give_bitwise_the_same_particles() {
     let k = p1.disp.len() - 1;
     assert!(p1.disp[k][3 * 64] > 1.5 * p1.disp[k][0]);
 }
+
+/// The bar with its particles in free fall (no supports, gravity, the
+/// packing-stage `free_damping = 0` beside a large `damping`): every node
+/// and sphere moves at g t (t half a substep before the history's time), so the history's momentum is the whole mass
+/// (ρ × the bar's volume: the tets outside the set and the spheres' cubes
+/// (2r)³ inside it) times g t, and its kinetic energy ½ M (g t)². Fails if
+/// the spheres are left out of the momentum, or are damped in free flight.
+#[test]
+fn bar_with_particles_falls_freely_with_all_its_mass() {
+    let text = std::fs::read_to_string(root().join("scenarios/fede-bar.toml")).unwrap();
+    let bc_at = text.find("[[mechanics.bc]]").unwrap();
+    let out_at = text.find("[output]").unwrap();
+    let g = 9.81;
+    let scen = format!(
+        "{}free_damping = 0.0\ngravity = [0.0, 0.0, -{g}]\n\n\
+         [mechanics.contact]\npenalty = 1e9\n\n{}",
+        &text[..bc_at],
+        &text[out_at..]
+    );
+    let dir = out_dir("fede-run-fall");
+    let path = dir.join("fede-fall.toml");
+    std::fs::write(&path, scen).unwrap();
+    for ranks in [1, 2] {
+        let out = dir.join(format!("ranks-{ranks}"));
+        let stdout = run_ok(ranks, &path, &out, &[]);
+        // The energies and momentum are at the level of the last force
+        // evaluation: the mean of the velocities before and after the last
+        // substep, half a substep before the history's time.
+        let line = summary_line(&stdout, "mechanics").expect("a mechanics summary");
+        let dt = 5e-6 / number_before(line, "per step)");
+        let (h, rows) = history(&out, "fede-fall");
+        // ρ × 4 mm × 1 mm × 1 mm.
+        let mass = 1000.0 * L * 1e-3 * 1e-3;
+        let mut checked = 0;
+        for r in rows.iter().filter(|r| r[col(&h, "mech_time")] > 0.0) {
+            let t = r[col(&h, "mech_time")] - 0.5 * dt;
+            let (p, k) = (r[col(&h, "momentum_z")], r[col(&h, "kinetic_energy")]);
+            let (p_ref, k_ref) = (-mass * g * t, 0.5 * mass * (g * t).powi(2));
+            assert!(
+                (p - p_ref).abs() < 1e-9 * p_ref.abs(),
+                "{ranks} rank(s), t = {t:e}: momentum_z {p:e} against -M g t = {p_ref:e}"
+            );
+            assert!(
+                (k - k_ref).abs() < 1e-9 * k_ref,
+                "{ranks} rank(s), t = {t:e}: kinetic {k:e} against M (g t)^2 / 2 = {k_ref:e}"
+            );
+            assert!(r[col(&h, "momentum_x")].abs() < 1e-12 * p_ref.abs());
+            checked += 1;
+        }
+        assert!(checked >= 5, "{checked} history rows");
+    }
+}

@@ -168,6 +168,8 @@ pub struct ExplicitDomain {
     /// kinetic energy after the last substep.
     pub(super) particles: super::particles::DomainParticles,
     pub(super) particle_kinetic: f64,
+    /// Their momentum (kg m/s), likewise.
+    pub(super) particle_momentum: Vector3<f64>,
     pub(super) contact_energy: f64,
     /// Energy dissipated by contact damping and friction and by the mass
     /// damping, this rank's share (J).
@@ -407,6 +409,7 @@ impl ExplicitDomain {
             self_contact,
             particles,
             particle_kinetic: 0.0,
+            particle_momentum: Vector3::zeros(),
             contact_energy: 0.0,
             dissipated: 0.0,
             external_work: 0.0,

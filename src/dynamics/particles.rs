@@ -66,6 +66,17 @@ pub(super) struct DomainParticles {
     pub(super) bodies: Vec<BodyParticles>,
 }
 
+/// What a substep of the spheres gives the domain's energies and momentum.
+#[derive(Debug, Clone, Copy, Default)]
+pub(super) struct ParticleStep {
+    /// Kinetic energy (J), translation and rotation.
+    pub(super) kinetic: f64,
+    /// Energy the mass damping took over the substep (J).
+    pub(super) damped: f64,
+    /// Linear momentum (kg m/s).
+    pub(super) momentum: Vector3<f64>,
+}
+
 /// This rank's particles for the output: global numbers, reference
 /// positions, displacements and velocities (flat, 3 per particle).
 #[derive(Debug, Clone, Default)]
@@ -275,18 +286,21 @@ impl DomainParticles {
         energy
     }
 
-    /// Advance the spheres over `dt` with mass damping `damping` (1/s) and
-    /// `gravity`. Returns the kinetic energy at the end (J, translation
-    /// and rotation at the new velocities) and the energy the damping
-    /// took; an error names a particle that became non-finite.
+    /// Advance the spheres over `dt` with `gravity` and the mass damping
+    /// (1/s) `damping(body)` gives each body. Returns the kinetic energy
+    /// and momentum at the time level of the forces (t_n: translation and
+    /// rotation at the mean of the old and new velocities, as for the
+    /// nodes) and the energy the damping took; an error names a particle
+    /// that became non-finite.
     pub(super) fn advance(
         &mut self,
         dt: f64,
-        damping: f64,
+        damping: impl Fn(u32) -> f64,
         gravity: &Vector3<f64>,
-    ) -> Result<(f64, f64)> {
-        let (mut kinetic, mut damped) = (0.0, 0.0);
+    ) -> Result<ParticleStep> {
+        let mut out = ParticleStep::default();
         for p in &mut self.bodies {
+            let damping = damping(p.body);
             let weight = gravity * p.mass;
             p.force.iter_mut().for_each(|a| *a += weight);
             let (v_old, w_old) = (p.v.clone(), p.w.clone());
@@ -303,13 +317,13 @@ impl DomainParticles {
                     )));
                 }
                 let (vm, wm) = ((p.v[k] + v_old[k]) * 0.5, (p.w[k] + w_old[k]) * 0.5);
-                damped +=
-                    damping * dt * (p.mass * vm.norm_squared() + p.inertia * wm.norm_squared());
-                kinetic +=
-                    0.5 * (p.mass * p.v[k].norm_squared() + p.inertia * p.w[k].norm_squared());
+                let twice_kinetic = p.mass * vm.norm_squared() + p.inertia * wm.norm_squared();
+                out.damped += damping * dt * twice_kinetic;
+                out.kinetic += 0.5 * twice_kinetic;
+                out.momentum += vm * p.mass;
             }
         }
-        Ok((kinetic, damped))
+        Ok(out)
     }
 
     /// Per body here, the links' force on its spheres in the last substep

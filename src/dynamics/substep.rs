@@ -280,14 +280,31 @@ impl ExplicitDomain {
             self.joints.add_forces(&self.x, t, &mut self.f);
             self.mark_cracks();
         }
+        let free = self.free_damping.unwrap_or(self.damping);
+        if self.free_damping.is_some() {
+            // Which bodies touch something, over all ranks (a body's pairs
+            // may be on another rank than its nodes).
+            let mine = self.touching.clone();
+            comm.all_reduce_into(&mine[..], &mut self.touching[..], SystemOperation::max());
+        }
         if !self.particles.is_empty() {
             // Bonds and links after the element sum, in each body's fixed order (its rank holds it whole).
             let (x, v) = (&self.x, &self.v);
             self.strain_energy += self.particles.add_forces(x, v, self.dt, &mut self.f);
-            match self.particles.advance(self.dt, self.damping, &self.gravity) {
-                Ok((kinetic, damped)) => {
-                    self.particle_kinetic = kinetic;
-                    self.dissipated += damped;
+            let (touching, damping) = (&self.touching, self.damping);
+            // The packing-stage damping of the nodes below, per body.
+            let body_damping = |b: u32| {
+                if touching[b as usize] != 0 {
+                    damping
+                } else {
+                    free
+                }
+            };
+            match self.particles.advance(self.dt, body_damping, &self.gravity) {
+                Ok(step) => {
+                    self.particle_kinetic = step.kinetic;
+                    self.particle_momentum = step.momentum;
+                    self.dissipated += step.damped;
                 }
                 Err(e) => {
                     error.get_or_insert(e);
@@ -300,13 +317,6 @@ impl ExplicitDomain {
             gravity: self.gravity,
             mass_damping: self.damping,
         };
-        let free = self.free_damping.unwrap_or(self.damping);
-        if self.free_damping.is_some() {
-            // Which bodies touch something, over all ranks (a body's pairs
-            // may be on another rank than its nodes).
-            let mine = self.touching.clone();
-            comm.all_reduce_into(&mine[..], &mut self.touching[..], SystemOperation::max());
-        }
         let (touching, owned_body, damping) = (&self.touching, &self.owned_body, self.damping);
         // Not in the seeds: packing-stage mass damping only on bodies in contact (free flight undamped).
         let node_damping = |i: usize| {

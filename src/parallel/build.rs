@@ -190,7 +190,17 @@ impl Part {
             .collect();
         let local = make_bodies(model, &files, &held);
         let local = agree(comm, local)?;
-        let mut part = number(comm, local);
+        // The particles of the whole bodies held here are thermal rows too (issue 21).
+        let particle_rows = if model.thermal_active {
+            whole
+                .iter()
+                .filter_map(|&b| model.body_particles(&model.bodies[b as usize]))
+                .map(|p| p.region.centres.len())
+                .sum()
+        } else {
+            0
+        };
+        let mut part = number(comm, local, particle_rows);
         part.whole_bodies = whole;
         Ok(part)
     }
@@ -395,19 +405,22 @@ fn joint_classes(joints: &[super::PartJoint]) -> HashMap<u32, u32> {
 /// Collective. The PETSc rows of this rank's owned nodes `owned` (global
 /// ids, ascending): each its own row in order from this rank's start,
 /// except that a node `tied` to a lower one takes that one's row (the
-/// lowest of a class comes first). Returns every rank's start (and the
-/// total) and the row of each owned node.
+/// lowest of a class comes first); `extra` more rows (the particles')
+/// end the rank's range. Returns every rank's start (and the total) and
+/// the row of each owned node.
 fn number_rows(
     comm: &SimpleCommunicator,
     owned: impl Iterator<Item = u32> + Clone,
     tied: &HashMap<u32, u32>,
+    extra: usize,
 ) -> (Vec<usize>, HashMap<u32, u32>) {
     let size = comm.size() as usize;
     let rank = comm.rank() as usize;
     let n_rows = owned
         .clone()
         .filter(|g| tied.get(g).is_none_or(|r| r == g))
-        .count();
+        .count()
+        + extra;
     let counts: Vec<u64> = all_gather(comm, &[n_rows as u64]);
     let mut starts = vec![0usize; size + 1];
     for r in 0..size {
@@ -428,8 +441,9 @@ fn number_rows(
     (starts, row_of)
 }
 
-/// Collective. Owners and PETSc numbers of the made nodes, and the part.
-fn number(comm: &SimpleCommunicator, m: Made) -> Part {
+/// Collective. Owners and PETSc numbers of the made nodes, and the part,
+/// with `particle_rows` thermal rows of particles after its nodes'.
+fn number(comm: &SimpleCommunicator, m: Made, particle_rows: usize) -> Part {
     let size = comm.size() as usize;
     let rank = comm.rank() as usize;
     // Owners of the split bodies' nodes: the lowest rank holding each,
@@ -478,7 +492,7 @@ fn number(comm: &SimpleCommunicator, m: Made) -> Part {
         .zip(&owner)
         .filter(|(_, &o)| o as usize == rank)
         .map(|(&g, _)| g);
-    let (starts, mut petsc_of) = number_rows(comm, owned_gids, &tied);
+    let (starts, mut petsc_of) = number_rows(comm, owned_gids, &tied, particle_rows);
     // Ghosts' numbers: owners tell the rendezvous rank, which tells the holders.
     let mut tell: Vec<Vec<u32>> = vec![Vec::new(); size];
     for (i, &g) in m.node_gid.iter().enumerate() {
@@ -563,6 +577,7 @@ fn number(comm: &SimpleCommunicator, m: Made) -> Part {
         bc,
         whole: None,
         whole_bodies: Vec::new(),
+        particle_rows,
         joints: m
             .joints
             .iter()
@@ -608,7 +623,12 @@ impl Part {
             .collect();
         let tied = joint_classes(&intact);
         let no = self.n_owned;
-        let (starts, row_of) = number_rows(comm, self.node_gid[..no].iter().copied(), &tied);
+        let (starts, row_of) = number_rows(
+            comm,
+            self.node_gid[..no].iter().copied(),
+            &tied,
+            self.particle_rows,
+        );
         for l in 0..no {
             self.petsc[l] = row_of[&self.node_gid[l]];
         }

@@ -79,6 +79,11 @@ pub struct Part {
     /// body is held whole, so all its joints are here): corners over local
     /// nodes, tets by global id, in the order of the body's joints.
     pub joints: Vec<PartJoint>,
+    /// Thermal rows of the bonded particles of the bodies held here
+    /// (issue 21): the last ones of this rank's range, after the nodes'
+    /// (the whole bodies' particles in ascending body id, each body's in
+    /// its lattice's order). Zero without heat.
+    pub particle_rows: usize,
 }
 
 /// One cohesive joint of a part.
@@ -120,14 +125,22 @@ impl Part {
     }
 
     /// Number of this rank's PETSc rows: its owned nodes, less the copies
-    /// that share a row with a node tied to them by intact joints.
+    /// that share a row with a node tied to them by intact joints, plus
+    /// its particles' rows.
     pub fn owned_rows(&self) -> usize {
         self.starts[self.rank + 1] - self.starts[self.rank]
     }
 
-    /// A value per owned node from a value per owned PETSc row.
+    /// This rank's first particle row (PETSc numbering): its particle
+    /// rows are [first, end of the owned range).
+    pub fn first_particle_row(&self) -> usize {
+        self.starts[self.rank + 1] - self.particle_rows
+    }
+
+    /// A value per owned node from a value per owned PETSc row (particle
+    /// rows left out).
     pub fn rows_to_nodes(&self, rows: &[f64]) -> Vec<f64> {
-        if rows.len() == self.n_owned {
+        if rows.len() == self.n_owned && self.particle_rows == 0 {
             return rows.to_vec();
         }
         let lo = self.starts[self.rank];
@@ -138,10 +151,11 @@ impl Part {
     }
 
     /// A value per owned PETSc row from a value per owned node (the copies
-    /// sharing a row hold the same value; the last one's is taken).
+    /// sharing a row hold the same value; the last one's is taken; particle
+    /// rows are zero).
     pub fn nodes_to_rows(&self, nodes: &[f64]) -> Vec<f64> {
         let n = self.owned_rows();
-        if n == self.n_owned {
+        if n == self.n_owned && self.particle_rows == 0 {
             return nodes[..n].to_vec();
         }
         let lo = self.starts[self.rank];
@@ -470,6 +484,7 @@ impl Part {
             }),
             whole_bodies: Vec::new(),
             joints: Vec::new(),
+            particle_rows: 0,
         }
     }
 

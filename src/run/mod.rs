@@ -373,10 +373,15 @@ impl Stages<'_, '_> {
                 m,
                 continue_after,
             )?;
-            out.particles = particle_output::ParticleOutput::open(
-                self.comm, self.model, &out.dir, &out.stem, m,
-            )?;
         }
+        out.particles = particle_output::ParticleOutput::open(
+            self.comm,
+            self.model,
+            &self.part,
+            &out.dir,
+            &out.stem,
+            self.mech.as_ref(),
+        )?;
         Ok(out)
     }
 

@@ -318,8 +318,8 @@ impl Output {
         if let (Some(j), Some(m)) = (self.joints.as_mut(), mech) {
             j.write(comm, time, m)?;
         }
-        if let (Some(p), Some(m)) = (self.particles.as_mut(), mech) {
-            p.write(comm, time, m)?;
+        if let Some(p) = self.particles.as_mut() {
+            p.write(comm, time, model, part, sys.as_ref(), mech)?;
         }
         if let Some(st) = self.status.as_mut() {
             let positions = match mech {

@@ -2,7 +2,8 @@
 //! `<stem>_particles.xdmf`, a point-set series beside the bodies' grid
 //! (one XDMF Polyvertex cell per sphere, at its reference centre), so
 //! ParaView shows the spheres over the finite elements: per output each
-//! sphere's `displacement` (warp by it) and `velocity`. Rows are the
+//! sphere's `displacement` (warp by it) and `velocity` in a run with
+//! mechanics, its `temperature` in a run with heat. Rows are the
 //! global particle numbers (body by body, each body's spheres in its
 //! lattice's order), so the files do not depend on the number of ranks.
 
@@ -14,6 +15,9 @@ use crate::error::{Error, Result};
 use crate::io::{MeshPart, TimeSeriesWriter};
 use crate::model::Model;
 use crate::parallel::exchange::to_blocks;
+use crate::parallel::Part;
+use crate::thermal::particles::ParticleHeat;
+use crate::thermal::ThermalSystem;
 
 use super::Mechanics;
 
@@ -33,12 +37,15 @@ fn ids(gid: &[u64]) -> Vec<u32> {
 impl ParticleOutput {
     /// Collective. Create `<dir>/<stem>_particles.h5` with the spheres at
     /// their reference centres; None when the model has no particles.
+    /// The spheres come from the mechanics when there is one, else from
+    /// the thermal rows of `part`.
     pub fn open(
         comm: &SimpleCommunicator,
         model: &Model,
+        part: &Part,
         dir: &Path,
         stem: &str,
-        mech: &Mechanics,
+        mech: Option<&Mechanics>,
     ) -> Result<Option<ParticleOutput>> {
         let (_, total) = model.particle_offsets();
         if total == 0 {
@@ -50,9 +57,18 @@ impl ParticleOutput {
                 u32::MAX
             )));
         }
-        let rows = mech.domain.particle_rows();
-        let point_ids = ids(&rows.gid);
-        let (p0, coords) = to_blocks(comm, &point_ids, &rows.reference, 3, total);
+        let (gid, reference) = match mech {
+            Some(m) => {
+                let rows = m.domain.particle_rows();
+                (rows.gid, rows.reference)
+            }
+            None => {
+                let (gid, reference, _) = ParticleHeat::new(model, part).rows(part, None);
+                (gid, reference)
+            }
+        };
+        let point_ids = ids(&gid);
+        let (p0, coords) = to_blocks(comm, &point_ids, &reference, 3, total);
         let coords: Vec<[f64; 3]> = coords.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
         // One point cell per sphere, the cells in the points' blocks.
         let cells: Vec<u32> = (p0..p0 + coords.len() as u64).map(|g| g as u32).collect();
@@ -77,17 +93,43 @@ impl ParticleOutput {
         }))
     }
 
-    /// Collective. Write the particles' state at `time`.
-    pub fn write(&mut self, comm: &SimpleCommunicator, time: f64, mech: &Mechanics) -> Result<()> {
-        let rows = mech.domain.particle_rows();
-        let point_ids = ids(&rows.gid);
-        let (_, u) = to_blocks(comm, &point_ids, &rows.displacement, 3, self.total);
-        let (_, v) = to_blocks(comm, &point_ids, &rows.velocity, 3, self.total);
-        self.writer.write_step(
-            time,
-            &[("displacement", 3, &u[..]), ("velocity", 3, &v[..])],
-            &[],
-        )?;
+    /// Collective. Write the particles' state at `time`: their motion
+    /// from `mech`, their temperatures from `sys`'s rows of `part`.
+    pub fn write(
+        &mut self,
+        comm: &SimpleCommunicator,
+        time: f64,
+        model: &Model,
+        part: &Part,
+        sys: Option<&ThermalSystem>,
+        mech: Option<&Mechanics>,
+    ) -> Result<()> {
+        let mut fields: Vec<(&str, usize, Vec<f64>)> = Vec::new();
+        if let Some(m) = mech {
+            let rows = m.domain.particle_rows();
+            let point_ids = ids(&rows.gid);
+            fields.push((
+                "displacement",
+                3,
+                to_blocks(comm, &point_ids, &rows.displacement, 3, self.total).1,
+            ));
+            fields.push((
+                "velocity",
+                3,
+                to_blocks(comm, &point_ids, &rows.velocity, 3, self.total).1,
+            ));
+        }
+        if let Some(s) = sys {
+            let owned = s.t.to_local_vec()?;
+            let (gid, _, t) = ParticleHeat::new(model, part).rows(part, Some(&owned));
+            let t = to_blocks(comm, &ids(&gid), &t, 1, self.total).1;
+            fields.push(("temperature", 1, t));
+        }
+        let f: Vec<(&str, usize, &[f64])> = fields
+            .iter()
+            .map(|(n, c, v)| (*n, *c, v.as_slice()))
+            .collect();
+        self.writer.write_step(time, &f, &[])?;
         Ok(())
     }
 

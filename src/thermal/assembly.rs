@@ -370,6 +370,8 @@ pub fn assemble<'p>(
     let owned = part.owned_rows();
     let g = |l: u32| part.petsc[l as usize] as i32;
     let elem_idx = |e: usize| part.mesh.tets[e].map(g);
+    // The bonded particles' rows (issue 21).
+    let particles = super::particles::ParticleHeat::new(model, part);
     // The average-ΔT rows, and the bodies' weights they couple to.
     let (rows, weights) = if mode == DeltaT::Average {
         let rows = average_rows(model, contacts);
@@ -400,6 +402,7 @@ pub fn assemble<'p>(
             let idx = elem_idx(e);
             p.add(&idx, &idx)?;
         }
+        particles.pattern(p)?;
         for (f, _, _) in &part.bc.convection {
             let idx = f.map(g);
             p.add(&idx, &idx)?;
@@ -456,6 +459,7 @@ pub fn assemble<'p>(
             load_flux.set_values(&idx, &element::source_load(&geo, q), true)?;
         }
     }
+    particles.add(&mut capacity, &mut stiffness, &mut load_flux)?;
     let coords = |f: &[u32; 3]| f.map(|n| part.mesh.nodes[n as usize]);
     for (f, q) in &part.bc.flux {
         let (area, _) = element::triangle_area_normal(&coords(f));

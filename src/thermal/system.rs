@@ -261,7 +261,7 @@ impl<'p> ThermalSystem<'p> {
         let mut t_end = t.duplicate()?;
         let mut ramped: Vec<(usize, f64, f64, f64)> = Vec::new();
         {
-            let start = part.nodes_to_rows(&part.bc.initial_t[..part.num_owned()]);
+            let start = super::particles::initial_rows(model, part);
             let mut v = t.view_mut()?;
             v.copy_from_slice(&start);
             let mut e = t_end.view_mut()?;
@@ -908,7 +908,9 @@ impl<'p> ThermalSystem<'p> {
         t_nodes: &[f64],
     ) -> crate::error::Result<()> {
         let next = ThermalSystem::new(petsc, comm, model, part, solver, contacts)?;
-        self.replace(next, &part.nodes_to_rows(t_nodes))
+        let old = self.t.to_local_vec()?;
+        let rows = super::particles::rows_keeping_particles(part, t_nodes, &old);
+        self.replace(next, &rows)
     }
 
     /// Continue from a saved state: owned temperatures (PETSc order), the

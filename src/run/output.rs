@@ -187,6 +187,11 @@ impl Output {
                 }
             }
         }
+        if heat && model.has_particles() {
+            for s in ["min", "mean", "max"] {
+                header.push(format!("particles_{s}_T"));
+            }
+        }
         if mechanics {
             for g in &groups.names {
                 for d in ["x", "y", "z"] {
@@ -461,6 +466,9 @@ impl Output {
             for s in self.groups.reduce(&self.stats.compute(comm, t)) {
                 row.extend_from_slice(&s);
             }
+        }
+        if let (Some(s), true) = (sys.as_ref(), model.has_particles()) {
+            row.extend(super::particle_output::temperature_range(comm, model, part, s)?);
         }
         if let Some(m) = mech {
             let ng = self.groups.names.len();

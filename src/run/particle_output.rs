@@ -6,10 +6,15 @@
 //! mechanics, its `temperature` in a run with heat. Rows are the
 //! global particle numbers (body by body, each body's spheres in its
 //! lattice's order), so the files do not depend on the number of ranks.
+//! The history's `particles_min_T`, `particles_mean_T` and
+//! `particles_max_T` are over all spheres (equal cells: the mean is the
+//! volume mean).
 
 use std::path::{Path, PathBuf};
 
+use mpi::collective::SystemOperation;
 use mpi::topology::SimpleCommunicator;
+use mpi::traits::CommunicatorCollectives;
 
 use crate::error::{Error, Result};
 use crate::io::{MeshPart, TimeSeriesWriter};
@@ -138,4 +143,23 @@ impl ParticleOutput {
         self.writer.close()?;
         Ok(())
     }
+}
+
+/// Collective. The lowest, mean and highest temperature of all spheres.
+pub(super) fn temperature_range(
+    comm: &SimpleCommunicator,
+    model: &Model,
+    part: &Part,
+    sys: &ThermalSystem,
+) -> Result<[f64; 3]> {
+    let owned = sys.t.to_local_vec()?;
+    let (_, _, t) = ParticleHeat::new(model, part).rows(part, Some(&owned));
+    let mine_lo = t.iter().copied().fold(f64::INFINITY, f64::min);
+    let mine_hi = t.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let mine_sum = [t.iter().sum::<f64>(), t.len() as f64];
+    let (mut lo, mut hi, mut sum) = (0.0f64, 0.0f64, [0.0f64; 2]);
+    comm.all_reduce_into(&mine_lo, &mut lo, SystemOperation::min());
+    comm.all_reduce_into(&mine_hi, &mut hi, SystemOperation::max());
+    comm.all_reduce_into(&mine_sum[..], &mut sum[..], SystemOperation::sum());
+    Ok([lo, sum[0] / sum[1].max(1.0), hi])
 }

@@ -168,10 +168,18 @@ fn bar_conducts_the_linear_profile_through_both_regions() {
         fe_err[0], fe_err[1], fe_flux_err[0], fe_flux_err[1]
     );
     assert!(de_err < 5e-3, "DE temperature off by {de_err:e} of dT");
-    assert!(fe_err[0] < 1.5e-2, "FE temperature off by {:e} of dT", fe_err[0]);
-    // The links take the heat at points (the bond midpoints): the
-    // interface's nodes at the bar's edges are the worst (module docs).
-    assert!(fe_err[1] < 4e-2, "interface temperature off by {:e} of dT", fe_err[1]);
+    assert!(
+        fe_err[0] < 1.5e-2,
+        "FE temperature off by {:e} of dT",
+        fe_err[0]
+    );
+    // The links take the heat at points (the bond midpoints): the interface's
+    // nodes at the bar's edges are the worst (docs/validation.md says why).
+    assert!(
+        fe_err[1] < 4e-2,
+        "interface temperature off by {:e} of dT",
+        fe_err[1]
+    );
     // Each section carries the same heat (conservation, to the solver's
     // tolerance), within 1 % of k ΔT / L (the lattice's edge spheres).
     for (what, e) in [
@@ -182,9 +190,16 @@ fn bar_conducts_the_linear_profile_through_both_regions() {
         ("lattice mid-plane", de_plane),
     ] {
         assert!(e.abs() < 1e-2, "{what} flux off by {e:e}");
-        assert!((e - fe_left).abs() < 1e-6, "{what} flux {e:e}, FE left {fe_left:e}");
+        assert!(
+            (e - fe_left).abs() < 1e-6,
+            "{what} flux {e:e}, FE left {fe_left:e}"
+        );
     }
-    assert!(fe_flux_err[0] < 0.1, "an element's flux off by {:e}", fe_flux_err[0]);
+    assert!(
+        fe_flux_err[0] < 0.1,
+        "an element's flux off by {:e}",
+        fe_flux_err[0]
+    );
     // Heat: stored = ρ c ∫ T dV of the linear profile; the change = the heat in through the ends.
     let (hd, rows) = history(&out, "fede-heat-bar");
     let (stored, inflow) = (col(&hd, "stored_heat"), col(&hd, "boundary_heat_in"));
@@ -200,7 +215,10 @@ fn bar_conducts_the_linear_profile_through_both_regions() {
         last[stored]
     );
     assert!(store_err.abs() < 1e-9, "stored heat off by {store_err:e}");
-    assert!(balance < 1e-10 * expected, "heat balance off by {balance:e} J");
+    assert!(
+        balance < 1e-10 * expected,
+        "heat balance off by {balance:e} J"
+    );
     // The history's particle columns are the file's.
     let lo = pt.iter().copied().fold(f64::INFINITY, f64::min);
     assert_eq!(last[col(&hd, "particles_min_T")], lo);
@@ -208,7 +226,10 @@ fn bar_conducts_the_linear_profile_through_both_regions() {
     assert_within_bounds(&r, 0.0, DT, "fede heat bar nodes");
     for (s, t) in p.temperature.iter().enumerate() {
         for &v in t {
-            assert!((-1e-9..=DT + 1e-9).contains(&v), "output {s}: a sphere at {v}");
+            assert!(
+                (-1e-9..=DT + 1e-9).contains(&v),
+                "output {s}: a sphere at {v}"
+            );
         }
     }
 }
@@ -251,10 +272,16 @@ fn one_and_two_ranks_give_the_same_temperatures() {
             .collect();
         assert!(ranks.iter().all(|&x| x == ranks[0]), "bar {b} split");
     }
-    assert!(rank.contains(&0) && rank.contains(&1), "one rank held both bars");
+    assert!(
+        rank.contains(&0) && rank.contains(&1),
+        "one rank held both bars"
+    );
     let (r1, r2) = (read_results(&o1, "two-bars"), read_results(&o2, "two-bars"));
     assert_same_temperatures(&r1, &r2, 1e-8, "fede heat bars, 1 vs 2 ranks");
-    let (p1, p2) = (read_particles(&o1, "two-bars"), read_particles(&o2, "two-bars"));
+    let (p1, p2) = (
+        read_particles(&o1, "two-bars"),
+        read_particles(&o2, "two-bars"),
+    );
     assert_eq!(p1.centres.len(), 128);
     assert_eq!(p1.centres, p2.centres);
     assert_eq!(p1.temperature.len(), 6);
@@ -268,6 +295,9 @@ fn one_and_two_ranks_give_the_same_temperatures() {
     // The transient has reached the spheres, and the second bar's are about half the first's.
     let k = p1.temperature.len() - 1;
     let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
-    let (a, b) = (mean(&p1.temperature[k][..64]), mean(&p1.temperature[k][64..]));
+    let (a, b) = (
+        mean(&p1.temperature[k][..64]),
+        mean(&p1.temperature[k][64..]),
+    );
     assert!(a > 10.0 && (b / a - 0.5).abs() < 1e-9, "{a} {b}");
 }

@@ -468,7 +468,9 @@ impl Output {
             }
         }
         if let (Some(s), true) = (sys.as_ref(), model.has_particles()) {
-            row.extend(super::particle_output::temperature_range(comm, model, part, s)?);
+            row.extend(super::particle_output::temperature_range(
+                comm, model, part, s,
+            )?);
         }
         if let Some(m) = mech {
             let ng = self.groups.names.len();

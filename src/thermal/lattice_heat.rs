@@ -32,7 +32,7 @@ pub fn bond_block(g: f64) -> [f64; 4] {
 pub fn link_block(g: f64, shape: &[f64; 4]) -> [f64; 25] {
     // seed 002 eqs 16–17 for heat: T_o = Σ N_I T_I, Q_s = g (T_o − T_s), Q_I = −N_I Q_s.
     let a = [1.0, -shape[0], -shape[1], -shape[2], -shape[3]];
-    std::array::from_fn(|k| g * a[k / 5] * a[k % 5])
+    std::array::from_fn(|k| g * (a[k / 5] * a[k % 5]))
 }
 
 /// Heat flow (W) into the sphere of a link of conductance `g` at sphere

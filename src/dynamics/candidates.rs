@@ -212,7 +212,15 @@ impl ExplicitDomain {
             let own = std::mem::take(&mut self.part_tets);
             let r = comm.rank();
             crate::run::trace_memory(r, "detect start");
-            let ghosts = exchange_ghosts(comm, &own, &mut self.pieces, self.margin, self.thermal);
+            let itself = self.self_contact.split_bodies();
+            let ghosts = exchange_ghosts(
+                comm,
+                &own,
+                &mut self.pieces,
+                self.margin,
+                self.thermal,
+                &itself,
+            );
             crate::run::trace_memory(r, "detect ghosts");
             let og = OwnAndGhosts {
                 own: &own,

@@ -289,7 +289,7 @@ impl ExplicitDomain {
             comm,
             super::joints::DomainJoints::new(model, part, &body_held),
         )?;
-        let self_contact = super::self_contact::SelfContact::new(part, &body_held);
+        let self_contact = super::self_contact::SelfContact::new(model, part, &body_held);
         let mut dom = ExplicitDomain {
             n_owned,
             node_gid: part.node_gid.clone(),
@@ -484,9 +484,10 @@ impl ExplicitDomain {
         self.elem_dt = new;
     }
 
-    /// Cohesive joints this rank advances.
+    /// Cohesive joints this rank advances and owns (a joint across a cut
+    /// is advanced on both sides' ranks, owned on one).
     pub fn num_joints(&self) -> usize {
-        self.joints.sets.iter().map(|s| s.faces.len()).sum()
+        self.joints.num_owned()
     }
 
     /// Joints broken on this rank since the thermal rows were last numbered.

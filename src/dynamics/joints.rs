@@ -1,8 +1,17 @@
 //! The cohesive joints of a rank's jointed bodies (issue 19) in the
 //! explicit loop: one [`JointSet`] per fracture material, advanced each
-//! substep after the owned nodes' forces are summed. A jointed body is held
-//! whole by one rank, so each of its nodes receives its joints' forces on
-//! that rank, in the body's joint order: the same sums on any rank count.
+//! substep after the owned nodes' forces are summed.
+//!
+//! Every joint with a tet here is advanced here. A body held whole has all
+//! its joints here; a fully jointed body split over the ranks
+//! (`parallel::build`) has each node in one tet, owned with it, so every
+//! joint at an owned node is here too, and a joint across the cut is
+//! advanced on both its tets' ranks from the same positions (the other
+//! tet's face corners are ghosts), each rank adding its forces to its own
+//! side only. Each node thus receives all its joints' forces on its rank,
+//! in the global order (material, then body and joint): the same sums on
+//! any rank count. A joint is owned once, by the rank of its lower tet:
+//! only there is it counted in the totals, written out and checkpointed.
 
 use nalgebra::Vector3;
 
@@ -27,6 +36,8 @@ pub(super) struct DomainJoints {
     closed_seen: (usize, u64),
     /// Every joint of the part, in the part's order, for the output.
     rows: Vec<JointRow>,
+    /// Local nodes below this are owned (receive joint forces here).
+    n_owned: usize,
 }
 
 /// A joint of the part as the output sees it.
@@ -40,6 +51,8 @@ struct JointRow {
     set: u32,
     index: u32,
     faces: crate::fracture::insert::JointFaces,
+    /// Owned here (its lower tet is here): counted, written, saved.
+    owned: bool,
 }
 
 /// This rank's joints for the output, in its order: global numbers, and
@@ -68,23 +81,18 @@ impl DomainJoints {
         let mut by_material: std::collections::BTreeMap<u32, (Vec<_>, Vec<bool>, Vec<usize>)> =
             Default::default();
         let (offsets, _) = model.joint_offsets();
-        let mut in_body: std::collections::HashMap<u32, u64> = Default::default();
         let mut rows = Vec::with_capacity(part.joints.len());
         for (k, j) in part.joints.iter().enumerate() {
-            let e = part
-                .elem_gid
-                .binary_search(&j.faces.tets[0])
-                .expect("a joint's tet is held");
-            let body = part.mesh.body[e];
-            let at = in_body.entry(body).or_insert(0);
+            let body = j.body;
+            let lower = j.faces.tets[0].min(j.faces.tets[1]);
             rows.push(JointRow {
-                gid: offsets[body as usize] + *at,
+                gid: offsets[body as usize] + u64::from(j.index),
                 body,
                 set: u32::MAX,
                 index: 0,
                 faces: j.faces,
+                owned: part.local_element(lower).is_some(),
             });
-            *at += 1;
             if body_held[body as usize] {
                 continue;
             }
@@ -110,10 +118,12 @@ impl DomainJoints {
             for (j, _) in broken.iter().enumerate().filter(|(_, &b)| b) {
                 set.start_broken(j, &x);
             }
+            set.count_only(at.iter().map(|&k| rows[k].owned).collect());
             d.sets.push(set);
             d.out.push(vec![[Vector3::zeros(); 3]; n]);
         }
         d.rows = rows;
+        d.n_owned = part.num_owned();
         Ok(d)
     }
 
@@ -121,7 +131,7 @@ impl DomainJoints {
     /// positions `x0`).
     pub(super) fn output_rows(&self, x: &[Vector3<f64>], x0: &[Vector3<f64>]) -> JointRows {
         let mut r = JointRows::default();
-        for row in &self.rows {
+        for row in self.rows.iter().filter(|r| r.owned) {
             let f = &row.faces;
             r.gid.push(row.gid);
             for &n in &f.a {
@@ -146,6 +156,14 @@ impl DomainJoints {
         r
     }
 
+    /// Joints advanced here whose owner this rank is.
+    pub(super) fn num_owned(&self) -> usize {
+        self.rows
+            .iter()
+            .filter(|r| r.owned && r.set != u32::MAX)
+            .count()
+    }
+
     /// Whether there are joints here.
     pub(super) fn is_empty(&self) -> bool {
         self.sets.is_empty()
@@ -158,11 +176,18 @@ impl DomainJoints {
         for (set, out) in self.sets.iter_mut().zip(&mut self.out) {
             let s = set.forces(x, t, out);
             // a's corners get the joint's forces, b's their negatives
-            // (exactly: f − g is f + (−g) in floating point).
+            // (exactly: f − g is f + (−g) in floating point); a corner
+            // owned elsewhere gets them on its own rank.
+            let no = self.n_owned;
             for (faces, forces) in set.faces.iter().zip(out.iter()) {
                 for k in 0..3 {
-                    f[faces.a[k] as usize] += forces[k];
-                    f[faces.b[k] as usize] -= forces[k];
+                    let (a, b) = (faces.a[k] as usize, faces.b[k] as usize);
+                    if a < no {
+                        f[a] += forces[k];
+                    }
+                    if b < no {
+                        f[b] -= forces[k];
+                    }
                 }
             }
             tot.add(&s);
@@ -185,11 +210,13 @@ impl DomainJoints {
 
     /// Per jointed body here (ascending id): its joints, broken joints
     /// (initial cracks not counted), crack area (m²), fracture energy (J),
-    /// first break (s; NaN if none) and the mean of its joints' reference
-    /// face centroids (m): `[body, joints, broken, area, energy, first, x, y, z]`.
+    /// first break (s; NaN if none) and the sum of its joints' reference
+    /// face centroids (m): `[body, joints, broken, area, energy, first, x, y, z]`,
+    /// over the joints owned here (a split body's rows are summed over
+    /// the ranks, [`merge_body_cracks`]).
     pub(super) fn body_cracks(&self, x0: &[Vector3<f64>]) -> Vec<[f64; 9]> {
         let mut by: std::collections::BTreeMap<u32, [f64; 9]> = Default::default();
-        for row in &self.rows {
+        for row in self.rows.iter().filter(|r| r.owned) {
             let r = by.entry(row.body).or_insert_with(|| {
                 let mut v = [0.0; 9];
                 v[0] = f64::from(row.body);
@@ -221,23 +248,16 @@ impl DomainJoints {
                 r[5] = if r[5].is_nan() { at } else { r[5].min(at) };
             }
         }
-        by.into_values()
-            .map(|mut r| {
-                for d in 0..3 {
-                    r[6 + d] /= r[1];
-                }
-                r
-            })
-            .collect()
+        by.into_values().collect()
     }
 
-    /// Every joint's history for a checkpoint: global joint numbers and
-    /// [`SAVED_JOINT`] values per joint (a held body's joints are intact).
+    /// Every owned joint's history for a checkpoint: global joint numbers
+    /// and [`SAVED_JOINT`] values per joint (a held body's joints are intact).
     pub(super) fn saved(&self) -> (Vec<u32>, Vec<f64>) {
         let crack_of: Vec<Vec<u32>> = self.sets.iter().map(|s| s.crack_index()).collect();
         let mut gid = Vec::with_capacity(self.rows.len());
         let mut v = Vec::with_capacity(self.rows.len() * SAVED_JOINT);
-        for row in &self.rows {
+        for row in self.rows.iter().filter(|r| r.owned) {
             gid.push(row.gid as u32);
             match self.sets.get(row.set as usize) {
                 Some(s) => {
@@ -253,7 +273,8 @@ impl DomainJoints {
         (gid, v)
     }
 
-    /// The global joint numbers of this rank's joints, in its order.
+    /// The global joint numbers of every joint here (owned or not), in
+    /// the part's order.
     pub(super) fn gids(&self) -> Vec<u32> {
         self.rows.iter().map(|r| r.gid as u32).collect()
     }
@@ -336,17 +357,17 @@ impl DomainJoints {
 
 impl super::ExplicitDomain {
     /// The faces of joints broken since the last call become boundary
-    /// faces of their tets (and their corners boundary nodes), so that the
+    /// faces of their tets here (and their corners boundary nodes), so that the
     /// contact search of other bodies sees them; each broken joint's own
     /// two faces meet through its crack contact ([`crate::fracture::crack`]).
     pub(super) fn mark_cracks(&mut self) {
         let own = &mut self.part_tets;
         for (tets, sides) in self.joints.take_new_cracks() {
             for (gid, face) in tets.iter().zip(&sides) {
-                let e = own
-                    .gid
-                    .binary_search(gid)
-                    .expect("a jointed body is held whole");
+                // The other side of a joint across the cut is marked on its rank.
+                let Ok(e) = own.gid.binary_search(gid) else {
+                    continue;
+                };
                 let opposite = own.tets[e]
                     .iter()
                     .position(|n| !face.contains(n))
@@ -358,4 +379,32 @@ impl super::ExplicitDomain {
             }
         }
     }
+}
+
+/// Per jointed body, its row of [`DomainJoints::body_cracks`] summed over
+/// the ranks' rows `rows` (any order; a split body has one per rank
+/// owning some of its joints), the centroid sums made means: by body.
+pub fn merge_body_cracks<'a>(rows: impl IntoIterator<Item = &'a [f64]>) -> Vec<[f64; 9]> {
+    let mut by: std::collections::BTreeMap<u64, [f64; 9]> = Default::default();
+    for r in rows {
+        let at = by.entry(r[0] as u64).or_insert_with(|| {
+            let mut v = [0.0; 9];
+            v[0] = r[0];
+            v[5] = f64::NAN;
+            v
+        });
+        for k in [1, 2, 3, 4, 6, 7, 8] {
+            at[k] += r[k];
+        }
+        // The earliest break; `min` ignores a NaN (no break).
+        at[5] = at[5].min(r[5]);
+    }
+    by.into_values()
+        .map(|mut r| {
+            for d in 0..3 {
+                r[6 + d] /= r[1];
+            }
+            r
+        })
+        .collect()
 }

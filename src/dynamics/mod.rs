@@ -72,7 +72,7 @@ mod tests;
 
 pub use balance::BodyLoad;
 pub use domain::ExplicitDomain;
-pub use joints::JointRows;
+pub use joints::{merge_body_cracks, JointRows};
 pub use particles::ParticleRows;
 pub use state::{MechanicsCounters, MechanicsState, SavedMotion};
 

@@ -1,14 +1,20 @@
 //! Self-contact of the jointed bodies this rank holds (issue 19): their
-//! parts that meet each other after cracks freed them. A jointed body is
-//! held whole by one rank, so its pairs are found there from its own tets,
-//! each once ([`crate::contact::self_search`]); a pair is a candidate only
-//! when its two tets shared no vertex of the continuous mesh (tets that did
-//! are held by their joints, or pressed by their crack faces). Pairs then
-//! go the way of any penalty pair: planes, balancing, the pair-key sum.
+//! parts that meet each other after cracks freed them. Each pair is found
+//! once, from its lower tet ([`crate::contact::self_search`]): among the
+//! own tets of a body held whole here, and for a body split over the ranks
+//! also against the ghost copies of its tets on other ranks (the contact
+//! ghosts carry a split body's own pieces for it). A pair is a candidate
+//! only when its two tets shared no vertex of the continuous mesh (tets
+//! that did are held by their joints, or pressed by their crack faces):
+//! the vertex classes of a whole body come from the part's joints, a
+//! split body's from all its joints in the model, so they name the ghosts'
+//! corners too. Pairs then go the way of any penalty pair: planes,
+//! balancing, the pair-key sum.
 
 use crate::contact::self_search::find_within;
 use crate::contact::{BodyTets, Candidate, OwnAndGhosts};
 use crate::fracture::vertices::{share_no_vertex, vertex_classes};
+use crate::model::Model;
 use crate::parallel::Part;
 
 /// Which bodies search themselves and the vertex class of each part node.
@@ -19,23 +25,21 @@ pub(super) struct SelfContact {
     /// Per part node: the lowest copy of its vertex of the continuous mesh
     /// (empty without jointed bodies).
     vertex: Vec<u32>,
+    /// The free jointed bodies split over the ranks (ascending), each
+    /// with its first node's global id and the class (lowest copy, global
+    /// id) of every node of it.
+    split: Vec<(u32, u32, Vec<u32>)>,
 }
 
 impl SelfContact {
     /// The part's free jointed bodies and their copies' vertices, from
     /// every joint of the part, broken or not (`body_held[b]`: body b
     /// does not move). Sized by the part, nothing of the whole mesh.
-    pub(super) fn new(part: &Part, body_held: &[bool]) -> SelfContact {
+    pub(super) fn new(model: &Model, part: &Part, body_held: &[bool]) -> SelfContact {
         let mut bodies: Vec<u32> = part
             .joints
             .iter()
-            .map(|j| {
-                let e = part
-                    .elem_gid
-                    .binary_search(&j.faces.tets[0])
-                    .expect("a joint's tet is held");
-                part.mesh.body[e]
-            })
+            .map(|j| j.body)
             .filter(|&b| !body_held[b as usize])
             .collect();
         bodies.sort_unstable();
@@ -43,14 +47,53 @@ impl SelfContact {
         if bodies.is_empty() {
             return SelfContact::default();
         }
+        let is_split = |b: u32| part.whole_bodies.binary_search(&b).is_err();
+        let split: Vec<(u32, u32, Vec<u32>)> = bodies
+            .iter()
+            .filter(|&&b| is_split(b))
+            .filter_map(|&b| {
+                let body = &model.bodies[b as usize];
+                let crate::model::BodySource::Mesh { mesh, .. } = body.source else {
+                    return None;
+                };
+                let j = model.meshes[mesh as usize].joints.as_ref()?;
+                let n0 = body.node_range.0;
+                let n = (body.node_range.1 - n0) as usize;
+                let ties = j
+                    .faces
+                    .iter()
+                    .flat_map(|f| f.a.iter().copied().zip(f.b.iter().copied()));
+                let class = vertex_classes(n, ties).iter().map(|&c| n0 + c).collect();
+                Some((b, n0, class))
+            })
+            .collect();
         let ties = part
             .joints
             .iter()
+            .filter(|j| !is_split(j.body))
             .flat_map(|j| j.faces.a.iter().copied().zip(j.faces.b.iter().copied()));
-        SelfContact {
-            vertex: vertex_classes(part.mesh.nodes.len(), ties),
-            bodies,
+        let mut vertex = vertex_classes(part.mesh.nodes.len(), ties);
+        // A split body's nodes by their classes over the whole body.
+        for (e, t) in part.mesh.tets.iter().enumerate() {
+            let b = part.mesh.body[e];
+            if let Ok(i) = split.binary_search_by_key(&b, |s| s.0) {
+                let (_, n0, class) = &split[i];
+                for &l in t {
+                    vertex[l as usize] = class[(part.node_gid[l as usize] - n0) as usize];
+                }
+            }
         }
+        SelfContact {
+            vertex,
+            bodies,
+            split,
+        }
+    }
+
+    /// The bodies split over the ranks that search themselves (ascending):
+    /// the contact ghosts must bring their pieces on other ranks.
+    pub(super) fn split_bodies(&self) -> Vec<u32> {
+        self.split.iter().map(|s| s.0).collect()
     }
 
     /// Whether any body here searches itself.
@@ -70,13 +113,28 @@ impl SelfContact {
             return Vec::new();
         }
         let n_own = og.own.len() as u32;
-        let class = |h: u32| og.own.tets[h as usize].map(|l| self.vertex[l as usize]);
+        let class = |h: u32| -> Option<[u32; 4]> {
+            if h < n_own {
+                return Some(og.own.tets[h as usize].map(|l| self.vertex[l as usize]));
+            }
+            // A ghost: a tet of a split body on another rank.
+            let g = (h - n_own) as usize;
+            let i = self
+                .split
+                .binary_search_by_key(&og.ghosts.body[g], |s| s.0)
+                .ok()?;
+            let (_, n0, class) = &self.split[i];
+            Some(og.ghosts.tets[g].map(|n| class[(og.ghosts.node_gid[n as usize] - n0) as usize]))
+        };
         find_within(
             tets,
             |b| self.bodies.binary_search(&b).is_ok(),
             |h| og.corners(h),
             |h| og.gid(h),
-            |a, b| a < n_own && b < n_own && share_no_vertex(&class(a), &class(b)),
+            |a, b| {
+                a < n_own
+                    && matches!((class(a), class(b)), (Some(x), Some(y)) if share_no_vertex(&x, &y))
+            },
             margin,
         )
     }

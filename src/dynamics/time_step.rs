@@ -50,7 +50,7 @@ pub(super) fn time_step(
     }
     let mut shapes: Vec<(BodyShape, f64)> = Vec::new();
     let mut local_error = None;
-    let mut joint_w2 = joint_frequencies(model, part);
+    let mut joint_w2 = joint_frequencies(comm, model, part);
     for &(b, w2) in particle_w2 {
         *joint_w2.entry(b).or_insert(0.0) += w2;
     }
@@ -131,23 +131,21 @@ pub(super) fn time_step(
     Ok((dt, substeps, min_len_all))
 }
 
-/// Per jointed body: a bound on the square of the highest frequency of its
-/// joints' springs alone, max over nodes of 2 Σ k_j / m (Gershgorin; each
-/// joint corner pair is an isotropic spring k_j = p_f / h × A / 3, the
-/// node's mass at least ρ V / 4 of its tet).
-fn joint_frequencies(model: &Model, part: &Part) -> std::collections::HashMap<u32, f64> {
+/// Collective. Per jointed body: a bound on the square of the highest
+/// frequency of its joints' springs alone, max over nodes of 2 Σ k_j / m
+/// (Gershgorin; each joint corner pair is an isotropic spring
+/// k_j = p_f / h × A / 3, the node's mass at least ρ V / 4 of its tet).
+/// A split (fully jointed) body's nodes are each where its tet is, with
+/// every joint at it: the max over its nodes here, then over the ranks.
+fn joint_frequencies(
+    comm: &SimpleCommunicator,
+    model: &Model,
+    part: &Part,
+) -> std::collections::HashMap<u32, f64> {
     let mut out = std::collections::HashMap::new();
-    if part.joints.is_empty() {
-        return out;
-    }
     let mesh = &part.mesh;
     let nl = part.node_gid.len();
     let (mut k_sum, mut m_min) = (vec![0.0; nl], vec![f64::INFINITY; nl]);
-    let local_elem = |g: u32| {
-        part.elem_gid
-            .binary_search(&g)
-            .expect("a joint's tet is held")
-    };
     for j in &part.joints {
         let f = &j.faces;
         let Some(fm) = model.materials[j.material as usize].fracture else {
@@ -155,7 +153,11 @@ fn joint_frequencies(model: &Model, part: &Part) -> std::collections::HashMap<u3
         };
         let k = fm.penalty / crate::fracture::insert::joint_size(f.area) * f.area / 3.0;
         for (side, corners) in [(0, &f.a), (1, &f.b)] {
-            let e = local_elem(f.tets[side]);
+            // The other side of a joint across the cut: its rank's nodes.
+            let Some(e) = part.local_element(f.tets[side]) else {
+                continue;
+            };
+            let e = e as usize;
             let m = model.materials[part.elem_material[e] as usize].density
                 * mesh.element_volume(e)
                 / 4.0;
@@ -166,12 +168,24 @@ fn joint_frequencies(model: &Model, part: &Part) -> std::collections::HashMap<u3
         }
     }
     for j in &part.joints {
-        let e = local_elem(j.faces.tets[0]);
-        let body = mesh.body[e];
         for &l in j.faces.a.iter().chain(&j.faces.b) {
-            let w2 = 2.0 * k_sum[l as usize] / m_min[l as usize];
-            let at = out.entry(body).or_insert(0.0f64);
-            *at = at.max(w2);
+            if m_min[l as usize].is_finite() {
+                let w2 = 2.0 * k_sum[l as usize] / m_min[l as usize];
+                let at = out.entry(j.body).or_insert(0.0f64);
+                *at = at.max(w2);
+            }
+        }
+    }
+    // Split jointed bodies: the max over the ranks holding some of each.
+    let mut split: Vec<f64> = Vec::new();
+    for (&b, &w2) in &out {
+        if part.whole_bodies.binary_search(&b).is_err() {
+            split.extend_from_slice(&[f64::from(b), w2]);
+        }
+    }
+    for rec in crate::parallel::all_gather_f64(comm, &split).chunks_exact(2) {
+        if let Some(at) = out.get_mut(&(rec[0] as u32)) {
+            *at = at.max(rec[1]);
         }
     }
     out

@@ -26,6 +26,9 @@ pub struct JointSet {
     pub cracks: Vec<(u32, CrackState)>,
     /// Joints broken since the caller last took them ([`Self::take_new_cracks`]).
     new_cracks: Vec<u32>,
+    /// Per joint: counted in the totals (false for a joint another owner
+    /// counts, advanced here too for its forces on this side).
+    counted: Vec<bool>,
 }
 
 /// Values per joint in a checkpoint ([`JointSet::save`]).
@@ -109,7 +112,15 @@ impl JointSet {
             broke_at: vec![f64::NAN; n],
             cracks: Vec::new(),
             new_cracks: Vec::new(),
+            counted: vec![true; n],
         })
+    }
+
+    /// Count in the totals only the joints `counted` marks (one flag per
+    /// joint); the others are advanced all the same.
+    pub fn count_only(&mut self, counted: Vec<bool>) {
+        assert_eq!(counted.len(), self.faces.len(), "one flag per joint");
+        self.counted = counted;
     }
 
     /// Break joint `j` before the run (an initial crack of the scenario):
@@ -207,10 +218,20 @@ impl JointSet {
     /// energy, known only at a step, left at zero).
     pub fn recount(&self) -> JointTotals {
         let mut tot = JointTotals::default();
-        for (f, st) in self.faces.iter().zip(&self.states) {
+        for ((f, st), _) in self
+            .faces
+            .iter()
+            .zip(&self.states)
+            .zip(&self.counted)
+            .filter(|(_, &c)| c)
+        {
             tot.count(st, f.area);
         }
-        for (_, c) in &self.cracks {
+        for (_, c) in self
+            .cracks
+            .iter()
+            .filter(|(j, _)| self.counted[*j as usize])
+        {
             tot.friction += c.lost;
             tot.closed += usize::from(c.closed);
         }
@@ -247,12 +268,15 @@ impl JointSet {
             // b's forces are −a's: a local the compiler drops.
             let mut fb = [Vector3::zeros(); 3];
             let law = self.law.with_stiffness(self.stiffness[j]);
-            tot.stored += joint_forces(&law, f.area, &xa, &xb, st, &mut out[j], &mut fb);
+            let stored = joint_forces(&law, f.area, &xa, &xb, st, &mut out[j], &mut fb);
             if st.broken.is_some() && !was_broken {
                 self.broke_at[j] = t;
                 self.new_cracks.push(j as u32);
             }
-            tot.count(st, f.area);
+            if self.counted[j] {
+                tot.stored += stored;
+                tot.count(st, f.area);
+            }
         }
         // The joints that broke in this call start their crack contact
         // relaxed (the slip is their present sliding).
@@ -281,9 +305,11 @@ impl JointSet {
                 &mut fb,
             );
             debug_assert!((0..3).all(|i| fb[i] == -out[j][i]));
-            tot.stored += r.stored;
-            tot.friction += cs.lost;
-            tot.closed += usize::from(cs.closed);
+            if self.counted[j] {
+                tot.stored += r.stored;
+                tot.friction += cs.lost;
+                tot.closed += usize::from(cs.closed);
+            }
         }
         tot
     }

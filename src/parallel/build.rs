@@ -225,7 +225,8 @@ fn split_bodies(model: &Model, size: usize) -> Vec<bool> {
             BodySource::Mesh { mesh, .. } => {
                 size > 1
                     && users[mesh as usize] == 1
-                    && model.meshes[mesh as usize].joints.is_none()
+                    && (model.meshes[mesh as usize].joints.is_none()
+                        || jointed_splits(model, &model.meshes[mesh as usize]))
                     && model.meshes[mesh as usize].particles.is_none()
                     && (model.mechanics.is_none()
                         || (b.node_range.1 - b.node_range.0) as usize > BODY_EIGEN_MAX_NODES)
@@ -233,6 +234,17 @@ fn split_bodies(model: &Model, size: usize) -> Vec<bool> {
             BodySource::Saved { .. } => false,
         })
         .collect()
+}
+
+/// Whether a jointed source mesh may be split over the ranks (issue 19):
+/// when every tet of it is jointed, each node belongs to one tet, so it is
+/// owned with its tet and every joint at it is evaluated where its tet is
+/// (a joint across the cut on both sides' ranks,
+/// [`crate::dynamics`]`::joints`); and only in a run without a thermal
+/// problem, whose copies of a vertex tied by intact joints share a
+/// thermal row numbered where the body is held whole.
+fn jointed_splits(model: &Model, src: &crate::model::SourceMesh) -> bool {
+    !model.thermal_active && src.mesh.nodes.len() == 4 * src.mesh.tets.len()
 }
 
 /// The elements and nodes a rank has made, before numbering.
@@ -259,8 +271,13 @@ struct Made {
     convection: Vec<([u32; 3], f64, f64)>,
     /// Per node: whether it belongs to a split body.
     shared: Vec<bool>,
+    /// Per node: a ghost only the joints across a cut need (a corner of
+    /// another rank's tet), not a node of an element made here.
+    joint_ghost: Vec<bool>,
     /// Joints of the jointed bodies (global node and element ids).
     joints: Vec<super::PartJoint>,
+    /// Per joint: whether it ties thermal rows here (its body held whole).
+    ties_rows: Vec<bool>,
 }
 
 /// Make the bodies and elements `held` by this rank.
@@ -288,6 +305,8 @@ fn make_bodies(
         let mut used = vec![false; mesh.nodes.len()];
         let mut face_of: HashMap<[u32; 3], ()> = HashMap::new();
         let whole = matches!(h, Held::Whole);
+        // The corners of other ranks' tets that joints across the cut need.
+        let mut wanted = vec![false; if whole { 0 } else { mesh.nodes.len() }];
         for &e in &elems {
             let t = mesh.tets[e as usize];
             m.elem_gid.push(e0 + e);
@@ -304,8 +323,36 @@ fn make_bodies(
                 }
             }
         }
+        if let Some(j) = &mesh.joints {
+            let held_tet = |e: u32| whole || elems.binary_search(&e).is_ok();
+            for (k, (f, &broken)) in j.faces.iter().zip(&j.broken).enumerate() {
+                let here = f.tets.map(held_tet);
+                if !here[0] && !here[1] {
+                    continue;
+                }
+                for (side, corners) in [&f.a, &f.b].into_iter().enumerate() {
+                    if !here[side] {
+                        corners.iter().for_each(|&n| wanted[n as usize] = true);
+                    }
+                }
+                m.joints.push(super::PartJoint {
+                    faces: crate::fracture::insert::JointFaces {
+                        a: f.a.map(|n| n0 + n),
+                        b: f.b.map(|n| n0 + n),
+                        tets: f.tets.map(|e| e0 + e),
+                        area: f.area,
+                    },
+                    material: j.material,
+                    broken,
+                    body: b,
+                    index: k as u32,
+                });
+                m.ties_rows.push(whole);
+            }
+        }
         for (n, &u) in used.iter().enumerate() {
-            if !u {
+            let ghost = !u && wanted.get(n).copied().unwrap_or(false);
+            if !u && !ghost {
                 continue;
             }
             m.node_gid.push(n0 + n as u32);
@@ -319,24 +366,7 @@ fn make_bodies(
                 m.traction.push(bc.traction[n]);
             }
             m.shared.push(!whole);
-        }
-        if let Some(j) = mesh.joints {
-            debug_assert!(whole, "a jointed body is held whole");
-            m.joints.extend(
-                j.faces
-                    .iter()
-                    .zip(&j.broken)
-                    .map(|(f, &broken)| super::PartJoint {
-                        faces: crate::fracture::insert::JointFaces {
-                            a: f.a.map(|n| n0 + n),
-                            b: f.b.map(|n| n0 + n),
-                            tets: f.tets.map(|e| e0 + e),
-                            area: f.area,
-                        },
-                        material: j.material,
-                        broken,
-                    }),
-            );
+            m.joint_ghost.push(ghost);
         }
         let here = |f: &[u32; 3]| {
             whole || {
@@ -446,26 +476,33 @@ fn number_rows(
 fn number(comm: &SimpleCommunicator, m: Made, particle_rows: usize) -> Part {
     let size = comm.size() as usize;
     let rank = comm.rank() as usize;
-    // Owners of the split bodies' nodes: the lowest rank holding each,
-    // found at the rendezvous rank gid % size.
+    // Owners of the split bodies' nodes: the lowest rank holding an
+    // element of each (not a rank wanting it only for a joint across the
+    // cut), found at the rendezvous rank gid % size.
     let mut ask: Vec<Vec<u32>> = vec![Vec::new(); size];
     for (i, &g) in m.node_gid.iter().enumerate() {
         if m.shared[i] {
-            ask[g as usize % size].push(g);
+            ask[g as usize % size].extend_from_slice(&[g, u32::from(m.joint_ghost[i])]);
         }
     }
     let asked = all_to_all(comm, ask);
+    // Every rank asking for a node (holders and joint ghosts), and its owner.
     let mut holders: HashMap<u32, Vec<u32>> = HashMap::new();
+    let mut owner_at: HashMap<u32, u32> = HashMap::new();
     for (r, list) in asked.iter().enumerate() {
-        for &g in list {
-            holders.entry(g).or_default().push(r as u32);
+        for rec in list.chunks_exact(2) {
+            holders.entry(rec[0]).or_default().push(r as u32);
+            if rec[1] == 0 {
+                let o = owner_at.entry(rec[0]).or_insert(r as u32);
+                *o = (*o).min(r as u32);
+            }
         }
     }
     let mut reply: Vec<Vec<u32>> = vec![Vec::new(); size];
     for (r, list) in asked.iter().enumerate() {
-        for &g in list {
-            let owner = *holders[&g].iter().min().expect("a holder");
-            reply[r].extend_from_slice(&[g, owner]);
+        for rec in list.chunks_exact(2) {
+            let owner = owner_at[&rec[0]];
+            reply[r].extend_from_slice(&[rec[0], owner]);
         }
     }
     let mut owner_of: HashMap<u32, u32> = HashMap::new();
@@ -485,7 +522,14 @@ fn number(comm: &SimpleCommunicator, m: Made, particle_rows: usize) -> Part {
     // ascending id from its start, the copies of a node that intact joints
     // tie (a jointed body, held whole here) sharing the row of the lowest.
     let n_owned = owner.iter().filter(|&&o| o as usize == rank).count();
-    let tied = joint_classes(&m.joints);
+    let tying: Vec<super::PartJoint> = m
+        .joints
+        .iter()
+        .zip(&m.ties_rows)
+        .filter(|(_, &t)| t)
+        .map(|(j, _)| *j)
+        .collect();
+    let tied = joint_classes(&tying);
     let owned_gids = m
         .node_gid
         .iter()
@@ -587,8 +631,7 @@ fn number(comm: &SimpleCommunicator, m: Made, particle_rows: usize) -> Part {
                     b: j.faces.b.map(l),
                     ..j.faces
                 },
-                material: j.material,
-                broken: j.broken,
+                ..*j
             })
             .collect(),
     }
@@ -617,8 +660,7 @@ impl Part {
                     b: j.faces.b.map(gid),
                     ..j.faces
                 },
-                material: j.material,
-                broken: j.broken,
+                ..*j
             })
             .collect();
         let tied = joint_classes(&intact);

@@ -103,13 +103,16 @@ fn f64_box(v: &[f64]) -> Aabb {
 /// `interior` (the thermal contact also pairs a boundary face with
 /// another body's interior tets). Each rank receives a piece's tets whose
 /// boxes come within the margin of the box of its own pieces near it.
-/// Nodes are listed once each, by ascending global id.
+/// Nodes are listed once each, by ascending global id. The bodies
+/// `self_bodies` (ascending: split bodies that search themselves) are
+/// also brought near this rank's own pieces of them.
 pub fn exchange_ghosts<C: Communicator>(
     comm: &C,
     own: &ContactTets,
     pieces: &mut Pieces,
     margin: f64,
     interior: bool,
+    self_bodies: &[u32],
 ) -> ContactTets {
     let size = comm.size() as usize;
     let me = comm.rank() as usize;
@@ -136,7 +139,8 @@ pub fn exchange_ghosts<C: Communicator>(
         }
     }
     let offered = all_to_all(comm, send);
-    // 3. Requests for the offered pieces near own pieces of other bodies,
+    // 3. Requests for the offered pieces near own pieces of other bodies
+    //    (or of the same body, for `self_bodies`),
     //    each with the box of those own pieces (the owner sends only the
     //    tets near it).
     let mut requests: Vec<Vec<f64>> = vec![Vec::new(); size];
@@ -144,7 +148,8 @@ pub fn exchange_ghosts<C: Communicator>(
         for rec in list.chunks_exact(7) {
             let (body, qb) = (rec[0] as u32, f64_box(&rec[1..]));
             let mut near = empty_box();
-            for p in mine.iter().filter(|p| p.body != body) {
+            let itself = self_bodies.binary_search(&body).is_ok();
+            for p in mine.iter().filter(|p| p.body != body || itself) {
                 if overlap(&p.bounds, &qb, margin) {
                     union(&mut near, &p.bounds);
                 }

@@ -75,9 +75,11 @@ pub struct Part {
     /// The bodies this rank holds whole (global ids, ascending): all their
     /// elements and nodes are here and owned here.
     pub whole_bodies: Vec<u32>,
-    /// The cohesive joints of the jointed bodies held (issue 19; a jointed
-    /// body is held whole, so all its joints are here): corners over local
-    /// nodes, tets by global id, in the order of the body's joints.
+    /// The cohesive joints of the jointed bodies held (issue 19): every
+    /// joint with a tet here (of a body held whole, all its joints; of a
+    /// split body, also those across the cut, whose other tet's face
+    /// nodes are ghosts here), corners over local nodes, tets by global
+    /// id, by body and then in the order of the body's joints.
     pub joints: Vec<PartJoint>,
     /// Thermal rows of the bonded particles of the bodies held here
     /// (issue 21): the last ones of this rank's range, after the nodes'
@@ -95,6 +97,9 @@ pub struct PartJoint {
     pub material: u32,
     /// Broken from the start (an initial crack of the scenario).
     pub broken: bool,
+    /// Its body, and its place in the body's joints.
+    pub body: u32,
+    pub index: u32,
 }
 
 /// Per element and node of the whole mesh: its rank and PETSc number.

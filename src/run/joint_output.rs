@@ -142,8 +142,8 @@ impl JointOutput {
     ) -> Result<Vec<PathBuf>> {
         let mine: Vec<f64> = mech.domain.body_cracks().into_iter().flatten().collect();
         let all = crate::parallel::all_gather_f64(comm, &mine);
-        let mut rows: Vec<&[f64]> = all.chunks_exact(9).collect();
-        rows.sort_by(|a, b| a[0].total_cmp(&b[0]));
+        let merged = crate::dynamics::merge_body_cracks(all.chunks_exact(9));
+        let rows: Vec<&[f64]> = merged.iter().map(|r| &r[..]).collect();
         let png = (rows.len() > 1).then(|| {
             let name = path.file_name().map_or(String::new(), |n| {
                 n.to_string_lossy()

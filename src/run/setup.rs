@@ -304,7 +304,7 @@ impl Contacts {
             (Source::Search(ts), _) => {
                 let t = Instant::now();
                 let ghosts =
-                    exchange_ghosts(comm, &ts.own, &mut ts.pieces, ts.exchange_margin, true);
+                    exchange_ghosts(comm, &ts.own, &mut ts.pieces, ts.exchange_margin, true, &[]);
                 let og = OwnAndGhosts {
                     own: &ts.own,
                     ghosts: &ghosts,

@@ -10,7 +10,8 @@
 //! the swelling can make, yet touch; the arms bent apart store about the
 //! energy of two cantilevers pushed back by the excess closure; the
 //! self-contact forces sum to zero and momentum stays zero (no external
-//! force); 1 and 2 ranks give bitwise the same trajectories. Thermal
+//! force); 1 and 2 ranks (the body split over both) give bitwise the
+//! same trajectories. Thermal
 //! variant: the two tips at different temperatures conduct only once they
 //! touch, and only with a `[contact]` table.
 
@@ -94,6 +95,8 @@ struct Run {
     cells: Vec<[usize; 4]>,
     disp: Vec<Vec<[f64; 3]>>,
     vel: Vec<Vec<[f64; 3]>>,
+    /// The rank of every element.
+    ranks: Vec<i32>,
 }
 
 fn run(ranks: usize, contact: bool) -> Run {
@@ -124,6 +127,7 @@ fn run(ranks: usize, contact: bool) -> Run {
         cells: m.cells,
         disp: m.disp,
         vel,
+        ranks: fdem::io::read_static_cell_field_i32(&h5, "rank").unwrap(),
     }
 }
 
@@ -267,6 +271,12 @@ fn the_tips_meet_themselves_and_press() {
         );
     }
     let two = run(2, true);
+    // The body (1,008 node copies) is split over the two ranks: its arms
+    // meet across the cut, as ghosts of each other's tets.
+    assert!(
+        two.ranks.contains(&0) && two.ranks.contains(&1),
+        "the C body is not split over the 2 ranks"
+    );
     assert_eq!(one.times, two.times);
     for s in 0..one.times.len() {
         assert!(one.disp[s] == two.disp[s], "step {s}: 1 and 2 ranks differ");

@@ -408,3 +408,27 @@ pub fn merge_body_cracks<'a>(rows: impl IntoIterator<Item = &'a [f64]>) -> Vec<[
         })
         .collect()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::merge_body_cracks;
+
+    /// A split body's rows from two ranks make one: counts, areas and
+    /// energies summed, the earliest break, the centroid over all joints;
+    /// another body's row passes through.
+    #[test]
+    fn crack_rows_of_a_split_body_merge() {
+        let nan = f64::NAN;
+        let rows = [
+            [3.0, 2.0, 1.0, 0.5, 0.25, 4.0, 2.0, 4.0, 6.0],
+            [1.0, 1.0, 0.0, 0.0, 0.0, nan, 1.0, 1.0, 1.0],
+            [3.0, 2.0, 0.0, 0.0, 0.5, nan, 6.0, 0.0, 2.0],
+            [3.0, 4.0, 2.0, 1.0, 0.25, 3.0, 0.0, 4.0, 0.0],
+        ];
+        let m = merge_body_cracks(rows.iter().map(|r| &r[..]));
+        assert_eq!(m.len(), 2);
+        assert_eq!(m[0][..5], [1.0, 1.0, 0.0, 0.0, 0.0]);
+        assert!(m[0][5].is_nan());
+        assert_eq!(m[1], [3.0, 8.0, 3.0, 1.5, 1.0, 3.0, 1.0, 1.0, 1.0]);
+    }
+}

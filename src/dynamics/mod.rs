@@ -24,8 +24,8 @@
 //! need. A contact pair joins two boundary tets of different bodies and is
 //! found by the rank owning one of them, `a` (the free body's tet against
 //! a held body, else the lower body's), so every pair is counted once over
-//! the ranks (a jointed body's pair with itself, from its lower tet, on the
-//! one rank that holds the body: `self_contact`); the found pairs are then shared out so every rank has about
+//! the ranks (a jointed body's pair with itself, from its lower tet, on
+//! the rank that owns that tet: `self_contact`); the found pairs are then shared out so every rank has about
 //! the same contact work (`balance_pairs`). With `free_damping`, step 3
 //! first agrees (one all-reduce over the bodies) on which bodies touch.
 //!

@@ -387,6 +387,51 @@ mod tests {
         assert!(set.broke_at[0] > 0.0 && set.broke_at[0] <= steps as f64);
     }
 
+    /// Two copies of one broken joint, the second not counted (a joint
+    /// another rank owns): the same forces, the totals of one joint.
+    #[test]
+    fn joints_not_counted_are_advanced_but_not_totalled() {
+        let h = 0.01;
+        let nodes = vec![
+            [0.0, 0.0, 0.0],
+            [h, 0.0, 0.0],
+            [0.0, h, 0.0],
+            [0.0, 0.0, -h],
+            [0.0, 0.0, h],
+        ];
+        let tets = vec![[0, 2, 1, 3], [0, 1, 2, 4]];
+        let j = make_discontinuous(&nodes, &tets, &[true, true]);
+        let m = table2();
+        let faces = vec![j.joints[0]; 2];
+        let mut both = JointSet::new(faces.clone(), &m).unwrap();
+        let mut one = JointSet::new(faces, &m).unwrap();
+        one.count_only(vec![true, false]);
+        let mut x: Vec<Vector3<f64>> = j.nodes.iter().map(|p| Vector3::from(*p)).collect();
+        // Lift the upper tet well past breaking, in a few steps.
+        let upper: Vec<usize> = (0..x.len())
+            .filter(|&n| j.tets[1].contains(&(n as u32)))
+            .collect();
+        let (mut out_both, mut out_one) = (
+            vec![[Vector3::zeros(); 3]; 2],
+            vec![[Vector3::zeros(); 3]; 2],
+        );
+        let (mut t_both, mut t_one) = (JointTotals::default(), JointTotals::default());
+        for i in 0..200 {
+            for &n in &upper {
+                x[n].z += 1e-4 * h;
+            }
+            t_both = both.forces(&x, i as f64, &mut out_both);
+            t_one = one.forces(&x, i as f64, &mut out_one);
+            assert_eq!(out_both, out_one, "step {i}: forces");
+        }
+        assert_eq!(t_both.broken, 2);
+        assert_eq!(t_one.broken, 1);
+        assert_eq!(t_one.crack_area, 0.5 * t_both.crack_area);
+        assert_eq!(t_one.dissipated, 0.5 * t_both.dissipated);
+        assert_eq!(one.recount().broken, 1);
+        assert_eq!(one.take_new_cracks().len(), 2, "both break here");
+    }
+
     #[test]
     fn a_joint_too_large_for_its_penalty_is_named() {
         let nodes = vec![

@@ -138,10 +138,7 @@ fn a_jointed_bar_split_over_ranks_breaks_bitwise_alike() {
         assert_eq!(rp.len(), rows.len(), "{p} ranks: history rows");
         // A vector's components share its scale (a transverse momentum is
         // rounding noise about zero).
-        let group = |name: &str| {
-            name.trim_end_matches(|c| c == 'x' || c == 'y' || c == 'z')
-                .to_string()
-        };
+        let group = |name: &str| name.trim_end_matches(['x', 'y', 'z']).to_string();
         for (i, name) in h.iter().enumerate() {
             let scale = (0..h.len())
                 .filter(|&c| group(&h[c]) == group(name))

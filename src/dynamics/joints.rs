@@ -180,13 +180,13 @@ impl DomainJoints {
             // owned elsewhere gets them on its own rank.
             let no = self.n_owned;
             for (faces, forces) in set.faces.iter().zip(out.iter()) {
-                for k in 0..3 {
-                    let (a, b) = (faces.a[k] as usize, faces.b[k] as usize);
+                for ((&a, &b), force) in faces.a.iter().zip(&faces.b).zip(forces) {
+                    let (a, b) = (a as usize, b as usize);
                     if a < no {
-                        f[a] += forces[k];
+                        f[a] += force;
                     }
                     if b < no {
-                        f[b] -= forces[k];
+                        f[b] -= force;
                     }
                 }
             }

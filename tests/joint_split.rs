@@ -271,3 +271,48 @@ fn a_split_jointed_body_meets_itself_across_the_cut() {
         assert!(one.vel[k] == two.vel[k], "output {k}: velocities differ");
     }
 }
+
+/// A split jointed run checkpoints each joint once and continues: the bar
+/// stopped on 2 ranks after it broke (at 22 of its 24 ms) and continued
+/// from its checkpoint on 2 ranks (its parts, as saved) and on 3 (a new
+/// cut) ends with bitwise the uninterrupted one-rank run's displacements
+/// and joint damage.
+#[test]
+fn a_split_jointed_run_restarts_from_its_checkpoint() {
+    let scen = root().join("scenarios/fracture-bar.toml");
+    let args = [
+        "--set",
+        "output.every=20",
+        "--set",
+        "output.checkpoint=true",
+    ];
+    let last = |dir: &std::path::Path| {
+        let m = read_mech(dir, STEM);
+        let k = m.times.len() - 1;
+        let h5 = dir.join(format!("{STEM}_joints.h5"));
+        let kj = fdem::io::read_times(&h5).unwrap().len() - 1;
+        let d = fdem::io::read_cell_field_step(&h5, "damage", kj).unwrap();
+        (m.times[k], m.disp[k].clone(), d)
+    };
+    let full = out_dir("joint-split-restart-full");
+    run_ok(1, &scen, &full, &args);
+    let want = last(&full);
+    let first = out_dir("joint-split-restart-first");
+    let stop = [&args[..], &["--set", "time.end_time=0.022"]].concat();
+    run_ok(2, &scen, &first, &stop);
+    let (h, rows) = history(&first, STEM);
+    assert!(
+        rows.last().unwrap()[col(&h, "broken_joints")] > 0.0,
+        "no joint broke before the checkpoint"
+    );
+    let ck = first.join(format!("{STEM}_checkpoint.h5"));
+    for ranks in [2, 3] {
+        let rest = out_dir(&format!("joint-split-restart-{ranks}"));
+        let more = [&args[..], &["--restart", ck.to_str().unwrap()]].concat();
+        run_ok(ranks, &scen, &rest, &more);
+        let got = last(&rest);
+        assert_eq!(got.0, want.0, "{ranks} ranks: end time");
+        assert!(got.1 == want.1, "{ranks} ranks: displacements differ");
+        assert!(got.2 == want.2, "{ranks} ranks: joint damage differs");
+    }
+}

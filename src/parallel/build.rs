@@ -640,9 +640,11 @@ fn number(comm: &SimpleCommunicator, m: Made, particle_rows: usize) -> Part {
 impl Part {
     /// Collective. Number the PETSc rows again after joints broke: the
     /// copies of a node stay on one row only while intact joints (those
-    /// whose two tets, by global id, are not in `broken`) still tie them.
-    /// Every rank's start moves, so the ghosts of split bodies ask their
-    /// owners for their new rows.
+    /// whose two tets, by global id, are not in `broken`) still tie them,
+    /// in the bodies held whole here (as [`Part::build`]: a split jointed
+    /// body, in a run without a thermal problem, ties none). Every rank's
+    /// start moves, so the ghosts of split bodies ask their owners for
+    /// their new rows.
     pub fn renumber_rows(
         &mut self,
         comm: &SimpleCommunicator,
@@ -653,7 +655,9 @@ impl Part {
         let intact: Vec<super::PartJoint> = self
             .joints
             .iter()
-            .filter(|j| !broken.contains(&j.faces.tets))
+            .filter(|j| {
+                !broken.contains(&j.faces.tets) && self.whole_bodies.binary_search(&j.body).is_ok()
+            })
             .map(|j| super::PartJoint {
                 faces: crate::fracture::insert::JointFaces {
                     a: j.faces.a.map(gid),

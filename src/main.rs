@@ -144,6 +144,7 @@ fn main() -> ExitCode {
     };
     let world = universe.world();
     let rank = world.rank();
+    abort_every_rank_on_panic();
     let result = match Petsc::init(&world, &petsc_args) {
         Err(e) => Err(Error::from(e)),
         Ok(petsc) => {
@@ -180,6 +181,30 @@ fn main() -> ExitCode {
     }
     drop(universe);
     code
+}
+
+/// A panic (a bug, not an input error) on one rank would leave the others
+/// waiting in their next collective call, and mpirun waits with them:
+/// after the panic's own message, say which rank it was and abort every
+/// rank (exit status 101, Rust's for a panic). `FDEM_FAULT_PANIC_RANK=r`
+/// makes rank r panic at start (fault injection for the tests).
+fn abort_every_rank_on_panic() {
+    let default = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        default(info);
+        let world = mpi::topology::SimpleCommunicator::world();
+        eprintln!(
+            "error: fdem panicked on rank {} of {} (a bug; please report it with the \
+             scenario); stopping every rank",
+            world.rank(),
+            world.size()
+        );
+        world.abort(101);
+    }));
+    let world = mpi::topology::SimpleCommunicator::world();
+    if std::env::var("FDEM_FAULT_PANIC_RANK").is_ok_and(|r| r == world.rank().to_string()) {
+        panic!("fault injection (FDEM_FAULT_PANIC_RANK)");
+    }
 }
 
 /// Errors every rank finds identically are printed by rank 0 only.

@@ -94,3 +94,39 @@ fn no_petsc_leaks_under_malloc_dump() {
         leaks.join("\n")
     );
 }
+
+/// Issue 18: a rank that panics (a bug, injected here) says which rank it
+/// was, and every rank stops at once with a non-zero status, instead of
+/// the others waiting in their next collective call until killed (the
+/// `timeout` of 120 s would give status 124).
+#[test]
+fn a_panic_on_one_rank_stops_every_rank() {
+    let out = out_dir("panic-on-rank-1");
+    let scenario = root().join("scenarios/thermal-stress-element.toml");
+    let o = std::process::Command::new("timeout")
+        .args(["120", "mpirun", "-n", "2", "--oversubscribe"])
+        .args([
+            "-x",
+            "FDEM_FAULT_PANIC_RANK",
+            env!("CARGO_BIN_EXE_fdem"),
+            "run",
+        ])
+        .arg(&scenario)
+        .args(["--quiet", "--output"])
+        .arg(&out)
+        .env("FDEM_FAULT_PANIC_RANK", "1")
+        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+        .output()
+        .expect("cannot start mpirun");
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    let code = o.status.code();
+    assert!(
+        code.is_some_and(|c| c != 0 && c != 124),
+        "status {code:?}:\n{stderr}"
+    );
+    assert!(
+        stderr.contains("fdem panicked on rank 1 of 2"),
+        "status {code:?}:\n{stderr}"
+    );
+}

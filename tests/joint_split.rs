@@ -47,18 +47,7 @@ fn run(ranks: usize) -> SplitRun {
     );
     let m = read_mech(&out, STEM);
     let h5 = out.join(format!("{STEM}.h5"));
-    let ids = fdem::io::read_static_node_field_i32(&h5, "node_id").unwrap();
-    let vel = (0..m.times.len())
-        .map(|k| {
-            let v = fdem::io::read_node_field_step(&h5, "velocity", k).unwrap();
-            let mut by_id = vec![0.0; v.len()];
-            for (row, &id) in ids.iter().enumerate() {
-                by_id[3 * id as usize..3 * id as usize + 3]
-                    .copy_from_slice(&v[3 * row..3 * row + 3]);
-            }
-            by_id
-        })
-        .collect();
+    let vel = velocities_by_node_id(&h5, m.times.len());
     let jh5 = out.join(format!("{STEM}_joints.h5"));
     let steps = fdem::io::read_times(&jh5).unwrap().len();
     let joints = (0..steps)
@@ -201,18 +190,7 @@ fn squeezed_c(ranks: usize) -> CRun {
     run_ok(ranks, &scen, &out, &["--set", "output.every=25"]);
     let m = read_mech(&out, "c");
     let h5 = out.join("c.h5");
-    let ids = fdem::io::read_static_node_field_i32(&h5, "node_id").unwrap();
-    let vel = (0..m.times.len())
-        .map(|k| {
-            let v = fdem::io::read_node_field_step(&h5, "velocity", k).unwrap();
-            let mut by_id = vec![0.0; v.len()];
-            for (row, &id) in ids.iter().enumerate() {
-                by_id[3 * id as usize..3 * id as usize + 3]
-                    .copy_from_slice(&v[3 * row..3 * row + 3]);
-            }
-            by_id
-        })
-        .collect();
+    let vel = velocities_by_node_id(&h5, m.times.len());
     CRun {
         ranks: fdem::io::read_static_cell_field_i32(&h5, "rank").unwrap(),
         centroids: (0..m.cells.len()).map(|c| m.centroid(c)).collect(),
@@ -315,4 +293,21 @@ fn a_split_jointed_run_restarts_from_its_checkpoint() {
         assert!(got.1 == want.1, "{ranks} ranks: displacements differ");
         assert!(got.2 == want.2, "{ranks} ranks: joint damage differs");
     }
+}
+
+/// The velocity of every output step of `h5` (`steps` of them), each row
+/// moved to the place its static `node_id` names.
+fn velocities_by_node_id(h5: &std::path::Path, steps: usize) -> Vec<Vec<f64>> {
+    let ids = fdem::io::read_static_node_field_i32(h5, "node_id").unwrap();
+    (0..steps)
+        .map(|k| {
+            let v = fdem::io::read_node_field_step(h5, "velocity", k).unwrap();
+            let mut by_id = vec![0.0; v.len()];
+            for (row, &id) in ids.iter().enumerate() {
+                by_id[3 * id as usize..3 * id as usize + 3]
+                    .copy_from_slice(&v[3 * row..3 * row + 3]);
+            }
+            by_id
+        })
+        .collect()
 }

@@ -322,12 +322,9 @@ mod tests {
     use crate::fracture::law::table2;
     use crate::mechanics::element::to_vectors;
 
-    /// Two tets sharing the face z = 0 (apexes at z = ∓h), jointed; the
-    /// upper tet is pulled up rigidly, the lower held: the joint's force
-    /// on the upper corners, summed, is the traction × area; its work is
-    /// G_I × area when it breaks.
-    #[test]
-    fn two_tets_pulled_apart_give_f_t_and_g_i() {
+    /// Two tets sharing the face z = 0 (apexes at z = ∓h, h = 1 cm), both
+    /// positively oriented: h, nodes and tets.
+    fn two_tets() -> (f64, Vec<[f64; 3]>, Vec<[u32; 4]>) {
         let h = 0.01;
         let nodes = vec![
             [0.0, 0.0, 0.0],
@@ -336,7 +333,16 @@ mod tests {
             [0.0, 0.0, -h],
             [0.0, 0.0, h],
         ];
-        let tets = vec![[0, 2, 1, 3], [0, 1, 2, 4]];
+        (h, nodes, vec![[0, 2, 1, 3], [0, 1, 2, 4]])
+    }
+
+    /// Two tets sharing the face z = 0 (apexes at z = ∓h), jointed; the
+    /// upper tet is pulled up rigidly, the lower held: the joint's force
+    /// on the upper corners, summed, is the traction × area; its work is
+    /// G_I × area when it breaks.
+    #[test]
+    fn two_tets_pulled_apart_give_f_t_and_g_i() {
+        let (h, nodes, tets) = two_tets();
         // Both positively oriented.
         for t in &tets {
             let x = to_vectors(&t.map(|n| nodes[n as usize]));
@@ -391,15 +397,7 @@ mod tests {
     /// another rank owns): the same forces, the totals of one joint.
     #[test]
     fn joints_not_counted_are_advanced_but_not_totalled() {
-        let h = 0.01;
-        let nodes = vec![
-            [0.0, 0.0, 0.0],
-            [h, 0.0, 0.0],
-            [0.0, h, 0.0],
-            [0.0, 0.0, -h],
-            [0.0, 0.0, h],
-        ];
-        let tets = vec![[0, 2, 1, 3], [0, 1, 2, 4]];
+        let (h, nodes, tets) = two_tets();
         let j = make_discontinuous(&nodes, &tets, &[true, true]);
         let m = table2();
         let faces = vec![j.joints[0]; 2];

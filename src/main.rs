@@ -138,6 +138,15 @@ fn main() -> ExitCode {
         .with_writer(std::io::stderr)
         .init();
 
+    // Open MPI's shared-file-pointer component `sm` keeps a named
+    // semaphore per file name in /dev/shm while MPI_File_open runs; a rank
+    // killed inside it (a crash, a job's time limit) leaves it taken, and
+    // the next open of that name (the restart's checkpoint) waits forever
+    // (met in scripts/fault-check.sh). fdem never uses shared file
+    // pointers: leave `sm` out unless the user chose the components.
+    if std::env::var_os("OMPI_MCA_sharedfp").is_none() {
+        std::env::set_var("OMPI_MCA_sharedfp", "^sm");
+    }
     let Some(universe) = mpi::initialize() else {
         eprintln!("error: MPI could not be initialised");
         return ExitCode::FAILURE;

@@ -167,6 +167,7 @@ impl ExplicitDomain {
     /// fifth of a busy rank's memory in a deposition).
     fn release_pair_arrays(&mut self) {
         self.send_buf = Vec::new();
+        self.pair_forces = Default::default();
         self.candidates = Vec::new();
         self.contrib = Vec::new();
         self.gather_slot = Vec::new();

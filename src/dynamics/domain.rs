@@ -443,6 +443,14 @@ impl ExplicitDomain {
         self.node_t.resize(nl, 0.0);
     }
 
+    /// Give back the buffers the substeps' messages to the neighbours are
+    /// packed in and land in (held for reuse; only ranks with neighbours
+    /// have them), before an output allocates its blocks.
+    pub fn release_message_buffers(&mut self) {
+        self.send_buf = Vec::new();
+        self.pair_forces.release_messages();
+    }
+
     pub(super) fn forward_state(&mut self, comm: &SimpleCommunicator) {
         let (x, v) = (flat_mut(&mut self.x), flat_mut(&mut self.v));
         self.halo.forward(comm, &mut [x, v], 3);

@@ -16,15 +16,26 @@ use nalgebra::Vector3;
 /// (as bits), and the force.
 const SENT_F64S: usize = 5;
 
-/// Make room for `extra` more items, growing by an eighth rather than
-/// doubling: these buffers are held for the whole run at the size of the
-/// busiest substep, so doubling left up to half of them unused (measured:
-/// 4.3 MiB held on the busiest of 8 ranks in the N = 2000 deposition).
-/// Blocks this size are mapped pages, which glibc grows with `mremap`,
-/// without copying.
+/// Bytes from which glibc gives a block pages of its own (fdem sets the
+/// threshold to 128 KiB, `run::allocator_settings`).
+const MAPPED_BYTES: usize = 128 << 10;
+
+/// Make room for `extra` more items. These buffers are freed at each
+/// detection and output and regrow in the substeps after, so: a small
+/// first block, then straight to a mapped block (whose untouched pages
+/// cost nothing), then growth by an eighth rather than doubling. Growing
+/// through the heap step by step left its old blocks as touched holes,
+/// several MiB on the busiest of 8 ranks in the N = 2000 deposition; and
+/// doubling left up to half of a block unused (4.3 MiB held there).
 fn make_room<T>(v: &mut Vec<T>, extra: usize) {
     if v.len() + extra > v.capacity() {
-        v.reserve_exact(extra.max(v.capacity() / 8).max(256));
+        let item = std::mem::size_of::<T>().max(1);
+        let grow = match v.capacity() {
+            0 => 256,
+            c if c * item < MAPPED_BYTES => MAPPED_BYTES / item,
+            c => c / 8,
+        };
+        v.reserve_exact(extra.max(grow));
     }
 }
 
@@ -183,6 +194,16 @@ impl PairForces {
         for &e in &self.order[begin..self.end[i] as usize] {
             *f += self.forces[self.entries[e as usize].at as usize];
         }
+    }
+
+    /// Give back the per-neighbour message buffers. They are held at the
+    /// size of the busiest substep for reuse, but only on ranks with
+    /// neighbours, on top of their share of the pairs; the next substep
+    /// sizes them again (a few page faults), so an output or a detection
+    /// need not hold them beside its own arrays.
+    pub(super) fn release_messages(&mut self) {
+        self.send = Vec::new();
+        self.recv = Vec::new();
     }
 
     /// Bytes held (capacities).

@@ -206,6 +206,8 @@ impl ExplicitDomain {
         send.resize(self.send_slots.len(), Vec::new());
         for (buf, slots) in send.iter_mut().zip(&self.send_slots) {
             buf.clear();
+            // Sized once (it is freed at detections and outputs).
+            buf.reserve_exact(3 * slots.len());
             for &s in slots {
                 let s = s as usize;
                 let f = f_b[s / 4][s % 4];

@@ -298,8 +298,11 @@ impl Stages<'_, '_> {
         self.record(out, step)?;
         if at.schedule.is_output(step) || (settled && step < self.model.steps) {
             at.schedule.output_written();
-            // The substeps' message buffers are free: give their pages back
-            // before the output allocates its blocks.
+            // The substeps' message buffers go, and the free pages go
+            // back, before the output allocates its blocks.
+            if let Some(m) = self.mech.as_mut() {
+                m.domain.release_message_buffers();
+            }
             release_free_memory();
             summary::trace_memory(self.comm.rank(), "trimmed for output");
             self.write(out, step)?;

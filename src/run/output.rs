@@ -282,16 +282,22 @@ impl Output {
         // at once (the output was the peak of the N = 2000 runs on 8 ranks).
         let mut node_fields: Vec<(&str, usize, Vec<f64>)> = Vec::new();
         let mut cell_fields: Vec<(&str, usize, Vec<f64>)> = Vec::new();
-        let mut node =
-            |n, c, v: Vec<f64>| node_fields.push((n, c, node_block(comm, model, part, &v, c)));
+        // After each field its transients' pages go back, before the next
+        // field touches new ones (the heap's holes they reused).
+        let mut node = |n, c, v: Vec<f64>| {
+            node_fields.push((n, c, node_block(comm, model, part, &v, c)));
+            super::summary::release_free_memory();
+        };
         if let Some(t) = &t {
             node("temperature", 1, t.clone());
         }
         if let Some(Mechanics { domain: m, .. }) = mech {
             node("displacement", 3, m.displacement());
             node("velocity", 3, m.velocity());
-            let mut cell =
-                |n, c, v: Vec<f64>| cell_fields.push((n, c, cell_block(comm, model, part, &v, c)));
+            let mut cell = |n, c, v: Vec<f64>| {
+                cell_fields.push((n, c, cell_block(comm, model, part, &v, c)));
+                super::summary::release_free_memory();
+            };
             // Cell fields in name order (the writer indexes fields by name anyway).
             if self.owners_move {
                 let rank = f64::from(comm.rank());

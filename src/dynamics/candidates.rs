@@ -22,7 +22,7 @@ use crate::contact::{
 };
 use crate::contact::{tet_tet_penalty, PenaltyParams};
 use crate::error::{Error, Result};
-use crate::geometry::{face_planes, planes_within, TetPlanes};
+use crate::geometry::{face_planes, planes_within};
 use crate::mechanics::MechElement;
 use crate::parallel::exchange::all_to_all;
 use crate::parallel::ghosts::exchange_ghosts;
@@ -173,7 +173,7 @@ impl ExplicitDomain {
         self.gather_slot = Vec::new();
         self.pair_geometry = Vec::new();
         self.pair_planes = Vec::new();
-        self.planes_stamp = Vec::new();
+        self.planes_of = Vec::new();
         self.lin_of = Vec::new();
         self.linearized = Vec::new();
         self.witness = Vec::new();
@@ -195,6 +195,7 @@ impl ExplicitDomain {
         self.flush_friction();
         let clock = std::time::Instant::now();
         let linearized_before = self.linearized.len();
+        let planes_before = self.pair_planes.len();
         self.release_pair_arrays();
         self.thermal_only.clear();
         self.margin = self.adapted_margin(comm);
@@ -242,8 +243,8 @@ impl ExplicitDomain {
         self.refresh_local_arrays();
         // Fresh candidates: planes rebuilt on demand, no linearisations.
         let nt = self.pair_tets.len();
-        self.pair_planes = vec![TetPlanes::new(&[[0.0; 3]; 4]); nt];
-        self.planes_stamp = vec![0; nt];
+        self.planes_of = vec![super::NONE; nt];
+        self.pair_planes = Vec::with_capacity(planes_before + planes_before / 4);
         self.lin_of = vec![super::NONE; self.candidates.len()];
         self.linearized = self.linearized_room(linearized_before);
         self.witness = vec![0; self.candidates.len()];

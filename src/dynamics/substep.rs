@@ -94,7 +94,7 @@ impl ExplicitDomain {
             let now = self.substep_id;
             let tolerance = self.linear_tolerance;
             let geo = &self.pair_geometry;
-            let (planes, stamp) = (&mut self.pair_planes, &mut self.planes_stamp);
+            let (planes_of, planes) = (&mut self.planes_of, &mut self.pair_planes);
             let (lin_of, linearized) = (&mut self.lin_of, &mut self.linearized);
             let witness = &mut self.witness;
             let mut exact = 0u64;
@@ -128,13 +128,17 @@ impl ExplicitDomain {
                     Some((m, v)) => Some(penalty_forces(&m.state, v, &va, &vb, &p)),
                     None => {
                         for t in [ta, tb] {
-                            if stamp[t] != now {
-                                planes[t] = TetPlanes::new(&geo[t].0);
-                                stamp[t] = now;
+                            let at = planes_of[t] as usize;
+                            if at >= planes.len() {
+                                planes_of[t] = planes.len() as u32;
+                                planes.push((now, TetPlanes::new(&geo[t].0)));
+                            } else if planes[at].0 != now {
+                                planes[at] = (now, TetPlanes::new(&geo[t].0));
                             }
                         }
                         exact += 1;
-                        match overlap_state((xa, &planes[ta]), (xb, &planes[tb])) {
+                        let (pa, pb) = (planes_of[ta] as usize, planes_of[tb] as usize);
+                        match overlap_state((xa, &planes[pa].1), (xb, &planes[pb].1)) {
                             Some(s) => {
                                 witness[j] = 0;
                                 if tolerance > 0.0 {

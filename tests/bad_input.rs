@@ -866,12 +866,12 @@ fn jointed_checkpoint_bodies_refuse_sets_and_initial_cracks() {
 
 /// Issue 21: a `particles` key naming a set the body lacks, a radius no
 /// sphere of which fits the set, a radius that is not positive, a body
-/// kind that cannot have particles, and particles that would expand in a
-/// coupled run are refused, naming the key, on one and two ranks.
+/// kind that cannot have particles are refused, naming the key, on one
+/// and two ranks.
 #[test]
 fn bad_particles_are_named() {
     let scen = root().join("scenarios/fede-bar.toml");
-    let cases: [(&str, &[&str], &[&str]); 6] = [
+    let cases: [(&str, &[&str], &[&str]); 5] = [
         (
             "unknown-set",
             &["--set", "bodies.bar.particles.set=\"nowhere\""],
@@ -896,20 +896,6 @@ fn bad_particles_are_named() {
             "whole-body",
             &["--set", "bodies.bar.particles.set=\"all\""],
             &["particles.set", "every element"],
-        ),
-        (
-            "expanding",
-            &[
-                "--set",
-                "thermal.theta=1.0",
-                "--set",
-                "materials.seed002.conductivity=1.0",
-                "--set",
-                "materials.seed002.specific_heat=10.0",
-                "--set",
-                "materials.seed002.expansion=1e-5",
-            ],
-            &["bodies[0].particles", "expansion = 0"],
         ),
     ];
     for (tag, extra, words) in cases {

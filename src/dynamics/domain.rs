@@ -435,6 +435,7 @@ impl ExplicitDomain {
         dom.mark_cracks();
         dom.detect(comm)?;
         dom.update_element_temperatures(None);
+        dom.particles.update_free(&dom.node_t);
         Ok((dom, substeps))
     }
 
@@ -469,6 +470,21 @@ impl ExplicitDomain {
         let t = &mut self.node_t[..];
         self.halo.forward(comm, &mut [t], 1);
         self.update_element_temperatures(dt);
+        self.particles.update_free(&self.node_t);
+    }
+
+    /// The temperatures of this rank's particles numbered `gid` (global
+    /// particle numbers; issue 21), from the thermal system's sphere rows:
+    /// their bonds' free thermal elongations follow. Call after
+    /// [`Self::set_temperatures`] (the links read the nodes').
+    pub fn set_particle_temperatures(&mut self, gid: &[u64], t: &[f64]) -> Result<()> {
+        self.particles.set_temperatures(gid, t, &self.node_t)
+    }
+
+    /// Every particle of body `b` here at the temperature `t(b)` (a
+    /// prescribed heating), as [`Self::set_particle_temperatures`].
+    pub fn set_particle_body_temperatures(&mut self, t: impl Fn(u32) -> f64) {
+        self.particles.set_body_temperatures(t, &self.node_t);
     }
 
     fn update_element_temperatures(&mut self, dt: Option<f64>) {

@@ -8,12 +8,20 @@
 //! with N_I at the bond midpoint (eq 17 there), and the spheres advance by
 //! the damped central difference with the same mass-proportional damping
 //! as the nodes. The sums do not depend on the rank count.
+//!
+//! Thermal expansion: each sphere has a temperature (the thermal system's
+//! row of the sphere in a coupled run, the body's prescribed heating in a
+//! mechanics run); when they are set, each bond's and link's free
+//! elongation α ΔT̄ ℓ is made from them (ΔT above the body's reference
+//! temperature, as the elements' thermal split; a link's ΔT̄ is the mean of
+//! the sphere's and its element point's, Σ N_I T_I at the midpoint), and
+//! the springs act on d_n less it (`mechanics::bond::advance_bond`).
 
 use nalgebra::Vector3;
 
 use crate::error::{Error, Result};
 use crate::mechanics::bond::{
-    bond_forces, sphere_mass_inertia, update_particles, BondState, BondStiffness,
+    bond_forces, free_elongation, sphere_mass_inertia, update_particles, BondState, BondStiffness,
 };
 use crate::mechanics::interface_link::{advance_link, LinkEnds};
 use crate::mesh::lattice::LatticeBond;
@@ -30,7 +38,8 @@ struct DomainLink {
     point_shape: [f64; 4],
     kn: f64,
     ks: f64,
-    /// (ℓ/2)² of the reference bond (time-step bound).
+    /// (ℓ/2)² of the reference bond (time-step bound); ℓ/2 is the half
+    /// bond's rest length.
     half2: f64,
 }
 
@@ -58,6 +67,18 @@ pub(super) struct BodyParticles {
     /// The links' force on the spheres in the last substep (the
     /// elements took its opposite).
     link_total: Vector3<f64>,
+    /// Expansion coefficient α (1/K) of the particles' material.
+    alpha: f64,
+    /// The body's reference (stress-free) temperature.
+    reference_t: f64,
+    /// Sphere temperatures.
+    t: Vec<f64>,
+    /// Rest length ℓ of each bond (m).
+    rest: Vec<f64>,
+    /// Free thermal elongation of each bond and each link (m), from `t`
+    /// and the nodes' temperatures when they were last set.
+    bond_free: Vec<f64>,
+    link_free: Vec<f64>,
 }
 
 /// The particles of one rank.
@@ -163,6 +184,12 @@ impl DomainParticles {
                 .iter()
                 .map(|bd| BondState::new(&x0[bd.i as usize], &x0[bd.j as usize]))
                 .collect();
+            let rest = region
+                .bonds
+                .iter()
+                .map(|bd| (x0[bd.j as usize] - x0[bd.i as usize]).norm())
+                .collect();
+            let (n_bonds, n_links) = (region.bonds.len(), links.len());
             out.bodies.push(BodyParticles {
                 body: b as u32,
                 first: offsets[b],
@@ -181,6 +208,12 @@ impl DomainParticles {
                 links,
                 link_state,
                 link_total: Vector3::zeros(),
+                alpha: el.expansion,
+                reference_t: body.reference_temperature,
+                t: vec![body.initial_temperature; n],
+                rest,
+                bond_free: vec![0.0; n_bonds],
+                link_free: vec![0.0; n_links],
             });
         }
         Ok(out)
@@ -188,6 +221,61 @@ impl DomainParticles {
 
     pub(super) fn is_empty(&self) -> bool {
         self.bodies.is_empty()
+    }
+
+    /// Sets the temperatures of the spheres numbered `gid` (global particle
+    /// numbers of bodies here) to `t`; then [`Self::update_free`].
+    pub(super) fn set_temperatures(
+        &mut self,
+        gid: &[u64],
+        t: &[f64],
+        node_t: &[f64],
+    ) -> Result<()> {
+        for (&g, &v) in gid.iter().zip(t) {
+            let b = self.bodies.partition_point(|p| p.first <= g);
+            let p = b
+                .checked_sub(1)
+                .map(|b| &mut self.bodies[b])
+                .filter(|p| g - p.first < p.t.len() as u64)
+                .ok_or_else(|| {
+                    Error::Mechanics(format!("particle {g} has a temperature but is not here"))
+                })?;
+            p.t[(g - p.first) as usize] = v;
+        }
+        self.update_free(node_t);
+        Ok(())
+    }
+
+    /// Sets every sphere of body `b` here to the temperature `t(b)`; then
+    /// [`Self::update_free`].
+    pub(super) fn set_body_temperatures(&mut self, t: impl Fn(u32) -> f64, node_t: &[f64]) {
+        for p in &mut self.bodies {
+            let v = t(p.body);
+            p.t.iter_mut().for_each(|x| *x = v);
+        }
+        self.update_free(node_t);
+    }
+
+    /// The bonds' and links' free elongations from the spheres'
+    /// temperatures and the local nodes' `node_t`.
+    pub(super) fn update_free(&mut self, node_t: &[f64]) {
+        for p in &mut self.bodies {
+            if p.alpha == 0.0 {
+                continue;
+            }
+            let dt = |v: f64| v - p.reference_t;
+            for ((e, b), &l) in p.bond_free.iter_mut().zip(&p.bonds).zip(&p.rest) {
+                *e = free_elongation(p.alpha, dt(p.t[b.i as usize]), dt(p.t[b.j as usize]), l);
+            }
+            for (e, l) in p.link_free.iter_mut().zip(&p.links) {
+                // seed 002 eq 16: the element point's temperature Σ N_I T_I at the midpoint.
+                let tp: f64 = (0..4)
+                    .map(|k| node_t[l.point_nodes[k] as usize] * l.point_shape[k])
+                    .sum();
+                let ts = p.t[l.sphere as usize];
+                *e = free_elongation(p.alpha, dt(ts), dt(tp), l.half2.sqrt());
+            }
+        }
     }
 
     /// Per body here, a bound on the square of the highest frequency the
@@ -254,13 +342,15 @@ impl DomainParticles {
                 &p.v,
                 &p.w,
                 dt,
+                (p.alpha != 0.0).then_some(&p.bond_free[..]),
                 &mut p.force,
                 &mut p.moment,
             );
-            for (b, s) in p.bonds.iter().zip(&p.state) {
-                energy += s.energy(&p.stiffness, b);
+            for ((b, s), &e) in p.bonds.iter().zip(&p.state).zip(&p.bond_free) {
+                energy += s.energy(&p.stiffness, b, e);
             }
-            for (l, s) in p.links.iter().zip(p.link_state.iter_mut()) {
+            let links = p.links.iter().zip(p.link_state.iter_mut());
+            for ((l, s), &e) in links.zip(&p.link_free) {
                 let i = l.sphere as usize;
                 let ends = LinkEnds {
                     sphere_x: p.x[i],
@@ -270,7 +360,7 @@ impl DomainParticles {
                     ghost_v: interpolate(&l.ghost_shape, &l.ghost_nodes, v),
                     point_v: interpolate(&l.point_shape, &l.point_nodes, v),
                 };
-                let (fs, ms) = advance_link(s, l.kn, l.ks, &ends, dt);
+                let (fs, ms) = advance_link(s, l.kn, l.ks, &ends, dt, e);
                 p.force[i] += fs;
                 p.moment[i] += ms;
                 p.link_total += fs;
@@ -280,7 +370,7 @@ impl DomainParticles {
                 }
                 let dn = s.d.dot(&s.n);
                 let dt2 = (s.d.norm_squared() - dn * dn).max(0.0);
-                energy += 0.5 * (l.kn * dn * dn + l.ks * dt2);
+                energy += 0.5 * (l.kn * (dn - e) * (dn - e) + l.ks * dt2);
             }
         }
         energy

@@ -123,12 +123,14 @@ impl BondState {
         }
     }
 
-    /// Stored energy w (½ k_n d_n² + ½ k_s |d_t|²) (J) of `bond`.
-    pub fn energy(&self, stiffness: &BondStiffness, bond: &LatticeBond) -> f64 {
+    /// Stored energy w (½ k_n (d_n − e)² + ½ k_s |d_t|²) (J) of `bond`
+    /// with free thermal elongation `free` = e (m; [`advance_bond`]).
+    pub fn energy(&self, stiffness: &BondStiffness, bond: &LatticeBond, free: f64) -> f64 {
         let dn = self.d.dot(&self.n);
         let dt2 = (self.d.norm_squared() - dn * dn).max(0.0);
         let k = bond.kind as usize;
-        0.5 * bond.weight * (stiffness.normal[k] * dn * dn + stiffness.tangential[k] * dt2)
+        let de = dn - free;
+        0.5 * bond.weight * (stiffness.normal[k] * de * de + stiffness.tangential[k] * dt2)
     }
 }
 
@@ -143,8 +145,19 @@ fn rotate_between(d: &Vector3<f64>, a: &Vector3<f64>, b: &Vector3<f64>) -> Vecto
 /// One bond's incremental update (seed 002 eqs 12–13 and 3): carries d
 /// along with the rotation of the centre line to the unit direction `n`,
 /// adds the relative midpoint velocity `v_rel` (ẋ_o^j − ẋ_o^i, eq 14) over
-/// `dt`, and returns the force on i, f = k_n d_n n + k_s d_t (the force on j
-/// is −f). `kn` and `ks` include the bond's weight.
+/// `dt`, and returns the force on i, f = k_n (d_n − e) n + k_s d_t (the
+/// force on j is −f), with `free` = e the bond's free thermal elongation
+/// (m, [`free_elongation`]; 0 without expansion). `kn` and `ks` include the
+/// bond's weight.
+///
+/// The free elongation is not accumulated into d: d stays the total
+/// relative displacement and e, a function of the current temperatures,
+/// is subtracted in the force. Under a uniform ΔT the free expansion
+/// x = (1 + α ΔT) x₀ makes d = α ΔT ℓ n exactly as the FE split
+/// F_T = (1 + α ΔT) I does, so the force is zero to round-off at any time
+/// and from any start (an initial temperature away from the reference, a
+/// restart), whereas subtracting increments of e would lose the part of e
+/// present before the first increment and sum the round-off of every one.
 #[inline]
 pub fn advance_bond(
     s: &mut BondState,
@@ -153,6 +166,7 @@ pub fn advance_bond(
     n: &Vector3<f64>,
     v_rel: &Vector3<f64>,
     dt: f64,
+    free: f64,
 ) -> Vector3<f64> {
     let d_old = rotate_between(&s.d, &s.n, n);
     // seed 002 eqs 12–13: d_{n+1} = d_n + ẋ^ij_{n+1/2} Δt.
@@ -160,8 +174,18 @@ pub fn advance_bond(
     s.d = d;
     s.n = *n;
     let dn = d.dot(n);
-    // seed 002 eq 3: f = k d, with (f_n, f_s, f_t) = (k_n d_n, k_s d_s, k_t d_t) and k_s = k_t.
-    n * (kn * dn) + (d - n * dn) * ks
+    // seed 002 eq 3: f = k d, with (f_n, f_s, f_t) = (k_n d_n, k_s d_s, k_t d_t) and k_s = k_t; d_n less the free elongation.
+    n * (kn * (dn - free)) + (d - n * dn) * ks
+}
+
+/// Free thermal elongation e = α ΔT̄ ℓ (m) of a bond of rest length `rest`
+/// whose ends are `dt_i` and `dt_j` (K) above the material's reference
+/// temperature: the FE split's F_T = (1 + α ΔT) I along the bond, at the
+/// ends' mean ΔT̄ = (ΔT_i + ΔT_j)/2.
+#[inline]
+pub fn free_elongation(alpha: f64, dt_i: f64, dt_j: f64, rest: f64) -> f64 {
+    // Not numbered in the seeds (seed 004 eqs 16, 26 along the bond): e = α (ΔT_i + ΔT_j)/2 ℓ.
+    alpha * 0.5 * (dt_i + dt_j) * rest
 }
 
 /// Updates the bonds `bonds` (with `state`, one per bond) over the step
@@ -172,7 +196,9 @@ pub fn advance_bond(
 /// at t + dt/2; the moment arms are taken at mid-step too, x − v Δt/2).
 /// Per bond: d is first carried along with the rotation of the
 /// centre line, then incremented by the relative velocity of the midpoint
-/// (eqs 12–15); the force is f = k_n d_n n + k_s d_t (eq 3 with k_s = k_t).
+/// (eqs 12–15); the force is f = k_n (d_n − e) n + k_s d_t (eq 3 with
+/// k_s = k_t), e the bond's free thermal elongation from `free` (one per
+/// bond; None: no expansion).
 #[allow(clippy::too_many_arguments)]
 pub fn bond_forces(
     bonds: &[LatticeBond],
@@ -182,10 +208,11 @@ pub fn bond_forces(
     v: &[Vector3<f64>],
     w: &[Vector3<f64>],
     dt: f64,
+    free: Option<&[f64]>,
     force: &mut [Vector3<f64>],
     moment: &mut [Vector3<f64>],
 ) {
-    for (b, s) in bonds.iter().zip(state.iter_mut()) {
+    for (k, (b, s)) in bonds.iter().zip(state.iter_mut()).enumerate() {
         let (i, j) = (b.i as usize, b.j as usize);
         // Boundary weight of the lattice (1 inside: eq 4 as written).
         let kn = stiffness.normal[b.kind as usize] * b.weight;
@@ -198,7 +225,8 @@ pub fn bond_forces(
         let vo_i = v[i] + w[i].cross(&half);
         let vo_j = v[j] - w[j].cross(&half);
         // seed 002 eq 14: relative velocity ẋ^ij = ẋ_o^j − ẋ_o^i.
-        let f = advance_bond(s, kn, ks, &n, &(vo_j - vo_i), dt);
+        let e = free.map_or(0.0, |e| e[k]);
+        let f = advance_bond(s, kn, ks, &n, &(vo_j - vo_i), dt, e);
         force[i] += f;
         force[j] -= f;
         // seed 002 eq 2: moments of the bond force about each centre, r × f (the same for both ends).
@@ -293,6 +321,60 @@ mod tests {
         s / l.cell_volume()
     }
 
+    /// A lattice at a uniform ΔT above the reference, expanded freely to
+    /// (1 + α ΔT) x₀ over many steps, carries no force when the bonds'
+    /// free elongation α ΔT ℓ is subtracted; ignoring it, the surface
+    /// spheres feel forces of order k_n α ΔT ℓ.
+    #[test]
+    fn free_thermal_expansion_leaves_the_bonds_unstressed() {
+        let (l, x0) = lattice();
+        let k = BondStiffness::seed002(E, NU, R).unwrap();
+        let (alpha, delta_t, steps, dt) = (1e-5, 200.0, 50, 1e-3);
+        let free: Vec<f64> = l
+            .bonds
+            .iter()
+            .map(|b| {
+                let rest = (x0[b.j as usize] - x0[b.i as usize]).norm();
+                free_elongation(alpha, delta_t, delta_t, rest)
+            })
+            .collect();
+        let w = vec![Vector3::zeros(); x0.len()];
+        let run = |free: Option<&[f64]>| {
+            let mut x = x0.clone();
+            let mut state: Vec<BondState> = l
+                .bonds
+                .iter()
+                .map(|b| BondState::new(&x0[b.i as usize], &x0[b.j as usize]))
+                .collect();
+            let v: Vec<Vector3<f64>> = x0
+                .iter()
+                .map(|p| p * (alpha * delta_t / (steps as f64 * dt)))
+                .collect();
+            let mut f = vec![Vector3::zeros(); x0.len()];
+            for _ in 0..steps {
+                let mut m = vec![Vector3::zeros(); x0.len()];
+                f.iter_mut().for_each(|a| *a = Vector3::zeros());
+                x.iter_mut().zip(&v).for_each(|(x, v)| *x += v * dt);
+                bond_forces(
+                    &l.bonds, &mut state, &k, &x, &v, &w, dt, free, &mut f, &mut m,
+                );
+            }
+            let energy: f64 = state
+                .iter()
+                .zip(&l.bonds)
+                .zip(free.unwrap_or(&vec![0.0; l.bonds.len()]))
+                .map(|((s, b), &e)| s.energy(&k, b, e))
+                .sum();
+            (f.iter().map(|a| a.norm()).fold(0.0, f64::max), energy)
+        };
+        let scale = k.normal[0] * alpha * delta_t * 2.0 * R;
+        let (with, w_with) = run(Some(&free));
+        let (without, w_without) = run(None);
+        assert!(with < 1e-9 * scale, "{with:e} against {scale:e}");
+        assert!(without > 0.1 * scale, "{without:e} against {scale:e}");
+        assert!(w_with < 1e-15 * w_without, "{w_with:e} {w_without:e}");
+    }
+
     #[test]
     fn uniform_strain_gives_the_continuum_stress() {
         let (l, x) = lattice();
@@ -308,7 +390,9 @@ mod tests {
             .collect();
         let mut f = vec![Vector3::zeros(); x.len()];
         let mut m = vec![Vector3::zeros(); x.len()];
-        bond_forces(&l.bonds, &mut state, &k, &x, &v, &w, 1.0, &mut f, &mut m);
+        bond_forces(
+            &l.bonds, &mut state, &k, &x, &v, &w, 1.0, None, &mut f, &mut m,
+        );
         let sigma = centre_stress(&l, &x, &state, &k);
         let mu = E / (2.0 * (1.0 + NU));
         let lambda = E * NU / ((1.0 + NU) * (1.0 - 2.0 * NU));
@@ -385,7 +469,9 @@ mod tests {
             x = next;
             f.iter_mut().for_each(|a| *a = Vector3::zeros());
             m.iter_mut().for_each(|a| *a = Vector3::zeros());
-            bond_forces(&l.bonds, &mut state, &k, &x, &v, &w, dt, &mut f, &mut m);
+            bond_forces(
+                &l.bonds, &mut state, &k, &x, &v, &w, dt, None, &mut f, &mut m,
+            );
         }
         // Total rotation |ω| t ≈ 2 rad. Bonds other than 0 stay unstressed.
         // Time-discretisation error O(steps (|ω|Δt)³ ℓ) ≈ 2e-11 m: under 1e-3 of the stretch.
@@ -425,11 +511,13 @@ mod tests {
             .collect();
         let mut f = vec![Vector3::zeros(); x.len()];
         let mut m = vec![Vector3::zeros(); x.len()];
-        bond_forces(&l.bonds, &mut state, &k, &x, &v, &w, 1.0, &mut f, &mut m);
+        bond_forces(
+            &l.bonds, &mut state, &k, &x, &v, &w, 1.0, None, &mut f, &mut m,
+        );
         let energy: f64 = state
             .iter()
             .zip(&l.bonds)
-            .map(|(s, b)| s.energy(&k, b))
+            .map(|(s, b)| s.energy(&k, b, 0.0))
             .sum();
         let mu = E / (2.0 * (1.0 + NU));
         let lambda = E * NU / ((1.0 + NU) * (1.0 - 2.0 * NU));
@@ -438,7 +526,7 @@ mod tests {
         let unweighted: f64 = state
             .iter()
             .zip(&l.bonds)
-            .map(|(s, b)| s.energy(&k, &LatticeBond { weight: 1.0, ..*b }))
+            .map(|(s, b)| s.energy(&k, &LatticeBond { weight: 1.0, ..*b }, 0.0))
             .sum();
         // Measured: weighted 0.954, unweighted 0.710 of the continuum energy; the rest of
         // the weighted deficit is the edge spheres (56 of 192 here, a few % in a beam).

@@ -24,7 +24,9 @@ pub struct LinkEnds {
 }
 
 /// Advances the link's state over `dt` with normal and tangential
-/// stiffnesses `kn`, `ks` (weight included) and returns the force and the
+/// stiffnesses `kn`, `ks` (weight included) and the half bond's free
+/// thermal elongation `free` (m, α ΔT̄ times the sphere–midpoint distance;
+/// `bond::advance_bond`), and returns the force and the
 /// moment on the sphere; the element's point takes −force (to be returned
 /// to its nodes with N_I at the midpoint, seed 002 eq 17 there).
 pub fn advance_link(
@@ -33,6 +35,7 @@ pub fn advance_link(
     ks: f64,
     ends: &LinkEnds,
     dt: f64,
+    free: f64,
 ) -> (Vector3<f64>, Vector3<f64>) {
     let branch = ends.ghost_x - ends.sphere_x;
     let n = branch.normalize();
@@ -41,7 +44,7 @@ pub fn advance_link(
     // seed 002 eq 15: the sphere's velocity at the midpoint.
     let vo = ends.sphere_v + ends.sphere_w.cross(&half);
     // seed 002 eq 14: relative velocity, the element's point against the sphere's midpoint.
-    let f = advance_bond(s, kn, ks, &n, &(ends.point_v - vo), dt);
+    let f = advance_bond(s, kn, ks, &n, &(ends.point_v - vo), dt, free);
     (f, half.cross(&f))
 }
 
@@ -62,14 +65,14 @@ mod tests {
             ghost_v: Vector3::new(0.3, 0.1, 0.0),
             point_v: Vector3::new(0.3, 0.1, 0.0),
         };
-        let (f, m) = advance_link(&mut s, 10.0, 4.0, &ends, 0.1);
+        let (f, m) = advance_link(&mut s, 10.0, 4.0, &ends, 0.1, 0.0);
         assert_eq!((f, m), (Vector3::zeros(), Vector3::zeros()));
         // The point moves away along +x: the sphere is pulled along +x with k_n d.
         let ends = LinkEnds {
             point_v: Vector3::new(1.3, 0.1, 0.0),
             ..ends
         };
-        let (f, _) = advance_link(&mut s, 10.0, 4.0, &ends, 0.1);
+        let (f, _) = advance_link(&mut s, 10.0, 4.0, &ends, 0.1, 0.0);
         assert!((f - Vector3::new(1.0, 0.0, 0.0)).norm() < 1e-12, "{f:?}");
     }
 }

@@ -380,6 +380,7 @@ mod tests {
             &pv,
             &pw,
             1.0,
+            None,
             &mut f,
             &mut mom,
         );
@@ -406,7 +407,7 @@ mod tests {
             };
             let kind = l.kind as usize;
             let (kn, ks) = (k.normal[kind] * l.weight, k.tangential[kind] * l.weight);
-            f[s] += advance_link(&mut st, kn, ks, &ends, 1.0).0;
+            f[s] += advance_link(&mut st, kn, ks, &ends, 1.0, 0.0).0;
         }
         // The spheres of the inner columns that have links. (Within two rows of a lateral face
         // the lattice's surface weights leave a sphere unbalanced under uniform strain, links

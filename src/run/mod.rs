@@ -455,12 +455,12 @@ impl Stages<'_, '_> {
             {
                 let clock = Instant::now();
                 let span = *n as f64 * m.dt;
+                // The ramp's value at the end of this step, reached over the substeps.
+                let time = (step + 1) as f64 * model.dt;
                 if let Some(s) = self.sys.as_ref() {
                     let t = s.node_temperatures(part)?;
                     m.set_temperatures(comm, &t, Some(span));
                 } else if model.has_heating() {
-                    // The ramp's value at the end of this step, reached over the substeps.
-                    let time = (step + 1) as f64 * model.dt;
                     let t: Vec<f64> = part
                         .owned_gids()
                         .iter()
@@ -469,6 +469,8 @@ impl Stages<'_, '_> {
                         .collect();
                     m.set_temperatures(comm, &t, Some(span));
                 }
+                let sys = self.sys.as_ref();
+                particle_output::couple_particle_temperatures(model, part, sys, time, m)?;
                 m.advance(comm, *n)?;
                 // Issue 20: the friction's heat, released over the next thermal step.
                 if let Some(s) = self.sys.as_mut() {

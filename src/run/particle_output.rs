@@ -163,3 +163,28 @@ pub(super) fn temperature_range(
     comm.all_reduce_into(&mine_sum[..], &mut sum[..], SystemOperation::sum());
     Ok([lo, sum[0] / sum[1].max(1.0), hi])
 }
+
+/// Give the mechanics' particles their temperatures (issue 21: the bonds
+/// expand with them), after the nodes' ([`crate::dynamics::ExplicitDomain::set_temperatures`]):
+/// the thermal system's sphere rows, or without one a prescribed heating's
+/// value of the body at `time` (the nodes' rule, from the body's initial
+/// temperature).
+pub(super) fn couple_particle_temperatures(
+    model: &Model,
+    part: &Part,
+    sys: Option<&ThermalSystem>,
+    time: f64,
+    m: &mut crate::dynamics::ExplicitDomain,
+) -> Result<()> {
+    if let Some(s) = sys {
+        let owned = s.t.to_local_vec()?;
+        let (gid, _, t) = ParticleHeat::new(model, part).rows(part, Some(&owned));
+        m.set_particle_temperatures(&gid, &t)?;
+    } else if model.has_heating() {
+        m.set_particle_body_temperatures(|b| {
+            let body = &model.bodies[b as usize];
+            model.prescribed_temperature(body.node_range.0, body.initial_temperature, time)
+        });
+    }
+    Ok(())
+}

@@ -479,5 +479,6 @@ pub(super) fn couple_temperatures(
             m.set_temperatures(comm, &t, None);
         }
     }
-    Ok(())
+    let time = restart.map_or(0.0, |ck| ck.time);
+    super::particle_output::couple_particle_temperatures(model, part, sys, time, m)
 }

@@ -694,17 +694,6 @@ impl Scenario {
                     format!("must be positive, got {}", p.radius),
                 ));
             }
-            // In a coupled run the spheres' temperatures do not expand the bonds (issue 21).
-            let expands = std::iter::once(&b.material)
-                .chain(b.regions.values())
-                .filter_map(|m| self.materials.iter().find(|x| &x.name == m))
-                .any(|m| m.expansion != 0.0);
-            if self.mechanics.is_some() && self.thermal.is_some() && expands {
-                return refuse(
-                    "particles do not expand with temperature yet: a coupled run needs \
-                     expansion = 0 in the body's materials",
-                );
-            }
             if matches!(b.mesh, MeshSpec::Checkpoint { .. }) {
                 return refuse("a body from a checkpoint has no element sets");
             }

@@ -360,6 +360,7 @@ pub fn de_cantilever(
             &v,
             &w,
             dt,
+            None,
             &mut f,
             &mut m,
         );

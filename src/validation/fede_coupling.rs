@@ -216,10 +216,10 @@ impl GhostLayer {
     /// ghost–sphere bonds), each ½ k_n d_n² + ½ k_s |d_t|² with its weight.
     pub fn stored_energy(&self, stiffness: &BondStiffness) -> f64 {
         let lattice: f64 = (self.bonds.iter().zip(&self.state))
-            .map(|(b, s)| s.energy(stiffness, b))
+            .map(|(b, s)| s.energy(stiffness, b, 0.0))
             .sum();
         let links: f64 = (self.link_bonds.iter().zip(&self.link_state))
-            .map(|(b, s)| s.energy(stiffness, b))
+            .map(|(b, s)| s.energy(stiffness, b, 0.0))
             .sum();
         lattice + links
     }
@@ -293,6 +293,7 @@ impl GhostLayer {
             pv,
             pw,
             dt,
+            None,
             pf,
             pm,
         );
@@ -322,7 +323,7 @@ impl GhostLayer {
                     let vo = pv[l.sphere] + pw[l.sphere].cross(&half);
                     let (k, w) = (l.kind as usize, l.weight);
                     let (kn, ks) = (stiffness.normal[k] * w, stiffness.tangential[k] * w);
-                    let fb = advance_bond(s, kn, ks, &n, &(v_point - vo), dt);
+                    let fb = advance_bond(s, kn, ks, &n, &(v_point - vo), dt, 0.0);
                     pf[l.sphere] += fb;
                     pm[l.sphere] += half.cross(&fb);
                     // seed 002 eq 17 at the midpoint: the force on the element, −f, with N_I(ξ_o).

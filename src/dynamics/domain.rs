@@ -481,6 +481,23 @@ impl ExplicitDomain {
         self.particles.set_temperatures(gid, t, &self.node_t)
     }
 
+    /// This rank's particles' motion and bond and link states for a
+    /// checkpoint (issue 21): spheres, bonds, links by global number.
+    pub fn saved_particles(&self) -> [crate::io::checkpoint_particles::GlobalRows; 3] {
+        self.particles.saved()
+    }
+
+    /// The global numbers of this rank's spheres, bonds and links and the
+    /// model's totals, the rows [`Self::restore_particles`] takes.
+    pub fn particle_ids(&self) -> ([Vec<u32>; 3], [u64; 3]) {
+        self.particles.saved_ids()
+    }
+
+    /// Puts the saved rows of [`Self::particle_ids`] (flat) back.
+    pub fn restore_particles(&mut self, rows: &[Vec<f64>; 3]) {
+        self.particles.restore(rows);
+    }
+
     /// Every particle of body `b` here at the temperature `t(b)` (a
     /// prescribed heating), as [`Self::set_particle_temperatures`].
     pub fn set_particle_body_temperatures(&mut self, t: impl Fn(u32) -> f64) {

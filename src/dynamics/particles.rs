@@ -20,6 +20,7 @@
 use nalgebra::Vector3;
 
 use crate::error::{Error, Result};
+use crate::io::checkpoint_particles::{GlobalRows, SAVED_BOND, SAVED_PARTICLE};
 use crate::mechanics::bond::{
     bond_forces, free_elongation, sphere_mass_inertia, update_particles, BondState, BondStiffness,
 };
@@ -48,8 +49,10 @@ struct DomainLink {
 pub(super) struct BodyParticles {
     /// Global body id.
     body: u32,
-    /// Global number of its first particle.
+    /// Global number of its first particle, bond and link.
     first: u64,
+    first_bond: u64,
+    first_link: u64,
     stiffness: BondStiffness,
     mass: f64,
     inertia: f64,
@@ -85,6 +88,8 @@ pub(super) struct BodyParticles {
 #[derive(Debug, Clone, Default)]
 pub(super) struct DomainParticles {
     pub(super) bodies: Vec<BodyParticles>,
+    /// Particles, bonds and links of the whole model.
+    totals: [u64; 3],
 }
 
 /// What a substep of the spheres gives the domain's energies and momentum.
@@ -117,12 +122,16 @@ impl DomainParticles {
     /// The particles of the bodies `part` holds; their link nodes must be
     /// owned (`n_owned`). Errors name the body.
     pub(super) fn new(model: &Model, part: &Part, n_owned: usize) -> Result<DomainParticles> {
-        let (offsets, _) = model.particle_offsets();
+        let (offsets, total) = model.particle_offsets();
         let mut out = DomainParticles::default();
+        let (mut next_bond, mut next_link) = (0u64, 0u64);
         for (b, body) in model.bodies.iter().enumerate() {
             let Some(p) = model.body_particles(body) else {
                 continue;
             };
+            let (first_bond, first_link) = (next_bond, next_link);
+            next_bond += p.region.bonds.len() as u64;
+            next_link += p.region.links.len() as u64;
             let local = |src_elem: u32| {
                 part.elem_gid
                     .binary_search(&(body.elem_range.0 + src_elem))
@@ -193,6 +202,8 @@ impl DomainParticles {
             out.bodies.push(BodyParticles {
                 body: b as u32,
                 first: offsets[b],
+                first_bond,
+                first_link,
                 stiffness,
                 mass,
                 inertia,
@@ -216,7 +227,69 @@ impl DomainParticles {
                 link_free: vec![0.0; n_links],
             });
         }
+        out.totals = [total, next_bond, next_link];
         Ok(out)
+    }
+
+    /// This rank's spheres' motion and bonds' and links' states for a
+    /// checkpoint, by global number (`io::checkpoint_particles`).
+    pub(super) fn saved(&self) -> [GlobalRows; 3] {
+        let mut out: [GlobalRows; 3] = Default::default();
+        for (r, &total) in out.iter_mut().zip(&self.totals) {
+            r.total = total;
+        }
+        let bond_row = |s: &BondState| [s.d.x, s.d.y, s.d.z, s.n.x, s.n.y, s.n.z];
+        for p in &self.bodies {
+            for k in 0..p.x.len() {
+                out[0].gid.push((p.first + k as u64) as u32);
+                for a in [p.x[k], p.v[k], p.w[k]] {
+                    out[0].values.extend_from_slice(a.as_slice());
+                }
+            }
+            for (k, s) in p.state.iter().enumerate() {
+                out[1].gid.push((p.first_bond + k as u64) as u32);
+                out[1].values.extend_from_slice(&bond_row(s));
+            }
+            for (k, s) in p.link_state.iter().enumerate() {
+                out[2].gid.push((p.first_link + k as u64) as u32);
+                out[2].values.extend_from_slice(&bond_row(s));
+            }
+        }
+        out
+    }
+
+    /// The global numbers of this rank's spheres, bonds and links, and
+    /// the model's totals (what [`Self::restore`] takes rows of).
+    pub(super) fn saved_ids(&self) -> ([Vec<u32>; 3], [u64; 3]) {
+        let s = self.saved();
+        let [a, b, c] = s;
+        ([a.gid, b.gid, c.gid], self.totals)
+    }
+
+    /// Puts saved rows (flat, in the order of [`Self::saved_ids`]) back.
+    pub(super) fn restore(&mut self, rows: &[Vec<f64>; 3]) {
+        let (mut s, mut b, mut l) = (
+            rows[0].chunks_exact(SAVED_PARTICLE),
+            rows[1].chunks_exact(SAVED_BOND),
+            rows[2].chunks_exact(SAVED_BOND),
+        );
+        let v3 = |c: &[f64]| Vector3::new(c[0], c[1], c[2]);
+        let bond = |c: &[f64]| BondState {
+            d: v3(&c[..3]),
+            n: v3(&c[3..]),
+        };
+        for p in &mut self.bodies {
+            for k in 0..p.x.len() {
+                let c = s.next().expect("a row per sphere");
+                (p.x[k], p.v[k], p.w[k]) = (v3(&c[..3]), v3(&c[3..6]), v3(&c[6..]));
+            }
+            for st in &mut p.state {
+                *st = bond(b.next().expect("a row per bond"));
+            }
+            for st in &mut p.link_state {
+                *st = bond(l.next().expect("a row per link"));
+            }
+        }
     }
 
     pub(super) fn is_empty(&self) -> bool {

@@ -417,6 +417,8 @@ pub struct CheckpointRows<'a> {
     /// Cohesive joints: global joint numbers, their saved values
     /// ([`crate::fracture::set::SAVED_JOINT`] each) and the total.
     pub joints: Option<(&'a [u32], &'a [f64], u64)>,
+    /// Bonded particles (issue 21), by global numbers.
+    pub particles: Option<&'a super::checkpoint_particles::ParticleCheckpoint>,
 }
 
 /// Collective. Write a checkpoint: every rank its rows (moved to
@@ -647,6 +649,9 @@ fn write_parallel_to(
             Some(&block),
         )?;
     }
+    if let Some(p) = rows.particles {
+        super::checkpoint_particles::write(comm, &file, path, &xfer, p)?;
+    }
     let mut sc = [0.0; SCALARS];
     sc[0] = head.step as f64;
     sc[1] = head.time;
@@ -666,7 +671,7 @@ fn write_parallel_to(
 /// this rank's block of rows from `lo` (none when `data` is None).
 /// Collective.
 #[allow(clippy::too_many_arguments)]
-fn dataset_f64(
+pub(super) fn dataset_f64(
     file: &File,
     path: &Path,
     name: &str,
@@ -704,7 +709,7 @@ fn dataset_f64(
 /// any nodes or elements by global id. Every rank opens it (read-only,
 /// serial driver) and reads only what it holds.
 pub struct CheckpointFile {
-    file: File,
+    pub(super) file: File,
     path: PathBuf,
     /// Scalars and the body table.
     pub head: CheckpointHead,
@@ -845,7 +850,7 @@ impl CheckpointFile {
     }
 
     /// Rows `ids` (any order) of the 2-D dataset `name` of `C` columns.
-    fn rows_of<T: H5Type + Copy + Default, const C: usize>(
+    pub(super) fn rows_of<T: H5Type + Copy + Default, const C: usize>(
         &self,
         name: &str,
         ids: &[u32],
@@ -1052,6 +1057,7 @@ mod tests {
             account_t_sum: c.account.as_ref().map(|a| &a.t_sum[..]),
             account_rad_sum: c.account.as_ref().and_then(|a| a.rad_sum.as_deref()),
             joints: None,
+            particles: None,
         };
         crate::testutil::on_one_rank(|comm| write_parallel(comm, p, &head, &rows))
     }

@@ -92,6 +92,7 @@
 //! finalised.
 
 pub mod checkpoint;
+pub mod checkpoint_particles;
 mod ffi;
 mod hdf5_out;
 mod history;

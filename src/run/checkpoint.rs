@@ -103,7 +103,7 @@ impl Restart {
 }
 
 /// The error for a checkpoint that lacks what the scenario needs.
-fn missing(restart: &Path, message: &str) -> Error {
+pub(super) fn missing(restart: &Path, message: &str) -> Error {
     Error::Model {
         path: restart.display().to_string(),
         message: message.into(),
@@ -111,7 +111,7 @@ fn missing(restart: &Path, message: &str) -> Error {
 }
 
 /// The error for a checkpoint that cannot be read.
-fn unreadable(restart: &Path, e: crate::io::IoError) -> Error {
+pub(super) fn unreadable(restart: &Path, e: crate::io::IoError) -> Error {
     Error::Model {
         path: restart.display().to_string(),
         message: e.to_string(),
@@ -304,6 +304,7 @@ pub(super) fn restore_joints(
 /// thermal system.
 pub(super) fn restore_thermal(
     comm: &SimpleCommunicator,
+    model: &Model,
     part: &Part,
     saved: Saved,
     s: &mut ThermalSystem,
@@ -334,8 +335,8 @@ pub(super) fn restore_thermal(
     };
     let (t, account) = agree(comm, read().map_err(|e| unreadable(saved.origin(), e)))?;
     // Per node in the file; the copies of a node tied by intact joints share a row.
-    let t = part.nodes_to_rows(&t);
-    let account = account.map(|(t0, ts, rs)| {
+    let mut t = part.nodes_to_rows(&t);
+    let mut account = account.map(|(t0, ts, rs)| {
         let rs = if rs.is_empty() {
             rs
         } else {
@@ -343,6 +344,13 @@ pub(super) fn restore_thermal(
         };
         (part.nodes_to_rows(&t0), part.nodes_to_rows(&ts), rs)
     });
+    // The spheres' rows (issue 21; a repartition never holds particles).
+    if let Saved::File(r) = saved {
+        let acc = account
+            .as_mut()
+            .map(|(a, b, c)| (&mut a[..], &mut b[..], &mut c[..]));
+        super::particle_checkpoint::restore_heat(comm, model, part, r, &mut t, acc)?;
+    }
     let h = ck.heat;
     let heat = EnergyAccount {
         stored: h[0],
@@ -410,6 +418,8 @@ pub(super) fn save_checkpoint(
         _ => None,
     };
     let total_joints = model.joint_offsets().1;
+    let particles =
+        super::particle_checkpoint::capture(model, part, sys.as_ref(), mech.as_deref())?;
     let mut c = capture(comm, model, part, sys, mech, step, contacts)?;
     c.head.peak_kinetic = peak_kinetic;
     c.head.settled = settled;
@@ -440,6 +450,7 @@ pub(super) fn save_checkpoint(
         joints: joints
             .as_ref()
             .map(|(ids, v)| (&ids[..], &v[..], total_joints)),
+        particles: particles.as_ref(),
     };
     crate::io::checkpoint::write_parallel(comm, path, &c.head, &rows).map_err(Error::from)
 }

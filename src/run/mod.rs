@@ -13,6 +13,7 @@
 mod checkpoint;
 mod joint_output;
 mod output;
+mod particle_checkpoint;
 mod particle_output;
 mod rebalance;
 mod schedule;
@@ -86,11 +87,6 @@ pub fn run(
         ..PhaseTimes::default()
     };
     let restart = match &opts.restart {
-        Some(_) if model.has_particles() => {
-            return Err(crate::error::Error::Mechanics(
-                "--restart: checkpoints do not hold the particles' state yet (issue 21)".into(),
-            ))
-        }
         Some(p) => Some(Restart::read(p, &model)?),
         None => None,
     };
@@ -215,6 +211,7 @@ impl<'a, 'p> Stages<'a, 'p> {
         if let (Some(r), Some(m)) = (restart, mech.as_mut()) {
             // The joints' histories; the thermal rows of the broken ones split.
             checkpoint::restore_joints(comm, model, r, m)?;
+            particle_checkpoint::restore_motion(comm, model, r, m)?;
             if model.has_joints() {
                 let broken = m.domain.take_broken_joints();
                 part.renumber_rows(comm, &broken);

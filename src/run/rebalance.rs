@@ -452,7 +452,7 @@ impl Stages<'_, '_> {
         let clock = Instant::now();
         let mut sys = setup::thermal_system(self.petsc, comm, model, part, &contacts.set)?;
         if let Some(s) = sys.as_mut() {
-            checkpoint::restore_thermal(comm, part, Saved::Memory(&snapshot), s)?;
+            checkpoint::restore_thermal(comm, model, part, Saved::Memory(&snapshot), s)?;
             s.iterations = iterations;
             s.assemblies += assemblies;
             if let Some((lo, block)) = pending.as_ref() {

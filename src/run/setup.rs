@@ -431,7 +431,7 @@ pub(super) fn thermal<'p>(
         }
     }
     if let (Some(r), Some(s)) = (restart, sys.as_mut()) {
-        checkpoint::restore_thermal(comm, part, checkpoint::Saved::File(r), s)?;
+        checkpoint::restore_thermal(comm, model, part, checkpoint::Saved::File(r), s)?;
     }
     Ok(sys)
 }

@@ -1,0 +1,197 @@
+//! Restarts of runs with bonded particles (issue 21): a run stopped at a
+//! checkpoint and continued with `--restart` on one and on two ranks
+//! ends as the run that never stopped. The checkpoint holds the spheres'
+//! motion, each bond's and link's incremental state and, with heat, the
+//! spheres' thermal rows, by global number.
+
+mod common;
+
+use std::path::Path;
+
+use common::*;
+
+/// Particle displacements and velocities (and temperatures, when
+/// written) of every output, with the output times.
+#[derive(PartialEq, Debug)]
+struct Particles {
+    times: Vec<f64>,
+    fields: Vec<Vec<Vec<f64>>>,
+}
+
+fn read_particles(dir: &Path, stem: &str) -> Particles {
+    let h5 = dir.join(format!("{stem}_particles.h5"));
+    let times = fdem::io::read_times(&h5).unwrap();
+    let ids = fdem::io::read_static_node_field_i32(&h5, "particle_id").unwrap();
+    assert!(ids.iter().enumerate().all(|(r, &i)| i as usize == r));
+    let fields = ["displacement", "velocity", "temperature"]
+        .iter()
+        .filter_map(|name| {
+            (0..times.len())
+                .map(|k| fdem::io::read_node_field_step(&h5, name, k).ok())
+                .collect()
+        })
+        .collect();
+    Particles { times, fields }
+}
+
+/// Two bars of `text` side by side (the body table repeated, moved by
+/// 3 mm in y), so that on two ranks each holds one; `extra` is appended.
+fn two_bars(text: &str, end_marker: &str, extra: &str) -> String {
+    let body_at = text.find("[[bodies]]").unwrap();
+    let end_at = text.find(end_marker).unwrap();
+    let body = &text[body_at..end_at];
+    let second = body
+        .replace("name = \"bar\"", "name = \"bar2\"")
+        .replace("particles =", "translate = [0.0, 3e-3, 0.0]\nparticles =");
+    format!(
+        "{}{body}{second}{}{extra}",
+        &text[..body_at],
+        &text[end_at..]
+    )
+}
+
+/// The state at the end of a run in `dir`: the last output of the
+/// particles and the nodes, and the time.
+fn last(dir: &Path) -> (f64, Vec<Vec<f64>>, Vec<[f64; 3]>) {
+    let p = read_particles(dir, "two-bars");
+    let m = read_mech(dir, "two-bars");
+    let k = p.times.len() - 1;
+    let fields = p.fields.iter().map(|f| f[k].clone()).collect();
+    (p.times[k], fields, m.disp[m.times.len() - 1].clone())
+}
+
+/// Runs `scen` whole on `ranks` ranks into a fresh directory `name`.
+fn whole(name: &str, scen: &Path, ranks: usize) -> std::path::PathBuf {
+    let dir = out_dir(name);
+    run_ok(ranks, scen, &dir, &["--set", "output.checkpoint=true"]);
+    dir
+}
+
+/// Runs `scen` on `ranks` ranks to `stop` (s) with a checkpoint there;
+/// returns the checkpoint's path.
+fn first_part(name: &str, scen: &Path, ranks: usize, stop: f64) -> std::path::PathBuf {
+    let dir = out_dir(name);
+    let end = format!("time.end_time={stop:?}");
+    run_ok(
+        ranks,
+        scen,
+        &dir,
+        &["--set", "output.checkpoint=true", "--set", &end],
+    );
+    dir.join("two-bars_checkpoint.h5")
+}
+
+/// Continues from `ck` on `ranks` ranks into a fresh directory `name`
+/// (its outputs start after the checkpoint's time).
+fn rest(name: &str, scen: &Path, ranks: usize, ck: &Path) -> std::path::PathBuf {
+    let dir = out_dir(name);
+    run_ok(
+        ranks,
+        scen,
+        &dir,
+        &[
+            "--restart",
+            ck.to_str().unwrap(),
+            "--set",
+            "output.checkpoint=true",
+        ],
+    );
+    let t = read_particles(&dir, "two-bars").times;
+    assert!(t[0] > 1.9e-5, "{name}: the restart wrote from {}", t[0]);
+    dir
+}
+
+/// Two FE | DE | FE bars pulled by 1 and 2 MPa (`scenarios/fede-bar.toml`,
+/// mechanics only), stopped at 2e-5 s on two ranks while they still move
+/// and continued to 5e-5 s on one and on two ranks: the particles'
+/// displacements and velocities and the nodes' displacements at the end
+/// are bitwise those of the run that never stopped (on one rank).
+#[test]
+fn a_particle_run_restarts_bitwise_on_one_and_two_ranks() {
+    let text = std::fs::read_to_string(root().join("scenarios/fede-bar.toml")).unwrap();
+    let mut extra = String::new();
+    for set in ["xmin", "ymin", "zmin"] {
+        let axis = &set[..1];
+        extra.push_str(&format!(
+            "\n[[mechanics.bc]]\nkind = \"fixed\"\nset = \"bar2.{set}\"\ncomponents = [\"{axis}\"]\n"
+        ));
+    }
+    extra.push_str(
+        "\n[[mechanics.bc]]\nkind = \"traction\"\nset = \"bar2.xmax\"\nvalue = [2e6, 0.0, 0.0]\n",
+    );
+    let scen = two_bars(&text, "[mechanics]", &extra);
+    let dir = out_dir("particle-restart-mech");
+    let path = dir.join("two-bars.toml");
+    std::fs::write(&path, scen).unwrap();
+    let full = whole("particle-restart-mech-full", &path, 1);
+    let want = last(&full);
+    let ck = first_part("particle-restart-mech-first", &path, 2, 2e-5);
+    // Still moving at the checkpoint: the restart has bond states to carry.
+    let stopped = read_particles(ck.parent().unwrap(), "two-bars");
+    let v = stopped.fields[1].last().unwrap();
+    assert!(v.iter().any(|x| x.abs() > 1e-3), "the bars were at rest");
+    for ranks in [1, 2] {
+        let got = last(&rest(
+            &format!("particle-restart-mech-{ranks}"),
+            &path,
+            ranks,
+            &ck,
+        ));
+        assert_eq!(got.0, want.0, "{ranks} ranks: end time");
+        assert!(got.1 == want.1, "{ranks} ranks: particles differ");
+        assert!(got.2 == want.2, "{ranks} ranks: node displacements differ");
+    }
+}
+
+/// The two free bars of `scenarios/fede-expansion-bar.toml` (heat and
+/// mechanics, the spheres' temperatures from their thermal rows, the
+/// bonds expanding) stopped at 2e-5 s while they expand and continued to
+/// 1e-4 s: on as many ranks as the first part, bitwise the run that never
+/// stopped on that many ranks (particles' motion and temperatures, nodes);
+/// from a one-rank checkpoint on two ranks, the same to the round-off of
+/// the thermal solve on another partition (1e-9 of the displacement).
+#[test]
+fn a_coupled_particle_run_restarts_with_its_temperatures() {
+    let text = std::fs::read_to_string(root().join("scenarios/fede-expansion-bar.toml")).unwrap();
+    let scen = two_bars(&text, "[thermal]", "");
+    let dir = out_dir("particle-restart-heat");
+    let path = dir.join("two-bars.toml");
+    std::fs::write(&path, scen).unwrap();
+    for ranks in [1, 2] {
+        let want = last(&whole(
+            &format!("particle-restart-heat-full-{ranks}"),
+            &path,
+            ranks,
+        ));
+        let ck = first_part(
+            &format!("particle-restart-heat-first-{ranks}"),
+            &path,
+            ranks,
+            2e-5,
+        );
+        let got = last(&rest(
+            &format!("particle-restart-heat-{ranks}"),
+            &path,
+            ranks,
+            &ck,
+        ));
+        assert_eq!(got.0, want.0, "{ranks} ranks: end time");
+        assert_eq!(got.1.len(), 3, "temperatures written");
+        assert!(got.1 == want.1, "{ranks} ranks: particles differ");
+        assert!(got.2 == want.2, "{ranks} ranks: node displacements differ");
+        if ranks == 1 {
+            // The one-rank checkpoint on two ranks.
+            let other = last(&rest("particle-restart-heat-1-on-2", &path, 2, &ck));
+            let scale = 2e-6;
+            let worst = other.1[0]
+                .iter()
+                .zip(&want.1[0])
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max);
+            assert!(
+                worst < 1e-9 * scale,
+                "1-rank checkpoint on 2 ranks: {worst:e}"
+            );
+        }
+    }
+}

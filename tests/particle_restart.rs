@@ -105,7 +105,8 @@ fn rest(name: &str, scen: &Path, ranks: usize, ck: &Path) -> std::path::PathBuf 
 /// mechanics only), stopped at 2e-5 s on two ranks while they still move
 /// and continued to 5e-5 s on one and on two ranks: the particles'
 /// displacements and velocities and the nodes' displacements at the end
-/// are bitwise those of the run that never stopped (on one rank).
+/// are bitwise those of the run that never stopped (on one rank); continued
+/// in place, the particle series holds every output of that run, bitwise.
 #[test]
 fn a_particle_run_restarts_bitwise_on_one_and_two_ranks() {
     let text = std::fs::read_to_string(root().join("scenarios/fede-bar.toml")).unwrap();
@@ -141,6 +142,28 @@ fn a_particle_run_restarts_bitwise_on_one_and_two_ranks() {
         assert!(got.1 == want.1, "{ranks} ranks: particles differ");
         assert!(got.2 == want.2, "{ranks} ranks: node displacements differ");
     }
+    // In place (the first part's directory, as many ranks): the particle
+    // series continues, every output bitwise the uninterrupted run's.
+    let first = ck.parent().unwrap();
+    let o = fdem(
+        2,
+        &[
+            "run",
+            path.to_str().unwrap(),
+            "--quiet",
+            "--output",
+            first.to_str().unwrap(),
+            "--restart",
+            ck.to_str().unwrap(),
+        ],
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (a, b) = (
+        read_particles(&full, "two-bars"),
+        read_particles(first, "two-bars"),
+    );
+    assert_eq!(a.times, b.times, "the continued series' times");
+    assert!(a == b, "the continued particle series differs");
 }
 
 /// The two free bars of `scenarios/fede-expansion-bar.toml` (heat and

@@ -374,6 +374,7 @@ impl Stages<'_, '_> {
                 continue_after,
             )?;
         }
+        let continue_after = restart.filter(|_| out.continues).map(|c| c.time);
         out.particles = particle_output::ParticleOutput::open(
             self.comm,
             self.model,
@@ -381,6 +382,7 @@ impl Stages<'_, '_> {
             &out.dir,
             &out.stem,
             self.mech.as_ref(),
+            continue_after,
         )?;
         Ok(out)
     }

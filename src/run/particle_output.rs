@@ -41,9 +41,10 @@ fn ids(gid: &[u64]) -> Vec<u32> {
 
 impl ParticleOutput {
     /// Collective. Create `<dir>/<stem>_particles.h5` with the spheres at
-    /// their reference centres; None when the model has no particles.
-    /// The spheres come from the mechanics when there is one, else from
-    /// the thermal rows of `part`.
+    /// their reference centres, or with `continue_after = Some(t)` reopen
+    /// it to continue after the checkpoint at `t` (a restart in place);
+    /// None when the model has no particles. The spheres come from the
+    /// mechanics when there is one, else from the thermal rows of `part`.
     pub fn open(
         comm: &SimpleCommunicator,
         model: &Model,
@@ -51,6 +52,7 @@ impl ParticleOutput {
         dir: &Path,
         stem: &str,
         mech: Option<&Mechanics>,
+        continue_after: Option<f64>,
     ) -> Result<Option<ParticleOutput>> {
         let (_, total) = model.particle_offsets();
         if total == 0 {
@@ -88,8 +90,16 @@ impl ParticleOutput {
         };
         let name = format!("{stem}_particles");
         let point_row: Vec<i32> = cells.iter().map(|&g| g as i32).collect();
-        let mut writer = TimeSeriesWriter::create(comm, dir, &name, &mesh)?;
-        writer.write_static_node_field_i32("particle_id", &point_row)?;
+        let writer = match continue_after {
+            Some(t) => TimeSeriesWriter::reopen(comm, dir, &name, &mesh, &point_row, t)?,
+            None => {
+                let mut w = TimeSeriesWriter::create(comm, dir, &name, &mesh)?;
+                w.write_static_node_field_i32("particle_id", &point_row)?;
+                // The rows' check of a restart in place reads `node_id`.
+                w.write_static_node_field_i32("node_id", &point_row)?;
+                w
+            }
+        };
         let xdmf = writer.xdmf_path().to_path_buf();
         Ok(Some(ParticleOutput {
             writer,

@@ -218,3 +218,59 @@ fn a_coupled_particle_run_restarts_with_its_temperatures() {
         }
     }
 }
+
+/// A heat-only run with particles (`scenarios/fede-heat-bar.toml`, the
+/// spheres rows of the thermal system) stopped at 10 ms, in its transient,
+/// and continued to 20 ms on one and on two ranks: the spheres' and the
+/// nodes' temperatures at the end are those of the run that never stopped
+/// (bitwise on one rank; to 1e-12 of ΔT on two, another partition's
+/// solve, measured bitwise there too).
+#[test]
+fn a_heat_run_with_particles_restarts_with_the_spheres_temperatures() {
+    let scen = root().join("scenarios/fede-heat-bar.toml");
+    let stem = "fede-heat-bar";
+    let set = ["--set", "output.every=1", "--set", "output.checkpoint=true"];
+    let end = |t: &'static str| [&set[..], &["--set", t]].concat();
+    let full = out_dir("particle-restart-thermal-full");
+    run_ok(1, &scen, &full, &end("time.end_time=0.02"));
+    let first = out_dir("particle-restart-thermal-first");
+    run_ok(1, &scen, &first, &end("time.end_time=0.01"));
+    let ck = first.join(format!("{stem}_checkpoint.h5"));
+    let temps = |dir: &Path| {
+        let p = read_particles(dir, stem);
+        let r = read_results(dir, stem);
+        let (kp, kr) = (p.times.len() - 1, r.times.len() - 1);
+        (
+            p.times[kp],
+            p.fields[0][kp].clone(),
+            r.temperature[kr].clone(),
+        )
+    };
+    let want = temps(&full);
+    // Mid-transient: the spheres are far from the steady line.
+    assert!(want.1.iter().any(|&t| t > 1.0) && want.1.iter().any(|&t| t < 99.0));
+    for ranks in [1, 2] {
+        let dir = out_dir(&format!("particle-restart-thermal-{ranks}"));
+        let more = [
+            &end("time.end_time=0.02")[..],
+            &["--restart", ck.to_str().unwrap()],
+        ]
+        .concat();
+        run_ok(ranks, &scen, &dir, &more);
+        let got = temps(&dir);
+        assert_eq!(got.0, want.0, "{ranks} ranks: end time");
+        let worst = got
+            .1
+            .iter()
+            .zip(&want.1)
+            .chain(got.2.iter().zip(&want.2))
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        eprintln!("heat restart on {ranks} rank(s): worst temperature difference {worst:e}");
+        if ranks == 1 {
+            assert!(got.1 == want.1 && got.2 == want.2, "not bitwise: {worst:e}");
+        } else {
+            assert!(worst < 1e-10, "{ranks} ranks: {worst:e}");
+        }
+    }
+}

@@ -261,9 +261,15 @@ impl DomainParticles {
     /// The global numbers of this rank's spheres, bonds and links, and
     /// the model's totals (what [`Self::restore`] takes rows of).
     pub(super) fn saved_ids(&self) -> ([Vec<u32>; 3], [u64; 3]) {
-        let s = self.saved();
-        let [a, b, c] = s;
-        ([a.gid, b.gid, c.gid], self.totals)
+        let mut ids: [Vec<u32>; 3] = Default::default();
+        for p in &self.bodies {
+            let firsts = [p.first, p.first_bond, p.first_link];
+            let counts = [p.x.len(), p.state.len(), p.link_state.len()];
+            for ((v, f), n) in ids.iter_mut().zip(firsts).zip(counts) {
+                v.extend((0..n as u64).map(|k| (f + k) as u32));
+            }
+        }
+        (ids, self.totals)
     }
 
     /// Puts saved rows (flat, in the order of [`Self::saved_ids`]) back.

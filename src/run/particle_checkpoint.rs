@@ -29,6 +29,18 @@ pub(super) fn capture(
         return Ok(None);
     }
     let motion = mech.map(|m| m.domain.saved_particles());
+    // Rows are numbered by u32 in the exchange to the file's blocks.
+    if let Some(r) = motion
+        .iter()
+        .flatten()
+        .find(|r| r.total > u64::from(u32::MAX))
+    {
+        return Err(crate::error::Error::Mechanics(format!(
+            "{} particles, bonds or links: a checkpoint holds at most {} of each",
+            r.total,
+            u32::MAX
+        )));
+    }
     let heat = match sys {
         Some(s) => {
             let owned = s.t.to_local_vec()?;

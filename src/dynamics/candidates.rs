@@ -818,34 +818,48 @@ impl ExplicitDomain {
             .closed_cracks()
             .into_iter()
             .map(|(tets, sides, area)| {
+                // Per side: its tet's gid, material, body, corner rows and face.
                 let side = |k: usize| {
-                    let e = own
-                        .gid
-                        .binary_search(&tets[k])
-                        .expect("a jointed body is held whole");
-                    let face = own.tets[e]
+                    if let Ok(e) = own.gid.binary_search(&tets[k]) {
+                        let face = own.tets[e]
+                            .iter()
+                            .position(|n| !sides[k].contains(n))
+                            .expect("a face of its tet");
+                        let rows = own.tets[e].map(|n| petsc[n as usize]);
+                        return (tets[k], own.material[e], Some(own.body[e]), rows, face);
+                    }
+                    // The other tet of a joint across a cut, owned here:
+                    // its face's corners are ghosts here, and the corner
+                    // off the face weighs nothing (any row stands for it).
+                    let (corners, material) = self.joints.remote_tets[&tets[k]];
+                    let on_face = sides[k].map(|n| self.node_gid[n as usize]);
+                    let face = corners
                         .iter()
-                        .position(|n| !sides[k].contains(n))
+                        .position(|g| !on_face.contains(g))
                         .expect("a face of its tet");
-                    (e, face)
+                    let rows = corners.map(|g| {
+                        let i = on_face.iter().position(|&x| x == g).unwrap_or(0);
+                        petsc[sides[k][i] as usize]
+                    });
+                    (tets[k], material, None, rows, face)
                 };
                 let (mut t, mut c) = (side(0), side(1));
                 if tets[0] > tets[1] {
                     std::mem::swap(&mut t, &mut c);
                 }
+                // A joint's two tets are of one body.
+                let body = t.2.or(c.2).expect("a crack's tet is here");
                 let mut d = PairDofs {
-                    materials: [own.material[t.0], own.material[c.0]],
-                    bodies: [own.body[t.0], own.body[c.0]],
+                    materials: [t.1, c.1],
+                    bodies: [body, body],
                     ..Default::default()
                 };
-                for j in 0..4 {
-                    d.petsc[j] = petsc[own.tets[t.0][j] as usize];
-                    d.petsc[4 + j] = petsc[own.tets[c.0][j] as usize];
-                }
+                d.petsc[..4].copy_from_slice(&t.3);
+                d.petsc[4..].copy_from_slice(&c.3);
                 let p = ContactPair {
-                    target: own.gid[t.0],
-                    contactor: own.gid[c.0],
-                    surface: ContactSurface::coincident_faces(area, t.1, c.1),
+                    target: t.0,
+                    contactor: c.0,
+                    surface: ContactSurface::coincident_faces(area, t.4, c.4),
                 };
                 (p, d)
             })

@@ -38,6 +38,10 @@ pub(super) struct DomainJoints {
     rows: Vec<JointRow>,
     /// Local nodes below this are owned (receive joint forces here).
     n_owned: usize,
+    /// The other tet of each joint owned here across a cut (global id):
+    /// its corners (global node ids, in its order) and material, for the
+    /// thermal contact of its crack.
+    pub(super) remote_tets: std::collections::HashMap<u32, ([u32; 4], u32)>,
 }
 
 /// A joint of the part as the output sees it.
@@ -82,9 +86,14 @@ impl DomainJoints {
             Default::default();
         let (offsets, _) = model.joint_offsets();
         let mut rows = Vec::with_capacity(part.joints.len());
+        let mut remote_tets = std::collections::HashMap::new();
         for (k, j) in part.joints.iter().enumerate() {
             let body = j.body;
             let lower = j.faces.tets[0].min(j.faces.tets[1]);
+            let upper = j.faces.tets[0].max(j.faces.tets[1]);
+            if part.local_element(lower).is_some() && part.local_element(upper).is_none() {
+                remote_tets.insert(upper, model.element_corners(body as usize, upper));
+            }
             rows.push(JointRow {
                 gid: offsets[body as usize] + u64::from(j.index),
                 body,
@@ -124,6 +133,7 @@ impl DomainJoints {
         }
         d.rows = rows;
         d.n_owned = part.num_owned();
+        d.remote_tets = remote_tets;
         Ok(d)
     }
 
@@ -325,10 +335,14 @@ impl DomainJoints {
         self.sets
             .iter()
             .flat_map(|s| {
-                s.cracks.iter().filter(|(_, c)| c.closed).map(|&(j, _)| {
-                    let f = &s.faces[j as usize];
-                    (f.tets, [f.a, f.b], f.area)
-                })
+                // A crack across a cut meets once, on its joint's owner.
+                s.cracks
+                    .iter()
+                    .filter(|&&(j, c)| c.closed && s.is_counted(j as usize))
+                    .map(|&(j, _)| {
+                        let f = &s.faces[j as usize];
+                        (f.tets, [f.a, f.b], f.area)
+                    })
             })
             .collect()
     }

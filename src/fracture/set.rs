@@ -123,6 +123,11 @@ impl JointSet {
         self.counted = counted;
     }
 
+    /// Whether joint `j` is counted here (see [`Self::count_only`]).
+    pub fn is_counted(&self, j: usize) -> bool {
+        self.counted.get(j).copied().unwrap_or(true)
+    }
+
     /// Break joint `j` before the run (an initial crack of the scenario):
     /// its faces are a crack from the start, not counted as broken.
     pub fn start_broken(&mut self, j: usize, x: &[Vector3<f64>]) {

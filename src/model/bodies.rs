@@ -273,6 +273,22 @@ impl super::Model {
             })
     }
 
+    /// The corners (global node ids, in the element's order) and material
+    /// of element `elem` (global id) of body `b`, a body of its own source
+    /// mesh (a split jointed body's).
+    pub fn element_corners(&self, b: usize, elem: u32) -> ([u32; 4], u32) {
+        let body = &self.bodies[b];
+        let BodySource::Mesh { mesh, .. } = body.source else {
+            unreachable!("a split body has its own source mesh")
+        };
+        let src = &self.meshes[mesh as usize];
+        let e = (elem - body.elem_range.0) as usize;
+        (
+            src.mesh.tets[e].map(|n| body.node_range.0 + n),
+            src.material[e],
+        )
+    }
+
     /// Per body, the global number of its first joint (joints numbered
     /// body by body, each body's in its mesh's joint order), and the
     /// total: O(bodies), the same on every rank.

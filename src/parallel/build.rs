@@ -200,8 +200,16 @@ impl Part {
         } else {
             0
         };
-        let mut part = number(comm, local, particle_rows);
+        // Whether a jointed body is split in a thermal run: its tied rows
+        // are then numbered across the ranks (the same on every rank).
+        let rows_across = model.thermal_active
+            && split.iter().zip(&model.bodies).any(|(&s, body)| {
+                s && matches!(body.source, BodySource::Mesh { mesh, .. }
+                    if model.meshes[mesh as usize].joints.is_some())
+            });
+        let mut part = number(comm, local, particle_rows, rows_across);
         part.whole_bodies = whole;
+        part.share_dirichlet(comm);
         Ok(part)
     }
 }
@@ -226,7 +234,7 @@ fn split_bodies(model: &Model, size: usize) -> Vec<bool> {
                 size > 1
                     && users[mesh as usize] == 1
                     && (model.meshes[mesh as usize].joints.is_none()
-                        || jointed_splits(model, &model.meshes[mesh as usize]))
+                        || jointed_splits(&model.meshes[mesh as usize]))
                     && model.meshes[mesh as usize].particles.is_none()
                     && (model.mechanics.is_none()
                         || (b.node_range.1 - b.node_range.0) as usize > BODY_EIGEN_MAX_NODES)
@@ -240,11 +248,12 @@ fn split_bodies(model: &Model, size: usize) -> Vec<bool> {
 /// when every tet of it is jointed, each node belongs to one tet, so it is
 /// owned with its tet and every joint at it is evaluated where its tet is
 /// (a joint across the cut on both sides' ranks,
-/// [`crate::dynamics`]`::joints`); and only in a run without a thermal
-/// problem, whose copies of a vertex tied by intact joints share a
-/// thermal row numbered where the body is held whole.
-fn jointed_splits(model: &Model, src: &crate::model::SourceMesh) -> bool {
-    !model.thermal_active && src.mesh.nodes.len() == 4 * src.mesh.tets.len()
+/// [`crate::dynamics`]`::joints`). In a thermal run the copies of a
+/// vertex tied by intact joints share one row across the ranks, numbered
+/// again when joints break ([`super::tied_rows`]), and a crack across the
+/// cut meets its other face as a thermal contact on the joint's owner.
+fn jointed_splits(src: &crate::model::SourceMesh) -> bool {
+    src.mesh.nodes.len() == 4 * src.mesh.tets.len()
 }
 
 /// The elements and nodes a rank has made, before numbering.
@@ -278,6 +287,10 @@ struct Made {
     joints: Vec<super::PartJoint>,
     /// Per joint: whether it ties thermal rows here (its body held whole).
     ties_rows: Vec<bool>,
+    /// The nodes of jointed bodies split in a thermal run: each node's
+    /// class (global id of the lowest copy tied to it by intact joints,
+    /// [`super::tied_rows`]).
+    class_of: HashMap<u32, u32>,
 }
 
 /// Make the bodies and elements `held` by this rank.
@@ -350,10 +363,19 @@ fn make_bodies(
                 m.ties_rows.push(whole);
             }
         }
+        let classes = match &mesh.joints {
+            Some(j) if !whole && model.thermal_active => {
+                super::tied_rows::mesh_classes(mesh.nodes.len(), j)
+            }
+            _ => Vec::new(),
+        };
         for (n, &u) in used.iter().enumerate() {
             let ghost = !u && wanted.get(n).copied().unwrap_or(false);
             if !u && !ghost {
                 continue;
+            }
+            if let Some(&c) = classes.get(n) {
+                m.class_of.insert(n0 + n as u32, n0 + c);
             }
             m.node_gid.push(n0 + n as u32);
             m.x.push(mesh.nodes[n]);
@@ -436,14 +458,16 @@ fn joint_classes(joints: &[super::PartJoint]) -> HashMap<u32, u32> {
 /// ids, ascending): each its own row in order from this rank's start,
 /// except that a node `tied` to a lower one takes that one's row (the
 /// lowest of a class comes first); `extra` more rows (the particles')
-/// end the rank's range. Returns every rank's start (and the total) and
-/// the row of each owned node.
+/// end the rank's range. Returns every rank's start (and the total), the
+/// row of each owned node, and the owned nodes tied to a lower one this
+/// rank does not own (node, lowest), whose rows are another rank's.
+#[allow(clippy::type_complexity)]
 fn number_rows(
     comm: &SimpleCommunicator,
     owned: impl Iterator<Item = u32> + Clone,
     tied: &HashMap<u32, u32>,
     extra: usize,
-) -> (Vec<usize>, HashMap<u32, u32>) {
+) -> (Vec<usize>, HashMap<u32, u32>, Vec<(u32, u32)>) {
     let size = comm.size() as usize;
     let rank = comm.rank() as usize;
     let n_rows = owned
@@ -458,9 +482,16 @@ fn number_rows(
     }
     let mut row_of: HashMap<u32, u32> = HashMap::new();
     let mut next = starts[rank] as u32;
+    let mut elsewhere = Vec::new();
     for g in owned {
         let row = match tied.get(&g) {
-            Some(&r) if r != g => row_of[&r],
+            Some(&r) if r != g => match row_of.get(&r) {
+                Some(&row) => row,
+                None => {
+                    elsewhere.push((g, r));
+                    continue;
+                }
+            },
             _ => {
                 next += 1;
                 next - 1
@@ -468,12 +499,14 @@ fn number_rows(
         };
         row_of.insert(g, row);
     }
-    (starts, row_of)
+    (starts, row_of, elsewhere)
 }
 
 /// Collective. Owners and PETSc numbers of the made nodes, and the part,
-/// with `particle_rows` thermal rows of particles after its nodes'.
-fn number(comm: &SimpleCommunicator, m: Made, particle_rows: usize) -> Part {
+/// with `particle_rows` thermal rows of particles after its nodes';
+/// `rows_across` (the same on every rank) when the copies of a split
+/// jointed body tie rows across the ranks.
+fn number(comm: &SimpleCommunicator, m: Made, particle_rows: usize, rows_across: bool) -> Part {
     let size = comm.size() as usize;
     let rank = comm.rank() as usize;
     // Owners of the split bodies' nodes: the lowest rank holding an
@@ -529,14 +562,18 @@ fn number(comm: &SimpleCommunicator, m: Made, particle_rows: usize) -> Part {
         .filter(|(_, &t)| t)
         .map(|(j, _)| *j)
         .collect();
-    let tied = joint_classes(&tying);
+    let mut tied = joint_classes(&tying);
+    tied.extend(m.class_of.iter().map(|(&g, &c)| (g, c)));
     let owned_gids = m
         .node_gid
         .iter()
         .zip(&owner)
         .filter(|(_, &o)| o as usize == rank)
         .map(|(&g, _)| g);
-    let (starts, mut petsc_of) = number_rows(comm, owned_gids, &tied, particle_rows);
+    let (starts, mut petsc_of, elsewhere) = number_rows(comm, owned_gids, &tied, particle_rows);
+    if rows_across {
+        super::tied_rows::fill_elsewhere(comm, &m.class_of, &mut petsc_of, elsewhere);
+    }
     // Ghosts' numbers: owners tell the rendezvous rank, which tells the holders.
     let mut tell: Vec<Vec<u32>> = vec![Vec::new(); size];
     for (i, &g) in m.node_gid.iter().enumerate() {
@@ -622,6 +659,8 @@ fn number(comm: &SimpleCommunicator, m: Made, particle_rows: usize) -> Part {
         whole: None,
         whole_bodies: Vec::new(),
         particle_rows,
+        rows_across,
+        own_dirichlet: None,
         joints: m
             .joints
             .iter()
@@ -648,6 +687,7 @@ impl Part {
     pub fn renumber_rows(
         &mut self,
         comm: &SimpleCommunicator,
+        model: &Model,
         broken: &std::collections::HashSet<[u32; 2]>,
     ) {
         let size = comm.size() as usize;
@@ -667,14 +707,20 @@ impl Part {
                 ..*j
             })
             .collect();
-        let tied = joint_classes(&intact);
+        let mut tied = joint_classes(&intact);
+        // A split jointed body's copies, tied across the ranks.
+        let class_of = self.split_classes(comm, model, broken);
+        tied.extend(class_of.iter().map(|(&g, &c)| (g, c)));
         let no = self.n_owned;
-        let (starts, row_of) = number_rows(
+        let (starts, mut row_of, elsewhere) = number_rows(
             comm,
             self.node_gid[..no].iter().copied(),
             &tied,
             self.particle_rows,
         );
+        if self.rows_across {
+            super::tied_rows::fill_elsewhere(comm, &class_of, &mut row_of, elsewhere);
+        }
         for l in 0..no {
             self.petsc[l] = row_of[&self.node_gid[l]];
         }
@@ -696,5 +742,6 @@ impl Part {
             at[o] += 1;
         }
         self.starts = starts;
+        self.share_dirichlet(comm);
     }
 }

@@ -15,6 +15,7 @@ mod halo;
 mod part;
 mod partition;
 pub mod rcb;
+mod tied_rows;
 
 pub use build::{element_work, Placement, IMBALANCE};
 pub use fingerprint::fingerprint;

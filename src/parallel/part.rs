@@ -86,6 +86,13 @@ pub struct Part {
     /// (the whole bodies' particles in ascending body id, each body's in
     /// its lattice's order). Zero without heat.
     pub particle_rows: usize,
+    /// Whether the copies of a split jointed body tie thermal rows across
+    /// the ranks (issue 19; the same on every rank): an owned node's row
+    /// may then be another rank's ([`Part::remote_rows`]).
+    pub rows_across: bool,
+    /// With `rows_across`: the part's own prescribed temperatures (and
+    /// ramps), before those of other ranks' copies joined them.
+    pub(super) own_dirichlet: Option<(Vec<(u32, f64)>, Vec<f64>)>,
 }
 
 /// One cohesive joint of a part.
@@ -143,7 +150,8 @@ impl Part {
     }
 
     /// A value per owned node from a value per owned PETSc row (particle
-    /// rows left out).
+    /// rows left out). Every owned node's row must be this rank's (not so
+    /// with [`Part::rows_across`]: `thermal::node_rows` gathers the others).
     pub fn rows_to_nodes(&self, rows: &[f64]) -> Vec<f64> {
         if rows.len() == self.n_owned && self.particle_rows == 0 {
             return rows.to_vec();
@@ -157,7 +165,8 @@ impl Part {
 
     /// A value per owned PETSc row from a value per owned node (the copies
     /// sharing a row hold the same value; the last one's is taken; particle
-    /// rows are zero).
+    /// rows are zero). Copies whose row another rank owns are left out:
+    /// that rank owns the row's lowest copy.
     pub fn nodes_to_rows(&self, nodes: &[f64]) -> Vec<f64> {
         let n = self.owned_rows();
         if n == self.n_owned && self.particle_rows == 0 {
@@ -166,7 +175,9 @@ impl Part {
         let lo = self.starts[self.rank];
         let mut rows = vec![0.0; n];
         for (&p, &v) in self.petsc[..self.n_owned].iter().zip(nodes) {
-            rows[p as usize - lo] = v;
+            if let Some(r) = rows.get_mut((p as usize).wrapping_sub(lo)) {
+                *r = v;
+            }
         }
         rows
     }
@@ -490,6 +501,8 @@ impl Part {
             whole_bodies: Vec::new(),
             joints: Vec::new(),
             particle_rows: 0,
+            rows_across: false,
+            own_dirichlet: None,
         }
     }
 

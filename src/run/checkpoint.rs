@@ -512,7 +512,7 @@ pub(super) fn capture(
     let (mut temperature, mut t0, mut t_sum, mut rad_sum) = (None, None, None, None);
     if let Some(s) = sys.as_mut() {
         // Saved per node: copies tied by intact joints share a row.
-        temperature = Some(part.rows_to_nodes(&s.t.to_local_vec()?));
+        temperature = Some(s.node_temperatures(part)?);
         head.ksp_iterations = s.iterations;
         let a = s.account_state()?;
         head.account = Some((
@@ -527,10 +527,11 @@ pub(super) fn capture(
             ],
             a.steps,
         ));
-        t0 = Some(part.rows_to_nodes(&a.t0));
-        t_sum = Some(part.rows_to_nodes(&a.t_sum));
+        let nodes = |rows: &[f64]| crate::thermal::node_rows::nodes_from_rows(part, &s.t, rows);
+        t0 = Some(nodes(&a.t0)?);
+        t_sum = Some(nodes(&a.t_sum)?);
         if !a.rad_sum.is_empty() {
-            rad_sum = Some(part.rows_to_nodes(&a.rad_sum));
+            rad_sum = Some(nodes(&a.rad_sum)?);
         }
         let e = s.energy()?;
         head.heat = [

@@ -214,7 +214,7 @@ impl<'a, 'p> Stages<'a, 'p> {
             particle_checkpoint::restore_motion(comm, model, r, m)?;
             if model.has_joints() {
                 let broken = m.domain.take_broken_joints();
-                part.renumber_rows(comm, &broken);
+                part.renumber_rows(comm, model, &broken);
                 m.domain.renumber_rows(&part);
             }
         }
@@ -521,7 +521,7 @@ impl Stages<'_, '_> {
         };
         let t_nodes = sys.node_temperatures(&self.part)?;
         let broken = m.take_broken_joints();
-        self.part.renumber_rows(comm, &broken);
+        self.part.renumber_rows(comm, self.model, &broken);
         m.renumber_rows(&self.part);
         self.contacts.refind(comm, self.model, self.mech.as_mut())?;
         if let Some(s) = self.sys.as_mut() {

@@ -11,6 +11,7 @@ pub mod hex8;
 pub mod lattice_heat;
 pub mod limits;
 pub mod monotone;
+pub mod node_rows;
 pub mod nonlinear;
 pub mod particles;
 pub mod radiation;

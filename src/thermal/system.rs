@@ -267,7 +267,13 @@ impl<'p> ThermalSystem<'p> {
             let mut e = t_end.view_mut()?;
             e.copy_from_slice(&start);
             for (k, &(l, value)) in part.bc.dirichlet.iter().enumerate() {
-                let r = part.petsc[l as usize] as usize - lo;
+                // A copy whose row is another rank's: that rank prescribes it.
+                let Some(r) = (part.petsc[l as usize] as usize).checked_sub(lo) else {
+                    continue;
+                };
+                if r >= owned {
+                    continue;
+                }
                 e[r] = value;
                 match ramp_of(k) {
                     0.0 => v[r] = value,
@@ -281,6 +287,7 @@ impl<'p> ThermalSystem<'p> {
             .dirichlet
             .iter()
             .map(|&(l, _)| part.petsc[l as usize] as i32)
+            .filter(|&r| (lo..lo + owned).contains(&(r as usize)))
             .collect();
         d_rows.sort_unstable();
         d_rows.dedup();
@@ -764,21 +771,24 @@ impl<'p> ThermalSystem<'p> {
         };
         let lo = part.starts[part.rank];
         let rows = f.to_local_vec()?;
+        // Copies whose row is another rank's take none of it.
+        let here = |p: u32| (p as usize).checked_sub(lo).filter(|&r| r < rows.len());
         let mut copies = vec![0u32; rows.len()];
-        for &p in &part.petsc[..part.n_owned] {
-            copies[p as usize - lo] += 1;
+        for r in part.petsc[..part.n_owned].iter().filter_map(|&p| here(p)) {
+            copies[r] += 1;
         }
         Ok(Some(
             part.petsc[..part.n_owned]
                 .iter()
-                .map(|&p| rows[p as usize - lo] / f64::from(copies[p as usize - lo]))
+                .map(|&p| here(p).map_or(0.0, |r| rows[r] / f64::from(copies[r])))
                 .collect(),
         ))
     }
 
     /// The temperature of every owned node of `part` (part order).
+    /// Collective when [`Part::rows_across`] (rows of other ranks gathered).
     pub fn node_temperatures(&self, part: &Part) -> Result<Vec<f64>> {
-        Ok(part.rows_to_nodes(&self.t.to_local_vec()?))
+        super::node_rows::node_values(part, &self.t)
     }
 
     /// Collective. This rank's share of the heat flowing through contacts

@@ -92,8 +92,11 @@ pub struct Part {
     pub rows_across: bool,
     /// With `rows_across`: the part's own prescribed temperatures (and
     /// ramps), before those of other ranks' copies joined them.
-    pub(super) own_dirichlet: Option<(Vec<(u32, f64)>, Vec<f64>)>,
+    pub(super) own_dirichlet: Option<OwnDirichlet>,
 }
+
+/// A part's own prescribed temperatures (local node, value) and ramps.
+pub(super) type OwnDirichlet = (Vec<(u32, f64)>, Vec<f64>);
 
 /// One cohesive joint of a part.
 #[derive(Debug, Clone, Copy)]

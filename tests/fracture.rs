@@ -829,7 +829,8 @@ fn an_open_crack_stops_conduction() {
 /// from them. The thermal bar pulled apart is stopped after 6 of its 8
 /// steps, once joints have broken, and continued from its checkpoint into
 /// a fresh directory on 1 and on 2 ranks: the final displacements,
-/// temperatures and joint damages are bitwise the uninterrupted run's;
+/// temperatures and joint damages are bitwise the uninterrupted run's
+/// (on 2 ranks, where the jointed bar is split, temperatures to 1e-8);
 /// continued in place, the joint series keeps its steps and appends.
 #[test]
 fn a_jointed_run_restarts_from_its_checkpoint() {
@@ -865,7 +866,14 @@ fn a_jointed_run_restarts_from_its_checkpoint() {
         let got = last(&rest);
         assert_eq!(got.0, want.0, "{ranks} rank(s): end time");
         assert_eq!(got.1, want.1, "{ranks} rank(s): displacements");
-        assert_eq!(got.2, want.2, "{ranks} rank(s): temperatures");
+        if ranks == 1 {
+            assert_eq!(got.2, want.2, "{ranks} rank(s): temperatures");
+        } else {
+            // The fully jointed bar is split over the 2 ranks, its tied rows
+            // across them: the iterative solve's sums follow the partition.
+            let d = rel_diff(&got.2, &want.2);
+            assert!(d < 1e-8, "{ranks} rank(s): temperatures differ by {d:e}");
+        }
         assert_eq!(got.3, want.3, "{ranks} rank(s): joint damage");
     }
     // In place: both series (bodies and joints) continue after the checkpoint.

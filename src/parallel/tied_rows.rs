@@ -212,7 +212,8 @@ impl Part {
         for l in (0..self.n_owned as u32).rev() {
             first.insert(self.petsc[l as usize], l);
         }
-        let ramps = !self.bc.dirichlet_ramp.is_empty();
+        // One ramp per condition (none only in parts made from a whole mesh).
+        let ramps = self.bc.dirichlet_ramp.len() == self.bc.dirichlet.len();
         for r in got.iter().flat_map(|v| v.chunks_exact(3)) {
             let p = r[0] as u32;
             if prescribed.insert(p) {

@@ -37,6 +37,9 @@ const MARGIN_GROWTH: f64 = 4.0;
 /// boxes are apart (a box test and zeroed forces).
 const HOT_PAIR_WEIGHT: u64 = 32;
 
+/// A tet's corners and face planes ([`face_planes`]).
+type TetCorners = ([[f64; 3]; 4], [[f64; 4]; 4]);
+
 /// A candidate contact pair: boundary tets `a` (of a free body) and `b` (of
 /// another body) whose boxes, grown by the margin, overlap.
 #[derive(Debug, Clone, Copy)]
@@ -247,7 +250,7 @@ impl ExplicitDomain {
         self.pair_planes = Vec::with_capacity(planes_before + planes_before / 4);
         self.lin_of = vec![super::NONE; self.candidates.len()];
         self.linearized = self.linearized_room(linearized_before);
-        self.witness = vec![0; self.candidates.len()];
+        self.witness = vec![super::substep::UNSEEN; self.candidates.len()];
         let ghosts: Vec<(u32, u32, u32)> = (self.n_owned..self.node_gid.len())
             .map(|l| (self.node_gid[l], self.node_owner[l], l as u32))
             .collect();
@@ -347,16 +350,18 @@ impl ExplicitDomain {
         // surface of seed 000 sec 3.1; a tet that meets the surface only
         // at an edge or corner overlaps a shallow intruder by O(δ²).
         let penalty = self.penalty.is_some();
-        // Each tet's face planes, built once (on first use).
-        let mut plane_at: Vec<u32> = vec![NONE; og.len()];
-        let mut planes: Vec<[[f64; 4]; 4]> = Vec::new();
-        let mut plane = |h: u32| -> [[f64; 4]; 4] {
-            let at = &mut plane_at[h as usize];
+        // Each tet's corners and face planes, gathered once (on first use)
+        // into one place: a tet is in several candidates.
+        let mut geo_at: Vec<u32> = vec![NONE; og.len()];
+        let mut geo: Vec<TetCorners> = Vec::new();
+        let mut geometry = |geo: &mut Vec<TetCorners>, h: u32| -> usize {
+            let at = &mut geo_at[h as usize];
             if *at == NONE {
-                *at = planes.len() as u32;
-                planes.push(face_planes(&og.corners(h)));
+                *at = geo.len() as u32;
+                let x = og.corners(h);
+                geo.push((x, face_planes(&x)));
             }
-            planes[*at as usize]
+            *at as usize
         };
         let body_of = |h: u32| {
             let n = og.own.len() as u32;
@@ -366,14 +371,15 @@ impl ExplicitDomain {
                 og.ghosts.body[(h - n) as usize]
             }
         };
-        let mut kept: Vec<(u32, u32)> = Vec::new();
-        let mut weights: Vec<u64> = Vec::new();
+        let mut kept: Vec<(u32, u32)> = Vec::with_capacity(found.len());
+        let mut weights: Vec<u64> = Vec::with_capacity(found.len());
         let mut thermal: Vec<(u32, u32)> = Vec::new();
         for c in found {
             let both_held = held[body_of(c.a) as usize] && held[body_of(c.b) as usize];
             if penalty && c.b_boundary && !both_held {
-                let (pa, pb) = (plane(c.a), plane(c.b));
-                if planes_within((&og.corners(c.a), &pa), (&og.corners(c.b), &pb), margin) {
+                let (ga, gb) = (geometry(&mut geo, c.a), geometry(&mut geo, c.b));
+                let ((xa, pa), (xb, pb)) = (&geo[ga], &geo[gb]);
+                if planes_within((xa, pa), (xb, pb), margin) {
                     kept.push((c.a, c.b));
                     weights.push(if c.hot { HOT_PAIR_WEIGHT } else { 1 });
                 }

@@ -131,7 +131,8 @@ pub struct ExplicitDomain {
     pub(super) lin_of: Vec<u32>,
     pub(super) linearized: Vec<LinearizedOverlap>,
     /// Per candidate, a separating axis found when it last did not
-    /// overlap (`geometry::separating_axis`; 0: none).
+    /// overlap (`geometry::separating_axis`; `substep::UNSEEN` before its
+    /// first evaluation, `OVERLAPPED` when none separated it).
     pub(super) witness: Vec<u8>,
     pub(super) x_detect: Vec<Vector3<f64>>,
     /// Element force contributions: 4 per element, then those received

@@ -17,6 +17,12 @@ use crate::error::{Error, Result};
 use crate::geometry::{separated_along, separating_axis, tet_bounds, TetPlanes};
 use crate::mechanics::explicit::{element_forces, update_nodes_damped, NodeUpdate, ThermalLoad};
 
+/// A candidate's witness before its first evaluation after a detection.
+pub(super) const UNSEEN: u8 = 0;
+/// A candidate's witness when no axis separated its tets at its last
+/// evaluation (they overlapped or touched): the clipping comes first.
+const OVERLAPPED: u8 = u8::MAX;
+
 /// Corners of a tet and its bounding box (low, high corner).
 pub(super) type TetGeometry = ([[f64; 3]; 4], [f64; 3], [f64; 3]);
 
@@ -115,6 +121,16 @@ impl ExplicitDomain {
                     lin_of[j] = NONE;
                     continue;
                 }
+                // Not evaluated since the detection: an axis that separates
+                // the tets (the clipping would find nothing) costs less
+                // than the clipping.
+                if lin_volume.is_none() && witness[j] == UNSEEN {
+                    if let Some(axis) = separating_axis(xa, xb) {
+                        witness[j] = axis;
+                        lin_of[j] = NONE;
+                        continue;
+                    }
+                }
                 let (la, lb) = (&self.pair_tets[ta], &self.pair_tets[tb]);
                 let va = la.map(|l| self.v[l as usize].into());
                 let vb = lb.map(|l| self.v[l as usize].into());
@@ -140,7 +156,7 @@ impl ExplicitDomain {
                         let (pa, pb) = (planes_of[ta] as usize, planes_of[tb] as usize);
                         match overlap_state((xa, &planes[pa].1), (xb, &planes[pb].1)) {
                             Some(s) => {
-                                witness[j] = 0;
+                                witness[j] = OVERLAPPED;
                                 if tolerance > 0.0 {
                                     let m = LinearizedOverlap::new(s, xa, xb, tolerance);
                                     if slot < linearized.len() {
@@ -154,7 +170,7 @@ impl ExplicitDomain {
                             }
                             None => {
                                 lin_of[j] = NONE;
-                                witness[j] = separating_axis(xa, xb).unwrap_or(0);
+                                witness[j] = separating_axis(xa, xb).unwrap_or(OVERLAPPED);
                                 None
                             }
                         }

@@ -159,6 +159,10 @@ pub struct Candidate {
     pub hot: bool,
 }
 
+/// Boundary tets up to which a moving body is searched without a tree
+/// (a nut has about 140).
+const SMALL_BODY_TETS: usize = 512;
+
 /// A box (low, high corner) loosened by `pad` of its size, then grown by
 /// `margin` on every side.
 fn grown((lo, hi): ([f64; 3], [f64; 3]), pad: f64, margin: f64) -> ([f64; 3], [f64; 3]) {
@@ -326,10 +330,23 @@ impl ContactSearch {
                     let b: Vec<_> = tets.interior[bb].iter().map(|&e| bounds(e)).collect();
                     self.interior_trees.insert(gb, (key, Tree::new(b)));
                 }
-                let tree_b = with_boundary.then(|| match self.boundary_trees.get(&gb) {
-                    Some((_, t)) => t,
-                    None => moving[bb].get_or_insert_with(|| Tree::new(boxes[bb].clone())),
-                });
+                // A small moving body: its tets near the searching body's
+                // box, tested against each searching tet in turn, cost
+                // less than a tree built for this search.
+                let small =
+                    with_boundary && !tets.fixed[bb] && tets.boundary[bb].len() <= SMALL_BODY_TETS;
+                let b_near: Vec<u32> = if small {
+                    (0..boxes[bb].len() as u32)
+                        .filter(|&l| overlap(&boxes[bb][l as usize], &body_box[ba], margin))
+                        .collect()
+                } else {
+                    Vec::new()
+                };
+                let tree_b =
+                    (with_boundary && !small).then(|| match self.boundary_trees.get(&gb) {
+                        Some((_, t)) => t,
+                        None => moving[bb].get_or_insert_with(|| Tree::new(boxes[bb].clone())),
+                    });
                 let tree_i = with_interior.then(|| match self.interior_trees.get(&gb) {
                     Some((_, t)) => t,
                     None => moving_interior[bb].get_or_insert_with(|| {
@@ -342,6 +359,17 @@ impl ContactSearch {
                         continue;
                     }
                     let a = tets.boundary[ba][ia as usize];
+                    for &l in &b_near {
+                        let other = &boxes[bb][l as usize];
+                        if overlap(own, other, margin) {
+                            found.push(Candidate {
+                                a,
+                                b: tets.boundary[bb][l as usize],
+                                b_boundary: true,
+                                hot: overlap(own, other, 0.0),
+                            });
+                        }
+                    }
                     let query = aabb(own, margin);
                     for (tree, list, b_boundary) in [
                         (tree_b, &tets.boundary[bb], true),

@@ -80,9 +80,18 @@ fn bar_conducts_the_linear_profile_through_both_regions() {
     // Temperatures, as a fraction of ΔT.
     // FE nodes on the interface planes x = 1, 2 mm, and the others.
     let mut fe_err = [0.0f64; 2];
+    // On the interface planes: inside the face, on its edges (the bar's lateral faces), at its corners.
+    let mut face_err = [0.0f64; 3];
     for (c, t) in r.coords.iter().zip(&r.temperature[k]) {
         let on = ((c[0] - 1e-3).abs() < 1e-12 || (c[0] - 2e-3).abs() < 1e-12) as usize;
-        fe_err[on] = fe_err[on].max((t - exact(c[0])).abs() / DT);
+        let e = (t - exact(c[0])).abs() / DT;
+        fe_err[on] = fe_err[on].max(e);
+        if on == 1 {
+            let lateral = (1..3)
+                .filter(|&a| c[a].abs() < 1e-12 || (c[a] - 1e-3).abs() < 1e-12)
+                .count();
+            face_err[lateral] = face_err[lateral].max(e);
+        }
     }
     let de_err = p
         .centres
@@ -146,7 +155,7 @@ fn bar_conducts_the_linear_profile_through_both_regions() {
     }
     // Links: heat into the spheres from the left interface flows along +x, from the right along −x.
     let mut iface = [0.0; 2];
-    for l in &region.links {
+    for l in &region.heat_links {
         let s = l.sphere as usize;
         let nodes = fe.tets[l.point_elem as usize].map(|n| r.temperature[k][n as usize]);
         let g = h[l.kind as usize] * l.weight;
@@ -167,21 +176,30 @@ fn bar_conducts_the_linear_profile_through_both_regions() {
          right {de_right:+.4e}, lattice mid-plane {de_plane:+.4e}",
         fe_err[0], fe_err[1], fe_flux_err[0], fe_flux_err[1]
     );
-    assert!(de_err < 5e-3, "DE temperature off by {de_err:e} of dT");
+    eprintln!(
+        "fede heat bar: interface nodes off by {:.3e} inside the face, {:.3e} on its edges, \
+         {:.3e} at its corners of dT",
+        face_err[0], face_err[1], face_err[2]
+    );
+    // Measured 0.084 % (DE), 0.10 % (FE off the interfaces), 0.39 % (a corner of an interface
+    // face; 0.072 % on its edges, 0.022 % inside): the issue's 1 % with margin.
+    assert!(de_err < 1.5e-3, "DE temperature off by {de_err:e} of dT");
     assert!(
-        fe_err[0] < 1.5e-2,
+        fe_err[0] < 2e-3,
         "FE temperature off by {:e} of dT",
         fe_err[0]
     );
-    // The links take the heat at points (the bond midpoints): the interface's
-    // nodes at the bar's edges are the worst (docs/validation.md says why).
+    // The links take the heat at points (the bond midpoints); with the outward
+    // edge half bonds of the lateral-surface spheres (mesh::heat_links) the
+    // face's edges and corners get their share (without them: 3.6 % at the
+    // corners, docs/validation.md).
     assert!(
-        fe_err[1] < 4e-2,
+        fe_err[1] < 6e-3,
         "interface temperature off by {:e} of dT",
         fe_err[1]
     );
     // Each section carries the same heat (conservation, to the solver's
-    // tolerance), within 1 % of k ΔT / L (the lattice's edge spheres).
+    // tolerance), within 0.1 % of k ΔT / L (measured −0.006 %).
     for (what, e) in [
         ("FE left", fe_left),
         ("FE right", fe_right),
@@ -189,16 +207,22 @@ fn bar_conducts_the_linear_profile_through_both_regions() {
         ("right interface", de_right),
         ("lattice mid-plane", de_plane),
     ] {
-        assert!(e.abs() < 1e-2, "{what} flux off by {e:e}");
+        assert!(e.abs() < 1e-3, "{what} flux off by {e:e}");
         assert!(
             (e - fe_left).abs() < 1e-6,
             "{what} flux {e:e}, FE left {fe_left:e}"
         );
     }
+    // Single elements: 0.84 % off the interfaces, 3.8 % touching one.
     assert!(
-        fe_flux_err[0] < 0.1,
+        fe_flux_err[0] < 1.5e-2,
         "an element's flux off by {:e}",
         fe_flux_err[0]
+    );
+    assert!(
+        fe_flux_err[1] < 6e-2,
+        "an element's flux at an interface off by {:e}",
+        fe_flux_err[1]
     );
     // Heat: stored = ρ c ∫ T dV of the linear profile; the change = the heat in through the ends.
     let (hd, rows) = history(&out, "fede-heat-bar");

@@ -37,6 +37,7 @@ mod error;
 pub mod generate;
 mod geometry;
 pub mod gmsh;
+pub mod heat_links;
 pub mod hex8;
 pub mod lattice;
 pub mod nut;

@@ -17,6 +17,7 @@
 //! default coupling does (`validation::fede_coupling`, module docs there).
 //! Pure code: no MPI.
 
+use super::heat_links::{outward_edge, split_weights, Beside, HeatLink};
 use super::lattice::{cubic_lattice_where, BondKind, LatticeBond};
 use super::{MeshError, TetMesh};
 use crate::geometry::TetPlanes;
@@ -53,6 +54,10 @@ pub struct ParticleRegion {
     pub bonds: Vec<LatticeBond>,
     /// Sphere–FE half bonds, in the lattice's bond order.
     pub links: Vec<RegionLink>,
+    /// The half bonds that carry heat: each link with its conductance
+    /// weight, followed by the outward edge half bond of a sphere on a
+    /// lateral surface if it has one ([`super::heat_links`]).
+    pub heat_links: Vec<HeatLink>,
 }
 
 #[derive(Clone, Copy, PartialEq)]
@@ -205,8 +210,24 @@ pub fn particle_region(
         }
     }
     let nodes_of = |fe: u32| fe_corners[fe as usize].map(|v| Vector3::from(mesh.nodes[v as usize]));
+    // The remaining element among `cands` that holds the point `mid` of an element face, seen
+    // from `toward`; if none does (the interface cuts the bond elsewhere), `elem` extended.
+    let locate = |cands: &[u32], mid: &Vector3<f64>, toward: &Vector3<f64>, elem: u32| {
+        let probe = mid + (toward - mid) * 1e-6;
+        cands
+            .iter()
+            .find_map(|&fe| {
+                let t = nodes_of(fe).map(|v| [v.x, v.y, v.z]);
+                TetPlanes::new(&t)
+                    .contains([probe.x, probe.y, probe.z], 1e-9 * d)
+                    .then(|| tet4_ghost(&nodes_of(fe), mid, fe as usize).ok())
+                    .flatten()
+            })
+            .unwrap_or_else(|| extended(&nodes_of(elem), mid, elem))
+    };
     let mut bonds = Vec::new();
     let mut links = Vec::new();
+    let mut heat_links = Vec::new();
     for b in &lattice.bonds {
         let (i, j) = (b.i as usize, b.j as usize);
         let (si, sj) = (sphere_of[i], sphere_of[j]);
@@ -230,19 +251,8 @@ pub fn particle_region(
             .map_err(|e| bad(format!("ghost at {:?}: {e}", lattice.centres[g])))?;
         // The midpoint, on the interface: the remaining element that holds it, seen from the ghost's side.
         let mid = (xs + xg) * 0.5;
-        let probe = mid + (xg - mid) * 1e-6;
-        let point = near[at(member[g])]
-            .iter()
-            .find_map(|&fe| {
-                let t = nodes_of(fe).map(|v| [v.x, v.y, v.z]);
-                TetPlanes::new(&t)
-                    .contains([probe.x, probe.y, probe.z], 1e-9 * d)
-                    .then(|| tet4_ghost(&nodes_of(fe), &mid, fe as usize).ok())
-                    .flatten()
-            })
-            // No element there (the interface cuts the bond elsewhere): the ghost's element, extended.
-            .unwrap_or_else(|| extended(&nodes_of(ghost_elem), &mid, ghost_elem));
-        links.push(RegionLink {
+        let point = locate(&near[at(member[g])], &mid, &xg, ghost_elem);
+        let link = RegionLink {
             sphere: sphere_of[s],
             ghost_elem,
             ghost_shape: to4(&ghost.shape),
@@ -251,13 +261,57 @@ pub fn particle_region(
             kind: b.kind,
             // Half bond: twice the stiffness (validation::fede_coupling docs).
             weight: 2.0 * b.weight,
-        });
+        };
+        // Heat: the outward edge half bond of a sphere on a lateral surface (heat_links docs).
+        let cs = member[s].map(|v| v as i64);
+        let offset = |c: [usize; 3]| std::array::from_fn(|a| c[a] as i64 - cs[a]);
+        let cell_at = |o: [i64; 3]| at(std::array::from_fn(|a| (cs[a] + o[a]) as usize));
+        let beside = |o: [i64; 3]| match cells[cell_at(o)] {
+            Cell::Empty => Beside::Empty,
+            Cell::Sphere => Beside::Sphere,
+            Cell::Fe(_, 1) => Beside::Ghost,
+            Cell::Fe(..) => Beside::Fe,
+        };
+        let mut heat = HeatLink {
+            sphere: link.sphere,
+            point_elem: link.point_elem,
+            point_shape: link.point_shape,
+            kind: link.kind,
+            weight: link.weight,
+        };
+        let outward = match outward_edge(offset(member[g]), beside) {
+            Some((star, p)) => {
+                let mut across = [0; 3];
+                across[p] = star[p];
+                let mid = xs + Vector3::from(star.map(|c| c as f64)) * radius;
+                let Cell::Fe(elem, _) = cells[cell_at(across)] else {
+                    unreachable!("outward_edge checked a ghost's cell across the interface")
+                };
+                let inner = Vector3::from(centre(std::array::from_fn(|a| {
+                    (cs[a] + across[a]) as usize
+                })));
+                let point = locate(&near[cell_at(across)], &mid, &inner, elem);
+                let (inward, out) = split_weights(b.weight);
+                heat.weight = inward;
+                Some(HeatLink {
+                    point_elem: point.elem as u32,
+                    point_shape: to4(&point.shape),
+                    weight: out,
+                    ..heat.clone()
+                })
+            }
+            None => None,
+        };
+        heat_links.push(heat);
+        heat_links.extend(outward);
+        links.push(link);
     }
     Ok(ParticleRegion {
         radius,
         centres,
         bonds,
         links,
+        heat_links,
     })
 }
 
@@ -426,6 +480,91 @@ mod tests {
             }
         }
         assert_eq!(checked, 8);
+    }
+
+    /// The heat half bonds in a uniform gradient across the interface: each
+    /// sphere's heat balance is that of its lattice bonds, and the heat
+    /// they give the interface face, shared by bilinear hats on the grid of
+    /// the spheres' squares (a Hex8 face), is the uniform flux's share of
+    /// every grid node: (2r)² inside, half on the face's edges, a quarter at
+    /// its corners. The mechanical links' weights put too little at the
+    /// edges.
+    #[test]
+    fn heat_links_give_the_face_the_uniform_flux() {
+        let r = 1e-3;
+        // 12r × 8r × 6r, elements of 2r, the middle third (4 × 4 × 3 spheres) as particles.
+        let mut m = box_mesh([0.0; 3], [24.0 * r, 8.0 * r, 6.0 * r], 2.0 * r).unwrap();
+        m.add_box_set("middle", [8.0 * r, -1.0, -1.0], [16.0 * r, 1.0, 1.0])
+            .unwrap();
+        let mut in_set = vec![false; m.tets.len()];
+        m.elem_sets["middle"]
+            .iter()
+            .for_each(|&e| in_set[e as usize] = true);
+        let (fe, index) = without_elements(&m, &in_set);
+        let region = particle_region(&m, "middle", &in_set, &index, r).unwrap();
+        assert_eq!(region.centres.len(), 48);
+        // T = G x; a link of weight w carries g = h w, h = 1 (k = 5/(2r)), from its point.
+        let grad = 3.0;
+        let t = |x: &Vector3<f64>| grad * x.x;
+        let point = |elem: u32, shape: &[f64; 4]| -> Vector3<f64> {
+            let n = fe.tets[elem as usize];
+            (0..4)
+                .map(|q| Vector3::from(fe.nodes[n[q] as usize]) * shape[q])
+                .sum()
+        };
+        let face = |links: &[(u32, u32, [f64; 4], f64)]| {
+            // Heat into each sphere, and the heat each node (j, k) of the 2r grid on x = 8r gets.
+            let mut sphere = vec![0.0; region.centres.len()];
+            let mut node = [[0.0f64; 4]; 5];
+            for &(s, elem, shape, w) in links {
+                let p = point(elem, &shape);
+                let c = Vector3::from(region.centres[s as usize]);
+                let q = w * (t(&p) - t(&c));
+                sphere[s as usize] += q;
+                if (p.x - 8.0 * r).abs() > 1e-9 * r {
+                    continue;
+                }
+                for (j, row) in node.iter_mut().enumerate() {
+                    for (k, v) in row.iter_mut().enumerate() {
+                        let hat = |a: f64, b: f64| (1.0 - (a - b).abs() / (2.0 * r)).max(0.0);
+                        *v -= q * hat(p.y, 2.0 * r * j as f64) * hat(p.z, 2.0 * r * k as f64);
+                    }
+                }
+            }
+            (sphere, node)
+        };
+        let heat: Vec<_> = (region.heat_links.iter())
+            .map(|l| (l.sphere, l.point_elem, l.point_shape, l.weight))
+            .collect();
+        let mech: Vec<_> = (region.links.iter())
+            .map(|l| (l.sphere, l.point_elem, l.point_shape, l.weight))
+            .collect();
+        let (sphere_heat, node_heat) = face(&heat);
+        let (sphere_mech, node_mech) = face(&mech);
+        // The uniform flux k G over (2r)²: 10 half bonds' worth of a sphere, 10 h G r.
+        let cell = 10.0 * grad * r;
+        let share = |j: usize, k: usize| {
+            let edge = |i: usize, n: usize| if i == 0 || i == n { 0.5 } else { 1.0 };
+            cell * edge(j, 4) * edge(k, 3)
+        };
+        let mut worst_mech: f64 = 0.0;
+        for j in 0..5 {
+            for k in 0..4 {
+                let e = (node_heat[j][k] - share(j, k)).abs();
+                assert!(
+                    e < 1e-12 * cell,
+                    "node ({j}, {k}): {} vs {}",
+                    node_heat[j][k],
+                    share(j, k)
+                );
+                worst_mech = worst_mech.max((node_mech[j][k] - share(j, k)).abs());
+            }
+        }
+        assert!(worst_mech > 0.05 * cell, "{worst_mech}");
+        // Each sphere's links carry the same heat with either weights (its lattice bonds' heat).
+        for (a, b) in sphere_heat.iter().zip(&sphere_mech) {
+            assert!((a - b).abs() < 1e-12 * cell, "{a} {b}");
+        }
     }
 
     #[test]

@@ -85,8 +85,9 @@ impl ParticleHeat {
                     (first + bd.i as i32, first + bd.j as i32, g)
                 })
                 .collect();
+            // The half bonds for heat (mesh::heat_links): the links and the outward edge ones.
             let links = region
-                .links
+                .heat_links
                 .iter()
                 .map(|l| LinkRows {
                     sphere: first + l.sphere as i32,

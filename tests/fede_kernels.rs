@@ -480,22 +480,22 @@ fn heat_report(name: &str, bar: &PatchBar, k: f64, t: (f64, f64), r: &HeatResult
         (r.inflow / flux - 1.0).abs(),
     ];
     eprintln!(
-        "{name}: worst |T − T_exact|/ΔT: FE nodes {:.3} %, spheres {:.3} %; flux: worst element {:.2} %, \
-         DE sections {:.3} %, inflow at X = 0 {:.3} %",
-        out[0] * 100.0,
-        out[1] * 100.0,
-        out[2] * 100.0,
-        out[3] * 100.0,
-        out[4] * 100.0
+        "{name}: worst |T − T_exact|/ΔT: FE nodes {:.3e}, spheres {:.3e}; flux: worst element {:.3e}, \
+         DE sections {:.3e}, inflow at X = 0 {:.3e}",
+        out[0], out[1], out[2], out[3], out[4]
     );
     out
 }
 
 /// Issue 21, heat across the interface: the patch bar (Hex8 | spheres) held
-/// at T₁ and T₂ at its ends; the steady profile is linear within 2 % of
-/// T₁ − T₂ in both regions.
+/// at T₁ and T₂ at its ends; the steady profile is linear in both regions
+/// and every element and DE section carries k (T₁ − T₂)/L, to round-off
+/// (the links' heat lands where a uniform flux puts it on the Hex8 face,
+/// `mesh::heat_links`; with the mechanical weights the FE nodes at the
+/// face's corners were 1.22 % of T₁ − T₂ off). Eq 17 as written (2.5 %)
+/// is printed beside it.
 #[test]
-fn fede_heat_steady_linear_within_2_percent() {
+fn fede_heat_steady_linear_to_round_off() {
     let bar = PatchBar::seed002();
     let (k, t) = (1.5, (100.0, 20.0));
     let start = Instant::now();
@@ -504,7 +504,7 @@ fn fede_heat_steady_linear_within_2_percent() {
     let r = fede_heat(&bar, k, t.0, t.1, Coupling::Interface).unwrap();
     let w = heat_report("heat, interface", &bar, k, t, &r);
     eprintln!("heat cases {:.1} s wall", start.elapsed().as_secs_f64());
-    assert!(w[0] < 0.02 && w[1] < 0.02, "{w:?}");
+    assert!(w.iter().all(|&e| e < 1e-9), "{w:?}");
 }
 
 /// Issue 21: a compression pulse of 20 particle spacings crosses

@@ -31,6 +31,7 @@ use nalgebra::Vector3;
 use crate::mechanics::bond::{advance_bond, bond_forces, bond_heat, BondState, BondStiffness};
 use crate::mechanics::ghost::{ghost_position, hex8_ghost, Ghost};
 use crate::mechanics::hex8::InverseMapError;
+use crate::mesh::heat_links::{outward_edge, split_weights, Beside};
 use crate::mesh::lattice::{BondKind, Lattice, LatticeBond};
 
 /// How a ghost–sphere bond acts on the finite elements (module docs).
@@ -59,6 +60,24 @@ struct Link {
     weight: f64,
 }
 
+/// A half bond that carries heat between a sphere and an element's point,
+/// for [`Coupling::Interface`]: each link with its conductance weight, and
+/// the outward edge half bonds of the spheres on the lattice's lateral
+/// faces ([`crate::mesh::heat_links`]).
+#[derive(Debug, Clone, PartialEq)]
+struct HeatPoint {
+    /// The sphere.
+    sphere: usize,
+    /// The ghost across the interface (for the section the flow crosses).
+    ghost: usize,
+    /// The element's material point at the half bond's far end.
+    point: Ghost,
+    /// Neighbour group.
+    kind: BondKind,
+    /// Weight of the half bond's conductance.
+    weight: f64,
+}
+
 /// The ghost layer and the bonds of a coupled lattice.
 #[derive(Debug, Clone)]
 pub(crate) struct GhostLayer {
@@ -76,6 +95,8 @@ pub(crate) struct GhostLayer {
     link_state: Vec<BondState>,
     /// The links as lattice bonds (for the time-step bound and the section forces).
     link_bonds: Vec<LatticeBond>,
+    /// The half bonds that carry heat ([`Coupling::Interface`]).
+    heat_links: Vec<HeatPoint>,
 }
 
 impl GhostLayer {
@@ -119,6 +140,14 @@ impl GhostLayer {
         let mut bonds = Vec::new();
         let mut links = Vec::new();
         let mut link_bonds = Vec::new();
+        let mut heat_links = Vec::new();
+        // The particle at offset d from particle s, if inside the lattice's box.
+        let at = |s: usize, d: [i64; 3]| {
+            let q = [s % c[0], (s / c[0]) % c[1], s / (c[0] * c[1])];
+            let v: [i64; 3] = std::array::from_fn(|a| q[a] as i64 + d[a]);
+            ((0..3).all(|a| v[a] >= 0 && v[a] < c[a] as i64))
+                .then(|| (v[0] + c[0] as i64 * (v[1] + c[1] as i64 * v[2])) as usize)
+        };
         for b in &lattice.bonds {
             let (i, j) = (b.i as usize, b.j as usize);
             match (is_ghost(i), is_ghost(j)) {
@@ -158,6 +187,38 @@ impl GhostLayer {
                     let point = hex8_ghost(&elem_nodes(e), &mid, e)?;
                     // Half bond: twice the stiffness (module docs).
                     let w = 2.0 * weight;
+                    // Heat: the outward edge half bond of a sphere on a lateral face (heat_links docs).
+                    let beside = |d: [i64; 3]| match at(s, d) {
+                        None => Beside::Empty,
+                        Some(q) if is_ghost(q) => Beside::Ghost,
+                        Some(_) => Beside::Sphere,
+                    };
+                    let mut heat = HeatPoint {
+                        sphere: s,
+                        ghost: g,
+                        point: point.clone(),
+                        kind: b.kind,
+                        weight: w,
+                    };
+                    if let Some((star, p)) = outward_edge([o[0], o[1], o[2]], beside) {
+                        let mut across = [0; 3];
+                        across[p] = star[p];
+                        let face_ghost = at(s, across).expect("outward_edge found a ghost there");
+                        let end = p0[s] + Vector3::from(star.map(|v| v as f64)) * radius;
+                        let e = locate(&(end + (p0[face_ghost] - end) * 1e-6));
+                        let (inward, out) = split_weights(weight);
+                        heat.weight = inward;
+                        heat_links.push(heat);
+                        heat_links.push(HeatPoint {
+                            sphere: s,
+                            ghost: face_ghost,
+                            point: hex8_ghost(&elem_nodes(e), &end, e)?,
+                            kind: b.kind,
+                            weight: out,
+                        });
+                    } else {
+                        heat_links.push(heat);
+                    }
                     links.push(Link {
                         sphere: s,
                         ghost: g,
@@ -190,6 +251,7 @@ impl GhostLayer {
             links,
             link_state,
             link_bonds,
+            heat_links,
         })
     }
 
@@ -348,8 +410,10 @@ impl GhostLayer {
     /// ghost and returns its heat with N_I there; [`Coupling::Interface`]:
     /// each ghost–sphere bond is the sphere's half (conductance doubled)
     /// between the sphere and the element's material point at the bond
-    /// midpoint, temperature and heat with N_I there. Either way the heat is
-    /// conserved and the flows are symmetric in the temperatures.
+    /// midpoint, temperature and heat with N_I there, and a sphere on a
+    /// lateral face also conducts through its outward edge half bond to the
+    /// face's edge (weights of [`crate::mesh::heat_links`]). Either way the
+    /// heat is conserved and the flows are symmetric in the temperatures.
     #[allow(clippy::too_many_arguments)]
     pub fn add_heat(
         &self,
@@ -377,7 +441,7 @@ impl GhostLayer {
                 }
             }
             Coupling::Interface => {
-                for l in &self.links {
+                for l in &self.heat_links {
                     let e = hexes[l.point.elem];
                     let t_point = l.point.temperature(&e.map(|a| t[a as usize]));
                     // Half bond of conductance 2 h w: Q into the sphere from the point.
@@ -415,7 +479,7 @@ impl GhostLayer {
                 (i, j, h[b.kind as usize] * b.weight * (pt[i] - pt[j]))
             })
             .collect();
-        out.extend(self.links.iter().map(|l| {
+        out.extend(self.heat_links.iter().map(|l| {
             let e = hexes[l.point.elem];
             let t_point = l.point.temperature(&e.map(|a| t[a as usize]));
             (

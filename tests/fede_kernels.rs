@@ -344,7 +344,10 @@ fn fede_patch_uniform_tension_within_2_percent() {
 /// the lattice's surface weights put the diagonal bonds' share of a surface
 /// sphere's force at its inner bond midpoints, so the interface-face nodes
 /// within h of a lateral face receive up to 7.9 % of σh² more or less than
-/// a uniform traction gives them.
+/// a uniform traction gives them. No weighting of the links can move it:
+/// each sphere's equilibrium of forces and moments fixes its links' force
+/// and first moment on the face (docs/validation.md); the lattice's surface
+/// weights would have to change.
 #[test]
 #[ignore = "fails: worst element 2.97 % at the interface beside the lateral faces (lattice surface weights), see docs/validation.md"]
 fn fede_patch_every_element_within_2_percent() {

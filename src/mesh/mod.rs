@@ -25,6 +25,9 @@
 //! - [`container`]: open-top cylindrical cup ([`container::container_mesh`]).
 //! - [`hex8`]: structured Hex8 box ([`hex8::hex_box`]) for seed 002.
 //! - [`lattice`]: bonded cubic lattice of spheres from a box (seed 002 Fig 2).
+//! - [`particle_region`]: an element set of a body as particles, with its
+//!   links to the remaining elements; [`heat_links`]: the weights of the
+//!   half bonds that carry heat across the interface.
 //! - `closed`: [`TetMesh::check_closed_volume`], the single closed solid
 //!   check for particle templates.
 

@@ -8,9 +8,10 @@
 //!
 //! Two levels: the bodies' boxes in one tree, then, for each pair of
 //! bodies whose boxes come within the margin, the owned boundary tets of
-//! the searching body against trees of the other body's tets. A body
-//! falling alone costs one box test; the trees of bodies that never move
-//! are built once.
+//! the searching body against trees of the other body's tets, or, for a
+//! small moving body (a particle), against the list of its tets near the
+//! searching body. A body falling alone costs one box test; the trees of
+//! bodies that never move are built once.
 
 use std::collections::HashMap;
 

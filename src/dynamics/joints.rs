@@ -2,16 +2,17 @@
 //! explicit loop: one [`JointSet`] per fracture material, advanced each
 //! substep after the owned nodes' forces are summed.
 //!
-//! Every joint with a tet here is advanced here. A body held whole has all
-//! its joints here; a fully jointed body split over the ranks
-//! (`parallel::build`) has each node in one tet, owned with it, so every
-//! joint at an owned node is here too, and a joint across the cut is
-//! advanced on both its tets' ranks from the same positions (the other
-//! tet's face corners are ghosts), each rank adding its forces to its own
-//! side only. Each node thus receives all its joints' forces on its rank,
-//! in the global order (material, then body and joint): the same sums on
-//! any rank count. A joint is owned once, by the rank of its lower tet:
-//! only there is it counted in the totals, written out and checkpointed.
+//! A body held whole has all its joints here. Of a jointed body split
+//! over the ranks (`parallel::build`), every joint with a corner in a tet
+//! here is here (its other corners are ghosts): a joint across the cut is
+//! advanced on both its tets' ranks from the same positions, and a joint
+//! at a continuum node of a body jointed on a set also on the ranks of
+//! that node's other tets, so every joint at an owned node is here. Each
+//! rank adds a joint's forces to its owned corners only. Each node thus
+//! receives all its joints' forces on its rank, in the global order
+//! (material, then body and joint): the same sums on any rank count. A
+//! joint is owned once, by the rank of its lower tet: only there is it
+//! counted in the totals, written out and checkpointed.
 
 use nalgebra::Vector3;
 
@@ -378,6 +379,12 @@ impl super::ExplicitDomain {
         let own = &mut self.part_tets;
         for (tets, sides) in self.joints.take_new_cracks() {
             for (gid, face) in tets.iter().zip(&sides) {
+                // Every corner here, as on one rank: a continuum node of a
+                // body jointed on a set may be in tets here though the
+                // face's own tet is on another rank.
+                for &n in face {
+                    own.node_boundary[n as usize] = true;
+                }
                 // The other side of a joint across the cut is marked on its rank.
                 let Ok(e) = own.gid.binary_search(gid) else {
                     continue;
@@ -387,9 +394,6 @@ impl super::ExplicitDomain {
                     .position(|n| !face.contains(n))
                     .expect("a face of its tet");
                 own.mask[e] |= 1 << opposite;
-                for &n in face {
-                    own.node_boundary[n as usize] = true;
-                }
             }
         }
     }

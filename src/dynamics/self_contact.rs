@@ -36,10 +36,21 @@ impl SelfContact {
     /// every joint of the part, broken or not (`body_held[b]`: body b
     /// does not move). Sized by the part, nothing of the whole mesh.
     pub(super) fn new(model: &Model, part: &Part, body_held: &[bool]) -> SelfContact {
+        let is_split = |b: u32| part.whole_bodies.binary_search(&b).is_err();
+        // A split jointed body searches itself on every rank holding tets
+        // of it, also one holding none of its joints (tets of the
+        // continuum part of a body jointed on a set).
+        let split_jointed = |b: u32| {
+            is_split(b)
+                && matches!(model.bodies[b as usize].source,
+                    crate::model::BodySource::Mesh { mesh, .. }
+                        if model.meshes[mesh as usize].joints.is_some())
+        };
         let mut bodies: Vec<u32> = part
             .joints
             .iter()
             .map(|j| j.body)
+            .chain(part.mesh.body.iter().copied().filter(|&b| split_jointed(b)))
             .filter(|&b| !body_held[b as usize])
             .collect();
         bodies.sort_unstable();
@@ -47,7 +58,6 @@ impl SelfContact {
         if bodies.is_empty() {
             return SelfContact::default();
         }
-        let is_split = |b: u32| part.whole_bodies.binary_search(&b).is_err();
         let split: Vec<(u32, u32, Vec<u32>)> = bodies
             .iter()
             .filter(|&&b| is_split(b))

@@ -135,8 +135,10 @@ pub(super) fn time_step(
 /// frequency of its joints' springs alone, max over nodes of 2 Σ k_j / m
 /// (Gershgorin; each joint corner pair is an isotropic spring
 /// k_j = p_f / h × A / 3, the node's mass at least ρ V / 4 of its tet).
-/// A split (fully jointed) body's nodes are each where its tet is, with
-/// every joint at it: the max over its nodes here, then over the ranks.
+/// A split body's owner of a node holds every joint at it (though perhaps
+/// not the joint's tets: a continuum node of a body jointed on a set,
+/// whose mass then comes from the model): the max over the owned nodes
+/// here, then over the ranks.
 fn joint_frequencies(
     comm: &SimpleCommunicator,
     model: &Model,
@@ -153,23 +155,26 @@ fn joint_frequencies(
         };
         let k = fm.penalty / crate::fracture::insert::joint_size(f.area) * f.area / 3.0;
         for (side, corners) in [(0, &f.a), (1, &f.b)] {
-            // The other side of a joint across the cut: its rank's nodes.
-            let Some(e) = part.local_element(f.tets[side]) else {
-                continue;
+            let m = match part.local_element(f.tets[side]) {
+                Some(e) => {
+                    let e = e as usize;
+                    model.materials[part.elem_material[e] as usize].density
+                        * mesh.element_volume(e)
+                        / 4.0
+                }
+                // A tet of another rank (a joint across the cut).
+                None => model_quarter_mass(model, j.body as usize, f.tets[side]),
             };
-            let e = e as usize;
-            let m = model.materials[part.elem_material[e] as usize].density
-                * mesh.element_volume(e)
-                / 4.0;
             for &l in corners {
                 k_sum[l as usize] += k;
                 m_min[l as usize] = f64::min(m_min[l as usize], m);
             }
         }
     }
+    let no = part.num_owned();
     for j in &part.joints {
         for &l in j.faces.a.iter().chain(&j.faces.b) {
-            if m_min[l as usize].is_finite() {
+            if (l as usize) < no && m_min[l as usize].is_finite() {
                 let w2 = 2.0 * k_sum[l as usize] / m_min[l as usize];
                 let at = out.entry(j.body).or_insert(0.0f64);
                 *at = at.max(w2);
@@ -189,6 +194,21 @@ fn joint_frequencies(
         }
     }
     out
+}
+
+/// The quarter mass ρ V / 4 of element `elem` (global id) of body `b`, a
+/// body of its own source mesh, from the model: the bits of the part's
+/// own (the same moved corners, the same volume).
+fn model_quarter_mass(model: &Model, b: usize, elem: u32) -> f64 {
+    let body = &model.bodies[b];
+    let crate::model::BodySource::Mesh { mesh, motion } = &body.source else {
+        unreachable!("a split body has its own source mesh")
+    };
+    let src = &model.meshes[*mesh as usize];
+    let e = (elem - body.elem_range.0) as usize;
+    let x = src.mesh.tets[e].map(|n| motion.apply(src.mesh.nodes[n as usize]));
+    // Not numbered in the seeds: row-sum lumped mass ρ V0/4 per node of a Tet4.
+    model.materials[src.material[e] as usize].density * crate::mesh::tet_signed_volume(&x) / 4.0
 }
 
 /// For a free body of elements `elems` small enough for its exact highest

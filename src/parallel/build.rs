@@ -218,7 +218,9 @@ impl Part {
 /// a copy of a template, nor from a checkpoint) when there are several
 /// ranks, in a mechanics run only if too large for the exact body
 /// frequency of the explicit step (a small body's elements stay together
-/// for it). Particles stay whole.
+/// for it). Particles stay whole. A jointed body (issue 19), on all its
+/// tets or on a set, is split too ([`make_bodies`]: its joints go to
+/// every rank holding a tet at one of their corners).
 fn split_bodies(model: &Model, size: usize) -> Vec<bool> {
     let mut users = vec![0usize; model.meshes.len()];
     for b in &model.bodies {
@@ -233,8 +235,6 @@ fn split_bodies(model: &Model, size: usize) -> Vec<bool> {
             BodySource::Mesh { mesh, .. } => {
                 size > 1
                     && users[mesh as usize] == 1
-                    && (model.meshes[mesh as usize].joints.is_none()
-                        || jointed_splits(&model.meshes[mesh as usize]))
                     && model.meshes[mesh as usize].particles.is_none()
                     && (model.mechanics.is_none()
                         || (b.node_range.1 - b.node_range.0) as usize > BODY_EIGEN_MAX_NODES)
@@ -242,18 +242,6 @@ fn split_bodies(model: &Model, size: usize) -> Vec<bool> {
             BodySource::Saved { .. } => false,
         })
         .collect()
-}
-
-/// Whether a jointed source mesh may be split over the ranks (issue 19):
-/// when every tet of it is jointed, each node belongs to one tet, so it is
-/// owned with its tet and every joint at it is evaluated where its tet is
-/// (a joint across the cut on both sides' ranks,
-/// [`crate::dynamics`]`::joints`). In a thermal run the copies of a
-/// vertex tied by intact joints share one row across the ranks, numbered
-/// again when joints break ([`super::tied_rows`]), and a crack across the
-/// cut meets its other face as a thermal contact on the joint's owner.
-fn jointed_splits(src: &crate::model::SourceMesh) -> bool {
-    src.mesh.nodes.len() == 4 * src.mesh.tets.len()
 }
 
 /// The elements and nodes a rank has made, before numbering.
@@ -337,15 +325,18 @@ fn make_bodies(
             }
         }
         if let Some(j) = &mesh.joints {
-            let held_tet = |e: u32| whole || elems.binary_search(&e).is_ok();
+            // A split body's joint is here when one of its corners is a
+            // node of a tet here: then every joint at a node this rank may
+            // own is here (a body jointed on a set has continuum nodes
+            // that its joints share with tets of other ranks). Its
+            // corners that no tet here has are ghosts.
             for (k, (f, &broken)) in j.faces.iter().zip(&j.broken).enumerate() {
-                let here = f.tets.map(held_tet);
-                if !here[0] && !here[1] {
+                if !whole && !f.a.iter().chain(&f.b).any(|&n| used[n as usize]) {
                     continue;
                 }
-                for (side, corners) in [&f.a, &f.b].into_iter().enumerate() {
-                    if !here[side] {
-                        corners.iter().for_each(|&n| wanted[n as usize] = true);
+                for &n in f.a.iter().chain(&f.b) {
+                    if !used[n as usize] {
+                        wanted[n as usize] = true;
                     }
                 }
                 m.joints.push(super::PartJoint {

@@ -75,11 +75,13 @@ pub struct Part {
     /// The bodies this rank holds whole (global ids, ascending): all their
     /// elements and nodes are here and owned here.
     pub whole_bodies: Vec<u32>,
-    /// The cohesive joints of the jointed bodies held (issue 19): every
-    /// joint with a tet here (of a body held whole, all its joints; of a
-    /// split body, also those across the cut, whose other tet's face
-    /// nodes are ghosts here), corners over local nodes, tets by global
-    /// id, by body and then in the order of the body's joints.
+    /// The cohesive joints of the jointed bodies held (issue 19): of a
+    /// body held whole, all its joints; of a split body, every joint with
+    /// a corner in a tet here (those across the cut, and for a body
+    /// jointed on a set those at its continuum nodes whose tets are all
+    /// elsewhere; corners in no tet here are ghosts), corners over local
+    /// nodes, tets by global id, by body and then in the order of the
+    /// body's joints.
     pub joints: Vec<PartJoint>,
     /// Thermal rows of the bonded particles of the bodies held here
     /// (issue 21): the last ones of this rank's range, after the nodes'

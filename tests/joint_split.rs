@@ -122,38 +122,13 @@ fn a_jointed_bar_split_over_ranks_breaks_bitwise_alike() {
             }
         }
         assert_eq!(broken_set(&r), broken, "{p} ranks: broken joints differ");
-        let (hp, rp) = &r.history;
-        assert_eq!(hp, h, "{p} ranks: history columns");
-        assert_eq!(rp.len(), rows.len(), "{p} ranks: history rows");
-        // A vector's components share its scale (a transverse momentum is
-        // rounding noise about zero).
-        let group = |name: &str| name.trim_end_matches(['x', 'y', 'z']).to_string();
-        for (i, name) in h.iter().enumerate() {
-            let scale = (0..h.len())
-                .filter(|&c| group(&h[c]) == group(name))
-                .flat_map(|c| rows.iter().map(move |row| row[c].abs()))
-                .fold(0.0, f64::max)
-                // The bar's contact force is round-off about zero (it
-                // touches nothing): on the scale of its load, f_t × section.
-                .max(if name.contains("_force_") {
-                    F_T * SECTION
-                } else {
-                    0.0
-                });
-            for (a, b) in rp.iter().zip(rows) {
-                if exact.contains(&name.as_str()) {
-                    assert_eq!(a[i], b[i], "{p} ranks: history {name} at step {}", b[0]);
-                } else {
-                    assert!(
-                        (a[i] - b[i]).abs() <= 1e-9 * scale,
-                        "{p} ranks: history {name} at step {}: {} against {}",
-                        b[0],
-                        a[i],
-                        b[i]
-                    );
-                }
-            }
-        }
+        assert_same_history(
+            &r.history,
+            &one.history,
+            &exact,
+            F_T * SECTION,
+            &format!("{p} ranks"),
+        );
     }
 }
 
@@ -293,21 +268,4 @@ fn a_split_jointed_run_restarts_from_its_checkpoint() {
         assert!(got.1 == want.1, "{ranks} ranks: displacements differ");
         assert!(got.2 == want.2, "{ranks} ranks: joint damage differs");
     }
-}
-
-/// The velocity of every output step of `h5` (`steps` of them), each row
-/// moved to the place its static `node_id` names.
-fn velocities_by_node_id(h5: &std::path::Path, steps: usize) -> Vec<Vec<f64>> {
-    let ids = fdem::io::read_static_node_field_i32(h5, "node_id").unwrap();
-    (0..steps)
-        .map(|k| {
-            let v = fdem::io::read_node_field_step(h5, "velocity", k).unwrap();
-            let mut by_id = vec![0.0; v.len()];
-            for (row, &id) in ids.iter().enumerate() {
-                by_id[3 * id as usize..3 * id as usize + 3]
-                    .copy_from_slice(&v[3 * row..3 * row + 3]);
-            }
-            by_id
-        })
-        .collect()
 }

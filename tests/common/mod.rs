@@ -509,3 +509,63 @@ pub fn assert_cracked_packing(
     assert!(energy >= 0.99 * g_i * area, "{energy} J for {area} m^2");
     (broken, area, energy)
 }
+
+/// The velocity of every output step of `h5` (`steps` of them), each row
+/// moved to the place its static `node_id` names.
+pub fn velocities_by_node_id(h5: &std::path::Path, steps: usize) -> Vec<Vec<f64>> {
+    let ids = fdem::io::read_static_node_field_i32(h5, "node_id").unwrap();
+    (0..steps)
+        .map(|k| {
+            let v = fdem::io::read_node_field_step(h5, "velocity", k).unwrap();
+            let mut by_id = vec![0.0; v.len()];
+            for (row, &id) in ids.iter().enumerate() {
+                by_id[3 * id as usize..3 * id as usize + 3]
+                    .copy_from_slice(&v[3 * row..3 * row + 3]);
+            }
+            by_id
+        })
+        .collect()
+}
+
+/// Assert a history `got` equals `want` (a run of the same scenario on
+/// another rank count): the same columns and rows, the columns `exact`
+/// equal, the others to 1e-9 of their scale (a vector's components share
+/// it; a column named `_force_` is at least `force_scale`, as a force
+/// that is round-off about zero). Sums over the ranks' partial sums
+/// follow the partition in their last bits.
+pub fn assert_same_history(
+    got: &(Vec<String>, Vec<Vec<f64>>),
+    want: &(Vec<String>, Vec<Vec<f64>>),
+    exact: &[&str],
+    force_scale: f64,
+    what: &str,
+) {
+    let ((hp, rp), (h, rows)) = (got, want);
+    assert_eq!(hp, h, "{what}: history columns");
+    assert_eq!(rp.len(), rows.len(), "{what}: history rows");
+    let group = |name: &str| name.trim_end_matches(['x', 'y', 'z']).to_string();
+    for (i, name) in h.iter().enumerate() {
+        let scale = (0..h.len())
+            .filter(|&c| group(&h[c]) == group(name))
+            .flat_map(|c| rows.iter().map(move |row| row[c].abs()))
+            .fold(0.0, f64::max)
+            .max(if name.contains("_force_") {
+                force_scale
+            } else {
+                0.0
+            });
+        for (a, b) in rp.iter().zip(rows) {
+            if exact.contains(&name.as_str()) {
+                assert_eq!(a[i], b[i], "{what}: history {name} at step {}", b[0]);
+            } else {
+                assert!(
+                    (a[i] - b[i]).abs() <= 1e-9 * scale,
+                    "{what}: history {name} at step {}: {} against {}",
+                    b[0],
+                    a[i],
+                    b[i]
+                );
+            }
+        }
+    }
+}

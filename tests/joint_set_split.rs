@@ -1,0 +1,426 @@
+//! Bodies jointed on a set split over the ranks (issue 19, parallel): the
+//! body keeps shared nodes in its continuum part (owned by the lowest rank
+//! holding a tet at them, like any split large body) and a node per tet in
+//! its jointed set; a joint at a continuum node is on every rank holding a
+//! tet at one of its corners, so each node's owner adds every joint force
+//! at it. Mechanics is bitwise that of one rank, temperatures agree to the
+//! solve's tolerance, and a restart continues on another rank count.
+//!
+//! Each test asserts that the body is cut over all the ranks it runs on
+//! (the output's `rank` field), with jointed and continuum tets on each of
+//! 2 ranks; before this change such a body stayed whole on rank 0.
+
+mod common;
+
+use common::*;
+
+/// The bar of scenarios/fracture-bar.toml (Tet4, h = 10 mm) jointed on its
+/// middle two fifths (x in [0.03, 0.07] m: 96 of its 240 tets, 456 node
+/// copies, above the size a mechanics run keeps whole), pulled at
+/// x = 0.1 m (`pulled`, the fracture bar's load) or, free and unloaded,
+/// heated at x = 0 from 0 to 100 °C (no expansion: nothing moves, no
+/// joint breaks). `jointed`: with its `fracture` entry.
+fn set_bar(pulled: bool, jointed: bool) -> String {
+    let mesh = root().join("scenarios/meshes/bar-irregular-10.msh");
+    let fracture = if jointed {
+        "fracture = { set = \"middle\" }"
+    } else {
+        ""
+    };
+    let physics = if pulled {
+        r#"[time]
+dt = 1e-4
+end_time = 0.024
+[mechanics]
+[[mechanics.bc]]
+kind = "fixed"
+set = "bar.xmin"
+components = ["x"]
+[[mechanics.bc]]
+kind = "velocity"
+set = "bar.xmax"
+value = [0.01, nan, nan]
+[output]
+every = 10
+history_every = 1
+"#
+    } else {
+        r#"[time]
+dt = 1e-4
+steps = 20
+[thermal]
+theta = 1.0
+bc = [{ kind = "temperature", set = "bar.xmin", value = 100.0 }]
+[mechanics]
+[solver]
+rtol = 1e-12
+[output]
+every = 5
+"#
+    };
+    format!(
+        r#"title = "bar jointed on a set"
+[[materials]]
+name = "rock"
+conductivity = 1.0
+specific_heat = 1e-3
+density = 1000.0
+young = 1e9
+poisson = 0.2
+tensile_strength = 1e6
+cohesion = 2e6
+friction_angle = 30.0
+g_i = 100.0
+g_ii = 200.0
+fracture_penalty = 1e10
+[[bodies]]
+name = "bar"
+material = "rock"
+initial_temperature = 0.0
+mesh = {{ kind = "gmsh", file = "{}" }}
+element_sets = {{ middle = {{ min = [0.03, -1.0, -1.0], max = [0.07, 1.0, 1.0] }} }}
+{fracture}
+{physics}"#,
+        mesh.display()
+    )
+}
+
+/// Whether a centroid lies in the bar's jointed middle.
+fn in_middle(c: [f64; 3]) -> bool {
+    (0.03..=0.07).contains(&c[0])
+}
+
+/// The ranks holding the elements of the output `h5` (its `rank` field),
+/// distinct and ascending.
+fn ranks_of(h5: &std::path::Path) -> Vec<i32> {
+    let mut r = fdem::io::read_static_cell_field_i32(h5, "rank").unwrap();
+    r.sort_unstable();
+    r.dedup();
+    r
+}
+
+/// Per rank of the run in `dir`: how many of its tets have their centroid
+/// in the jointed set (`in_set`) and how many not.
+fn tets_by_rank(
+    dir: &std::path::Path,
+    stem: &str,
+    in_set: impl Fn([f64; 3]) -> bool,
+) -> Vec<[usize; 2]> {
+    let m = read_mech(dir, stem);
+    let ranks =
+        fdem::io::read_static_cell_field_i32(&dir.join(format!("{stem}.h5")), "rank").unwrap();
+    let mut by = vec![[0usize; 2]; 1 + *ranks.iter().max().unwrap() as usize];
+    for (c, &r) in ranks.iter().enumerate() {
+        by[r as usize][usize::from(!in_set(m.centroid(c)))] += 1;
+    }
+    by
+}
+
+/// What one pulled-bar run gives: per output the displacements and
+/// velocities by node id and the joint grid's fields, the history, and
+/// the ranks holding its tets.
+struct BarRun {
+    disp: Vec<Vec<[f64; 3]>>,
+    vel: Vec<Vec<f64>>,
+    joints: Vec<[Vec<f64>; 4]>,
+    history: (Vec<String>, Vec<Vec<f64>>),
+    ranks: Vec<i32>,
+    by_rank: Vec<[usize; 2]>,
+}
+
+fn pulled_bar(ranks: usize) -> BarRun {
+    let dir = out_dir(&format!("joint-set-split-bar-{ranks}"));
+    let scen = dir.join("bar.toml");
+    std::fs::write(&scen, set_bar(true, true)).unwrap();
+    let out = dir.join("out");
+    run_ok(ranks, &scen, &out, &[]);
+    let m = read_mech(&out, "bar");
+    let h5 = out.join("bar.h5");
+    let jh5 = out.join("bar_joints.h5");
+    let steps = fdem::io::read_times(&jh5).unwrap().len();
+    BarRun {
+        vel: velocities_by_node_id(&h5, m.times.len()),
+        disp: m.disp,
+        joints: (0..steps)
+            .map(|k| {
+                ["damage", "mode", "broke_at", "opening"]
+                    .map(|f| fdem::io::read_cell_field_step(&jh5, f, k).unwrap())
+            })
+            .collect(),
+        history: history(&out, "bar"),
+        ranks: ranks_of(&h5),
+        by_rank: tets_by_rank(&out, "bar", in_middle),
+    }
+}
+
+/// The global numbers of the joints broken (modes 1–3) in `mode`.
+fn broken(mode: &[f64]) -> Vec<usize> {
+    (0..mode.len())
+        .filter(|&j| (1.0..=3.0).contains(&mode[j]))
+        .collect()
+}
+
+#[test]
+fn a_bar_jointed_on_a_set_split_over_ranks_breaks_bitwise_alike() {
+    let one = pulled_bar(1);
+    let want = broken(&one.joints.last().expect("joint outputs")[1]);
+    let (h, rows) = &one.history;
+    let last = rows.last().expect("history rows");
+    assert!(
+        want.len() >= 4 && want.len() as f64 == last[col(h, "broken_joints")],
+        "the bar must crack: {} broken joints in the grid, {} in the history",
+        want.len(),
+        last[col(h, "broken_joints")]
+    );
+    // Integer columns are equal; sums over the ranks' partial sums (energies,
+    // momenta, forces) follow the partition in their last bits.
+    let exact = [
+        "step",
+        "time",
+        "broken_joints",
+        "broken_opening",
+        "broken_sliding",
+        "broken_mixed",
+        "closed_cracks",
+    ];
+    for p in [2, 3] {
+        let r = pulled_bar(p);
+        assert_eq!(
+            r.ranks,
+            (0..p as i32).collect::<Vec<_>>(),
+            "{p} ranks: the bar is not split over all ranks"
+        );
+        if p == 2 {
+            assert!(
+                r.by_rank.iter().all(|&[j, c]| j > 0 && c > 0),
+                "2 ranks: each must hold jointed and continuum tets: {:?}",
+                r.by_rank
+            );
+        }
+        assert_eq!(r.disp.len(), one.disp.len(), "{p} ranks: outputs");
+        for k in 0..one.disp.len() {
+            assert!(
+                r.disp[k] == one.disp[k],
+                "{p} ranks, output {k}: displacements differ"
+            );
+            assert!(
+                r.vel[k] == one.vel[k],
+                "{p} ranks, output {k}: velocities differ"
+            );
+        }
+        assert_eq!(r.joints.len(), one.joints.len(), "{p} ranks: joint outputs");
+        for (k, (a, b)) in r.joints.iter().zip(&one.joints).enumerate() {
+            for (f, name) in ["damage", "mode", "broke_at", "opening"].iter().enumerate() {
+                assert!(a[f] == b[f], "{p} ranks, joint output {k}: {name} differs");
+            }
+        }
+        let got = broken(&r.joints.last().expect("joint outputs")[1]);
+        assert_eq!(got, want, "{p} ranks: broken joints differ");
+        eprintln!(
+            "{p} ranks: {} joints broken, bitwise alike; tets (jointed, continuum) by rank {:?}",
+            got.len(),
+            r.by_rank
+        );
+        // The bar touches nothing: its contact force is round-off about
+        // zero, on the scale of its load f_t × section.
+        assert_same_history(
+            &r.history,
+            &one.history,
+            &exact,
+            1e6 * 4e-4,
+            &format!("{p} ranks"),
+        );
+    }
+}
+
+/// The largest relative difference of two runs' temperatures over their outputs.
+fn worst(a: &Results, b: &Results) -> f64 {
+    a.temperature
+        .iter()
+        .zip(&b.temperature)
+        .map(|(x, y)| rel_diff(x, y))
+        .fold(0.0, f64::max)
+}
+
+/// Temperatures by position (the copies of a vertex sit where it does).
+fn by_position(r: &Results) -> Vec<std::collections::HashMap<[u64; 3], f64>> {
+    r.temperature
+        .iter()
+        .map(|t| {
+            r.coords
+                .iter()
+                .zip(t)
+                .map(|(c, &v)| (c.map(f64::to_bits), v))
+                .collect()
+        })
+        .collect()
+}
+
+/// A coupled run: the bar jointed on its middle, heated from one end,
+/// split over 2 and 3 ranks, has one rank's temperatures (its tied rows
+/// across the ranks: the continuum nodes' and the set's copies) and, its
+/// joints intact, the continuum's at every copy.
+#[test]
+fn a_bar_jointed_on_a_set_heats_split_as_on_one_rank() {
+    let dir = out_dir("joint-set-split-heat");
+    let run = |jointed: bool, ranks: usize| {
+        let scen = dir.join(format!("bar-{jointed}.toml"));
+        std::fs::write(&scen, set_bar(false, jointed)).unwrap();
+        let out = dir.join(format!("j{jointed}-r{ranks}"));
+        run_ok(ranks, &scen, &out, &[]);
+        let stem = format!("bar-{jointed}");
+        let h5 = out.join(format!("{stem}.h5"));
+        let by_rank = tets_by_rank(&out, &stem, in_middle);
+        (read_results(&out, &stem), ranks_of(&h5), by_rank)
+    };
+    let (one, _, _) = run(true, 1);
+    let last = one.temperature.last().unwrap();
+    let warm = last.iter().filter(|&&t| t > 1.0 && t < 99.0).count();
+    assert!(
+        warm > last.len() / 10,
+        "the bar barely warmed: {warm} of {} copies between 1 and 99 °C",
+        last.len()
+    );
+    for p in [2, 3] {
+        let (r, held, by_rank) = run(true, p);
+        assert_eq!(
+            held,
+            (0..p as i32).collect::<Vec<_>>(),
+            "{p} ranks: the bar is not split over all ranks"
+        );
+        if p == 2 {
+            assert!(
+                by_rank.iter().all(|&[j, c]| j > 0 && c > 0),
+                "2 ranks: each must hold jointed and continuum tets: {by_rank:?}"
+            );
+        }
+        assert_same_temperatures(
+            &one,
+            &r,
+            1e-8,
+            &format!("bar on a set, 1 against {p} ranks"),
+        );
+        eprintln!("{p} ranks: temperatures within {:e}", worst(&one, &r));
+    }
+    let (cont, _, _) = run(false, 1);
+    assert_eq!(cont.times, one.times);
+    let at = by_position(&cont);
+    for (k, t) in one.temperature.iter().enumerate() {
+        for (c, &v) in one.coords.iter().zip(t) {
+            let want = at[k][&c.map(f64::to_bits)];
+            assert!(
+                (v - want).abs() <= 1e-8 * 100.0,
+                "output {k}: a copy at {c:?} has {v}, the continuum {want}"
+            );
+        }
+    }
+}
+
+/// The hollow cylinder of scenarios/hollow-cylinder-cracking.toml jointed
+/// only within 80 mm of its axis (|x|, |y| ≤ 0.08 m: its inner part,
+/// where the hoop stress first reaches f_t), on `ranks` ranks into `out`
+/// with `extra` arguments: its temperatures and the modes of its joints
+/// at the last output.
+fn set_cylinder(ranks: usize, out: &std::path::Path, extra: &[&str]) -> (Results, Vec<f64>) {
+    std::fs::create_dir_all(out).unwrap();
+    let text =
+        std::fs::read_to_string(root().join("scenarios/hollow-cylinder-cracking.toml")).unwrap();
+    let whole = "fracture = {}";
+    assert!(text.contains(whole));
+    let text = text.replace(
+        whole,
+        "element_sets = { near = { min = [-0.08, -0.08, -1.0], max = [0.08, 0.08, 1.0] } }\n\
+         fracture = { set = \"near\" }",
+    );
+    let scen = out.join("cylinder.toml");
+    std::fs::write(&scen, text).unwrap();
+    let args = [
+        &[
+            "--set",
+            "solver.rtol=1e-12",
+            "--set",
+            "time.end_time=7.6e-3",
+        ],
+        extra,
+    ]
+    .concat();
+    run_ok(ranks, &scen, out, &args);
+    let jh5 = out.join("cylinder_joints.h5");
+    let k = fdem::io::read_times(&jh5).unwrap().len() - 1;
+    let mode = fdem::io::read_cell_field_step(&jh5, "mode", k).unwrap();
+    (read_results(out, "cylinder"), mode)
+}
+
+#[test]
+fn a_cylinder_jointed_on_a_set_cracks_split_as_on_one_rank() {
+    let (one, one_mode) = set_cylinder(1, &out_dir("joint-set-split-cyl-1"), &[]);
+    let want = broken(&one_mode);
+    assert!(!want.is_empty(), "the cylinder must crack");
+    let dir = out_dir("joint-set-split-cyl-2");
+    let (two, two_mode) = set_cylinder(2, &dir, &[]);
+    assert_eq!(
+        ranks_of(&dir.join("cylinder.h5")),
+        vec![0, 1],
+        "the cylinder is not split over 2 ranks"
+    );
+    let by_rank = tets_by_rank(&dir, "cylinder", |c| {
+        c[0].abs() <= 0.08 && c[1].abs() <= 0.08
+    });
+    assert!(
+        by_rank.iter().all(|&[j, c]| j > 0 && c > 0),
+        "2 ranks: each must hold jointed and continuum tets: {by_rank:?}"
+    );
+    assert_eq!(broken(&two_mode), want, "2 ranks: broken joints differ");
+    assert_same_temperatures(&one, &two, 1e-8, "cylinder on a set, 1 against 2 ranks");
+    eprintln!(
+        "{} joints broken on 1 and 2 ranks; temperatures within {:e}",
+        want.len(),
+        worst(&one, &two)
+    );
+}
+
+/// The cylinder jointed on a set, checkpointed on 2 ranks after joints
+/// broke (7.4 ms), continues to 8 ms on 3 ranks and on 1 to the
+/// uninterrupted one-rank run's broken joints and temperatures.
+#[test]
+fn a_cylinder_jointed_on_a_set_restarts_on_other_rank_counts() {
+    let ck_args = [
+        "--set",
+        "output.checkpoint=true",
+        "--set",
+        "time.end_time=8e-3",
+    ];
+    let (want, want_mode) = set_cylinder(1, &out_dir("joint-set-split-restart-full"), &ck_args);
+    let first = out_dir("joint-set-split-restart-first");
+    let stop = [&ck_args[..], &["--set", "time.end_time=7.4e-3"]].concat();
+    let (_, first_mode) = set_cylinder(2, &first, &stop);
+    assert_eq!(ranks_of(&first.join("cylinder.h5")), vec![0, 1]);
+    assert!(
+        !broken(&first_mode).is_empty(),
+        "no joint broke before the checkpoint"
+    );
+    let ck = first.join("cylinder_checkpoint.h5");
+    for ranks in [3, 1] {
+        let rest = out_dir(&format!("joint-set-split-restart-{ranks}"));
+        let more = [&ck_args[..], &["--restart", ck.to_str().unwrap()]].concat();
+        let (got, mode) = set_cylinder(ranks, &rest, &more);
+        assert_eq!(
+            ranks_of(&rest.join("cylinder.h5")),
+            (0..ranks as i32).collect::<Vec<_>>(),
+            "{ranks} ranks: the restarted cylinder is not split over all ranks"
+        );
+        assert_eq!(
+            broken(&mode),
+            broken(&want_mode),
+            "{ranks} ranks: broken joints differ"
+        );
+        let (k, kw) = (got.times.len() - 1, want.times.len() - 1);
+        assert_eq!(got.times[k], want.times[kw], "{ranks} ranks: end time");
+        let d = rel_diff(&got.temperature[k], &want.temperature[kw]);
+        assert!(d < 1e-8, "{ranks} ranks: end temperatures differ by {d:e}");
+        eprintln!(
+            "restart on {ranks} ranks: {} joints broken, end temperatures within {d:e}",
+            broken(&mode).len()
+        );
+    }
+}

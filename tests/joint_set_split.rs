@@ -8,19 +8,62 @@
 //!
 //! Each test asserts that the body is cut over all the ranks it runs on
 //! (the output's `rank` field), with jointed and continuum tets on each of
-//! 2 ranks; before this change such a body stayed whole on rank 0.
+//! 2 ranks; before this change such a body stayed whole on rank 0. The bar
+//! jointed on its upper half is cut across the set's border, so some
+//! continuum nodes are owned by a rank holding neither tet of some of
+//! their joints (a joint only on its tets' ranks would miss them).
 
 mod common;
 
 use common::*;
 
-/// The bar of scenarios/fracture-bar.toml (Tet4, h = 10 mm) jointed on its
-/// middle two fifths (x in [0.03, 0.07] m: 96 of its 240 tets, 456 node
-/// copies, above the size a mechanics run keeps whole), pulled at
-/// x = 0.1 m (`pulled`, the fracture bar's load) or, free and unloaded,
-/// heated at x = 0 from 0 to 100 °C (no expansion: nothing moves, no
-/// joint breaks). `jointed`: with its `fracture` entry.
-fn set_bar(pulled: bool, jointed: bool) -> String {
+/// Where the bar of scenarios/fracture-bar.toml (0.1 × 0.02 × 0.02 m, 240
+/// Tet4, h = 10 mm) is jointed: every count above the 400 node copies a
+/// mechanics run keeps whole.
+#[derive(Clone, Copy, Debug)]
+enum Set {
+    /// Its middle two fifths, x in [0.03, 0.07] m (96 tets, 456 nodes):
+    /// RCB's cuts across the bar fall in the set.
+    Middle,
+    /// Its upper half, y > 0.01 m (120 tets, 546 nodes): the cuts across
+    /// the bar cross the set's border, so a continuum node there is owned
+    /// by the lower rank while some of its joints have both tets on the
+    /// higher one.
+    Upper,
+}
+
+impl Set {
+    /// The `element_sets` box.
+    fn range(self) -> &'static str {
+        match self {
+            Set::Middle => "min = [0.03, -1.0, -1.0], max = [0.07, 1.0, 1.0]",
+            Set::Upper => "min = [-1.0, 0.01, -1.0], max = [1.0, 1.0, 1.0]",
+        }
+    }
+
+    /// Whether a tet's centroid lies in the set.
+    fn holds(self, c: [f64; 3]) -> bool {
+        match self {
+            Set::Middle => (0.03..=0.07).contains(&c[0]),
+            Set::Upper => c[1] >= 0.01,
+        }
+    }
+
+    /// The pull (m/s): the upper half cracks while the continuum below
+    /// carries the load, later; pulled 5 times faster it cracks by 18 ms.
+    fn pull(self) -> f64 {
+        match self {
+            Set::Middle => 0.01,
+            Set::Upper => 0.05,
+        }
+    }
+}
+
+/// The bar jointed on `set`, pulled at x = 0.1 m (`pulled`, the fracture
+/// bar's load) or, free and unloaded, heated at x = 0 from 0 to 100 °C
+/// (no expansion: nothing moves, no joint breaks). `jointed`: with its
+/// `fracture` entry.
+fn set_bar(set: Set, pulled: bool, jointed: bool) -> String {
     let mesh = root().join("scenarios/meshes/bar-irregular-10.msh");
     let fracture = if jointed {
         "fracture = { set = \"middle\" }"
@@ -28,7 +71,8 @@ fn set_bar(pulled: bool, jointed: bool) -> String {
         ""
     };
     let physics = if pulled {
-        r#"[time]
+        format!(
+            r#"[time]
 dt = 1e-4
 end_time = 0.024
 [mechanics]
@@ -39,11 +83,13 @@ components = ["x"]
 [[mechanics.bc]]
 kind = "velocity"
 set = "bar.xmax"
-value = [0.01, nan, nan]
+value = [{}, nan, nan]
 [output]
 every = 10
 history_every = 1
-"#
+"#,
+            set.pull()
+        )
     } else {
         r#"[time]
 dt = 1e-4
@@ -57,6 +103,7 @@ rtol = 1e-12
 [output]
 every = 5
 "#
+        .to_string()
     };
     format!(
         r#"title = "bar jointed on a set"
@@ -78,16 +125,12 @@ name = "bar"
 material = "rock"
 initial_temperature = 0.0
 mesh = {{ kind = "gmsh", file = "{}" }}
-element_sets = {{ middle = {{ min = [0.03, -1.0, -1.0], max = [0.07, 1.0, 1.0] }} }}
+element_sets = {{ middle = {{ {} }} }}
 {fracture}
 {physics}"#,
-        mesh.display()
+        mesh.display(),
+        set.range()
     )
-}
-
-/// Whether a centroid lies in the bar's jointed middle.
-fn in_middle(c: [f64; 3]) -> bool {
-    (0.03..=0.07).contains(&c[0])
 }
 
 /// The ranks holding the elements of the output `h5` (its `rank` field),
@@ -128,10 +171,10 @@ struct BarRun {
     by_rank: Vec<[usize; 2]>,
 }
 
-fn pulled_bar(ranks: usize) -> BarRun {
-    let dir = out_dir(&format!("joint-set-split-bar-{ranks}"));
+fn pulled_bar(set: Set, ranks: usize) -> BarRun {
+    let dir = out_dir(&format!("joint-set-split-bar-{set:?}-{ranks}"));
     let scen = dir.join("bar.toml");
-    std::fs::write(&scen, set_bar(true, true)).unwrap();
+    std::fs::write(&scen, set_bar(set, true, true)).unwrap();
     let out = dir.join("out");
     run_ok(ranks, &scen, &out, &[]);
     let m = read_mech(&out, "bar");
@@ -149,7 +192,7 @@ fn pulled_bar(ranks: usize) -> BarRun {
             .collect(),
         history: history(&out, "bar"),
         ranks: ranks_of(&h5),
-        by_rank: tets_by_rank(&out, "bar", in_middle),
+        by_rank: tets_by_rank(&out, "bar", |c| set.holds(c)),
     }
 }
 
@@ -161,8 +204,19 @@ fn broken(mode: &[f64]) -> Vec<usize> {
 }
 
 #[test]
-fn a_bar_jointed_on_a_set_split_over_ranks_breaks_bitwise_alike() {
-    let one = pulled_bar(1);
+fn a_bar_jointed_on_its_middle_split_over_ranks_breaks_bitwise_alike() {
+    breaks_bitwise_alike(Set::Middle);
+}
+
+#[test]
+fn a_bar_jointed_on_its_upper_half_split_across_the_border_breaks_bitwise_alike() {
+    breaks_bitwise_alike(Set::Upper);
+}
+
+/// The bar jointed on `set`, pulled until it cracks, on 1, 2 and 3 ranks:
+/// bitwise the same trajectories and joints, the history's counts equal.
+fn breaks_bitwise_alike(set: Set) {
+    let one = pulled_bar(set, 1);
     let want = broken(&one.joints.last().expect("joint outputs")[1]);
     let (h, rows) = &one.history;
     let last = rows.last().expect("history rows");
@@ -184,16 +238,17 @@ fn a_bar_jointed_on_a_set_split_over_ranks_breaks_bitwise_alike() {
         "closed_cracks",
     ];
     for p in [2, 3] {
-        let r = pulled_bar(p);
+        let r = pulled_bar(set, p);
         assert_eq!(
             r.ranks,
             (0..p as i32).collect::<Vec<_>>(),
             "{p} ranks: the bar is not split over all ranks"
         );
-        if p == 2 {
+        // The middle's cuts on 3 ranks leave the centre rank only jointed tets.
+        if p == 2 || matches!(set, Set::Upper) {
             assert!(
                 r.by_rank.iter().all(|&[j, c]| j > 0 && c > 0),
-                "2 ranks: each must hold jointed and continuum tets: {:?}",
+                "{p} ranks: each must hold jointed and continuum tets: {:?}",
                 r.by_rank
             );
         }
@@ -265,12 +320,12 @@ fn a_bar_jointed_on_a_set_heats_split_as_on_one_rank() {
     let dir = out_dir("joint-set-split-heat");
     let run = |jointed: bool, ranks: usize| {
         let scen = dir.join(format!("bar-{jointed}.toml"));
-        std::fs::write(&scen, set_bar(false, jointed)).unwrap();
+        std::fs::write(&scen, set_bar(Set::Middle, false, jointed)).unwrap();
         let out = dir.join(format!("j{jointed}-r{ranks}"));
         run_ok(ranks, &scen, &out, &[]);
         let stem = format!("bar-{jointed}");
         let h5 = out.join(format!("{stem}.h5"));
-        let by_rank = tets_by_rank(&out, &stem, in_middle);
+        let by_rank = tets_by_rank(&out, &stem, |c| Set::Middle.holds(c));
         (read_results(&out, &stem), ranks_of(&h5), by_rank)
     };
     let (one, _, _) = run(true, 1);

@@ -563,12 +563,12 @@ impl ExplicitDomain {
     /// Per jointed body here: `[body, joints, broken, crack area, fracture
     /// energy, first break, centroid x, y, z]`.
     pub fn body_cracks(&self) -> Vec<[f64; 9]> {
-        self.joints.body_cracks(&self.x0)
+        self.joints.body_cracks()
     }
 
     /// This rank's joints for the joint output grid.
     pub fn joint_rows(&self) -> super::JointRows {
-        self.joints.output_rows(&self.x, &self.x0)
+        self.joints.output_rows(&self.x)
     }
 
     /// This rank's particles for the particle output (issue 21).

@@ -56,6 +56,9 @@ struct JointRow {
     set: u32,
     index: u32,
     faces: crate::fracture::insert::JointFaces,
+    /// The reference positions of its a face's corners (a corner may be
+    /// a ghost here: a continuum node of a body jointed on a set).
+    a0: [[f64; 3]; 3],
     /// Owned here (its lower tet is here): counted, written, saved.
     owned: bool,
 }
@@ -101,6 +104,7 @@ impl DomainJoints {
                 set: u32::MAX,
                 index: 0,
                 faces: j.faces,
+                a0: j.faces.a.map(|n| part.mesh.nodes[n as usize]),
                 owned: part.local_element(lower).is_some(),
             });
             if body_held[body as usize] {
@@ -138,15 +142,14 @@ impl DomainJoints {
         Ok(d)
     }
 
-    /// This rank's joints for the output at positions `x` (reference
-    /// positions `x0`).
-    pub(super) fn output_rows(&self, x: &[Vector3<f64>], x0: &[Vector3<f64>]) -> JointRows {
+    /// This rank's joints for the output at positions `x`.
+    pub(super) fn output_rows(&self, x: &[Vector3<f64>]) -> JointRows {
         let mut r = JointRows::default();
         for row in self.rows.iter().filter(|r| r.owned) {
             let f = &row.faces;
             r.gid.push(row.gid);
-            for &n in &f.a {
-                let (p, p0) = (x[n as usize], x0[n as usize]);
+            for (&n, &p0) in f.a.iter().zip(&row.a0) {
+                let (p, p0) = (x[n as usize], Vector3::from(p0));
                 r.corners.push([p0.x, p0.y, p0.z]);
                 r.displacement
                     .extend_from_slice(&[p.x - p0.x, p.y - p0.y, p.z - p0.z]);
@@ -225,7 +228,7 @@ impl DomainJoints {
     /// face centroids (m): `[body, joints, broken, area, energy, first, x, y, z]`,
     /// over the joints owned here (a split body's rows are summed over
     /// the ranks, [`merge_body_cracks`]).
-    pub(super) fn body_cracks(&self, x0: &[Vector3<f64>]) -> Vec<[f64; 9]> {
+    pub(super) fn body_cracks(&self) -> Vec<[f64; 9]> {
         let mut by: std::collections::BTreeMap<u32, [f64; 9]> = Default::default();
         for row in self.rows.iter().filter(|r| r.owned) {
             let r = by.entry(row.body).or_insert_with(|| {
@@ -236,10 +239,9 @@ impl DomainJoints {
             });
             r[1] += 1.0;
             let c = row
-                .faces
-                .a
+                .a0
                 .iter()
-                .map(|&n| x0[n as usize])
+                .map(|&p| Vector3::from(p))
                 .sum::<Vector3<f64>>()
                 / 3.0;
             for d in 0..3 {

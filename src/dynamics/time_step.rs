@@ -158,8 +158,7 @@ fn joint_frequencies(
             let m = match part.local_element(f.tets[side]) {
                 Some(e) => {
                     let e = e as usize;
-                    model.materials[part.elem_material[e] as usize].density
-                        * mesh.element_volume(e)
+                    model.materials[part.elem_material[e] as usize].density * mesh.element_volume(e)
                         / 4.0
                 }
                 // A tet of another rank (a joint across the cut).

@@ -197,13 +197,6 @@ fn pulled_bar(set: Set, ranks: usize) -> BarRun {
     }
 }
 
-/// The global numbers of the joints broken (modes 1–3) in `mode`.
-fn broken(mode: &[f64]) -> Vec<usize> {
-    (0..mode.len())
-        .filter(|&j| (1.0..=3.0).contains(&mode[j]))
-        .collect()
-}
-
 #[test]
 fn a_bar_jointed_on_its_middle_split_over_ranks_breaks_bitwise_alike() {
     breaks_bitwise_alike(Set::Middle);
@@ -296,20 +289,6 @@ fn worst(a: &Results, b: &Results) -> f64 {
         .zip(&b.temperature)
         .map(|(x, y)| rel_diff(x, y))
         .fold(0.0, f64::max)
-}
-
-/// Temperatures by position (the copies of a vertex sit where it does).
-fn by_position(r: &Results) -> Vec<std::collections::HashMap<[u64; 3], f64>> {
-    r.temperature
-        .iter()
-        .map(|t| {
-            r.coords
-                .iter()
-                .zip(t)
-                .map(|(c, &v)| (c.map(f64::to_bits), v))
-                .collect()
-        })
-        .collect()
 }
 
 /// A coupled run: the bar jointed on its middle, heated from one end,

@@ -67,10 +67,7 @@ fn run(ranks: usize) -> SplitRun {
 
 /// The global numbers of the joints broken (modes 1–3) at the last output.
 fn broken_set(r: &SplitRun) -> Vec<usize> {
-    let mode = &r.joints.last().expect("joint outputs")[1];
-    (0..mode.len())
-        .filter(|&j| (1.0..=3.0).contains(&mode[j]))
-        .collect()
+    broken(&r.joints.last().expect("joint outputs")[1])
 }
 
 #[test]

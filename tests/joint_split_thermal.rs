@@ -64,21 +64,6 @@ every = 5
     )
 }
 
-/// Temperatures by position (the copies of a vertex sit where it does):
-/// per output, each node's temperature with its coordinates' bits.
-fn by_position(r: &Results) -> Vec<std::collections::HashMap<[u64; 3], f64>> {
-    r.temperature
-        .iter()
-        .map(|t| {
-            r.coords
-                .iter()
-                .zip(t)
-                .map(|(c, &v)| (c.map(f64::to_bits), v))
-                .collect()
-        })
-        .collect()
-}
-
 #[test]
 fn a_split_jointed_bar_heats_as_on_one_rank_and_as_the_continuum() {
     let dir = out_dir("joint-split-thermal-bar");
@@ -147,12 +132,6 @@ fn cylinder(ranks: usize, out: &std::path::Path, extra: &[&str]) -> (Results, Ve
     let k = fdem::io::read_times(&jh5).unwrap().len() - 1;
     let mode = fdem::io::read_cell_field_step(&jh5, "mode", k).unwrap();
     (read_results(out, stem), mode)
-}
-
-fn broken(mode: &[f64]) -> Vec<usize> {
-    (0..mode.len())
-        .filter(|&j| (1.0..=3.0).contains(&mode[j]))
-        .collect()
 }
 
 #[test]

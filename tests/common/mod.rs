@@ -569,3 +569,26 @@ pub fn assert_same_history(
         }
     }
 }
+
+/// Temperatures by position (the copies of a vertex sit where it does):
+/// per output, each node's temperature with its coordinates' bits.
+pub fn by_position(r: &Results) -> Vec<std::collections::HashMap<[u64; 3], f64>> {
+    r.temperature
+        .iter()
+        .map(|t| {
+            r.coords
+                .iter()
+                .zip(t)
+                .map(|(c, &v)| (c.map(f64::to_bits), v))
+                .collect()
+        })
+        .collect()
+}
+
+/// The global numbers of the joints broken (modes 1–3) in a joint grid's
+/// `mode` field.
+pub fn broken(mode: &[f64]) -> Vec<usize> {
+    (0..mode.len())
+        .filter(|&j| (1.0..=3.0).contains(&mode[j]))
+        .collect()
+}

@@ -338,17 +338,7 @@ fn a_bar_jointed_on_a_set_heats_split_as_on_one_rank() {
         eprintln!("{p} ranks: temperatures within {:e}", worst(&one, &r));
     }
     let (cont, _, _) = run(false, 1);
-    assert_eq!(cont.times, one.times);
-    let at = by_position(&cont);
-    for (k, t) in one.temperature.iter().enumerate() {
-        for (c, &v) in one.coords.iter().zip(t) {
-            let want = at[k][&c.map(f64::to_bits)];
-            assert!(
-                (v - want).abs() <= 1e-8 * 100.0,
-                "output {k}: a copy at {c:?} has {v}, the continuum {want}"
-            );
-        }
-    }
+    assert_copies_at_continuum(&one, &cont);
 }
 
 /// The hollow cylinder of scenarios/hollow-cylinder-cracking.toml jointed
@@ -369,21 +359,7 @@ fn set_cylinder(ranks: usize, out: &std::path::Path, extra: &[&str]) -> (Results
     );
     let scen = out.join("cylinder.toml");
     std::fs::write(&scen, text).unwrap();
-    let args = [
-        &[
-            "--set",
-            "solver.rtol=1e-12",
-            "--set",
-            "time.end_time=7.6e-3",
-        ],
-        extra,
-    ]
-    .concat();
-    run_ok(ranks, &scen, out, &args);
-    let jh5 = out.join("cylinder_joints.h5");
-    let k = fdem::io::read_times(&jh5).unwrap().len() - 1;
-    let mode = fdem::io::read_cell_field_step(&jh5, "mode", k).unwrap();
-    (read_results(out, "cylinder"), mode)
+    cracking_run(ranks, &scen, out, "cylinder", extra)
 }
 
 #[test]

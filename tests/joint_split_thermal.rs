@@ -97,17 +97,7 @@ fn a_split_jointed_bar_heats_as_on_one_rank_and_as_the_continuum() {
     }
     // The same bar without joints: at every copy its vertex's temperature.
     let (cont, _) = run(false, 1);
-    assert_eq!(cont.times, one.times);
-    let at = by_position(&cont);
-    for (k, t) in one.temperature.iter().enumerate() {
-        for (c, &v) in one.coords.iter().zip(t) {
-            let want = at[k][&c.map(f64::to_bits)];
-            assert!(
-                (v - want).abs() <= 1e-8 * 100.0,
-                "output {k}: a copy at {c:?} has {v}, the continuum {want}"
-            );
-        }
-    }
+    assert_copies_at_continuum(&one, &cont);
 }
 
 /// The hollow cylinder of scenarios/hollow-cylinder-cracking.toml (its
@@ -116,22 +106,7 @@ fn a_split_jointed_bar_heats_as_on_one_rank_and_as_the_continuum() {
 /// output.
 fn cylinder(ranks: usize, out: &std::path::Path, extra: &[&str]) -> (Results, Vec<f64>) {
     let scen = root().join("scenarios/hollow-cylinder-cracking.toml");
-    let args = [
-        &[
-            "--set",
-            "solver.rtol=1e-12",
-            "--set",
-            "time.end_time=7.6e-3",
-        ],
-        extra,
-    ]
-    .concat();
-    run_ok(ranks, &scen, out, &args);
-    let stem = "hollow-cylinder-cracking";
-    let jh5 = out.join(format!("{stem}_joints.h5"));
-    let k = fdem::io::read_times(&jh5).unwrap().len() - 1;
-    let mode = fdem::io::read_cell_field_step(&jh5, "mode", k).unwrap();
-    (read_results(out, stem), mode)
+    cracking_run(ranks, &scen, out, "hollow-cylinder-cracking", extra)
 }
 
 #[test]

@@ -592,3 +592,43 @@ pub fn broken(mode: &[f64]) -> Vec<usize> {
         .filter(|&j| (1.0..=3.0).contains(&mode[j]))
         .collect()
 }
+
+/// Every copy of a vertex in the jointed run `jointed` has, at each
+/// output, the temperature of that vertex in the continuum run `cont`
+/// (to 1e-6 absolute: 1e-8 of a 100-degree range).
+pub fn assert_copies_at_continuum(jointed: &Results, cont: &Results) {
+    assert_eq!(cont.times, jointed.times);
+    let at = by_position(cont);
+    for (k, t) in jointed.temperature.iter().enumerate() {
+        for (c, &v) in jointed.coords.iter().zip(t) {
+            let want = at[k][&c.map(f64::to_bits)];
+            assert!(
+                (v - want).abs() <= 1e-8 * 100.0,
+                "output {k}: a copy at {c:?} has {v}, the continuum {want}"
+            );
+        }
+    }
+}
+
+/// A cracking run of `scen` (output stem `stem`) on `ranks` ranks into
+/// `out`, to 7.6 ms at rtol 1e-12 unless `extra` says otherwise: its
+/// temperatures and the modes of its joints at the last output.
+pub fn cracking_run(
+    ranks: usize,
+    scen: &Path,
+    out: &Path,
+    stem: &str,
+    extra: &[&str],
+) -> (Results, Vec<f64>) {
+    let base = [
+        "--set",
+        "solver.rtol=1e-12",
+        "--set",
+        "time.end_time=7.6e-3",
+    ];
+    run_ok(ranks, scen, out, &[&base[..], extra].concat());
+    let jh5 = out.join(format!("{stem}_joints.h5"));
+    let k = fdem::io::read_times(&jh5).unwrap().len() - 1;
+    let mode = fdem::io::read_cell_field_step(&jh5, "mode", k).unwrap();
+    (read_results(out, stem), mode)
+}

@@ -101,6 +101,9 @@ mech_case "nut deposition N=500, to settled" 1 scenarios/nut-packing-deposit.tom
 mech_case "nut deposition N=500, to settled" 2 scenarios/nut-packing-deposit.toml --set bodies.1.pack.count=500
 mech_case "nut deposition N=2000 (seed 000 sec 6), to settled" 2 scenarios/nut-packing-deposit.toml
 deposit_wall=$last_wall
+# The same deposition by LIGGGHTS spheres, and the ratio (issue 22, item 3):
+# docs/peers-deposition.md.
+FDEM_SECONDS=$deposit_wall bash scripts/bench-liggghts.sh
 mkdir -p "$OUT/dep2000" && cp "$OUT/mech/nut-packing-deposit_checkpoint.h5" "$OUT/dep2000/"
 run_case "heat-up of the deposited N=2000 packing, 80 steps" 1 scenarios/nut-packing-heatup.toml \
   --set "bodies.1.mesh.file=$OUT/dep2000/nut-packing-deposit_checkpoint.h5"

@@ -6,7 +6,8 @@
 # --paraview` also installs ParaView (pvbatch), its Python module and Xvfb
 # for scripts/paraview-check.sh. They are large (~1 GB), so the default
 # setup leaves them out and the check skips itself. `--bench` adds the
-# FEniCSx peer of scripts/bench-fenicsx.sh (python3-dolfinx, python3-h5py).
+# FEniCSx peer of scripts/bench-fenicsx.sh (python3-dolfinx, python3-h5py)
+# and the LIGGGHTS peer of scripts/bench-liggghts.sh (liggghts).
 set -euo pipefail
 
 paraview="${FDEM_PARAVIEW:-0}"
@@ -38,7 +39,7 @@ PKGS=(
 if [ "${bench:-0}" = 1 ]; then
   # The peer of scripts/bench-fenicsx.sh (issue 22), and h5py to read
   # fdem's output there.
-  PKGS+=(python3-dolfinx python3-h5py)
+  PKGS+=(python3-dolfinx python3-h5py liggghts)
 fi
 if [ "$paraview" = 1 ]; then
   # pvbatch + paraview.simple, and a virtual X server to render under.

@@ -41,6 +41,9 @@ if [ "${bench:-0}" = 1 ]; then
   # fdem's output there.
   PKGS+=(python3-dolfinx python3-h5py liggghts)
 fi
+# ParaView already here (another package brought it): the check of
+# scripts/paraview-check.sh runs, so it gets what it renders with.
+if command -v pvbatch >/dev/null 2>&1; then paraview=1; fi
 if [ "$paraview" = 1 ]; then
   # pvbatch + paraview.simple, and a virtual X server to render under.
   PKGS+=(paraview python3-paraview xvfb xauth)

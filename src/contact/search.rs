@@ -218,6 +218,8 @@ pub struct ContactSearch {
     /// and of its interior tets.
     boundary_trees: HashMap<u32, (u64, Tree)>,
     interior_trees: HashMap<u32, (u64, Tree)>,
+    /// Trees for small moving bodies too (tests compare both ways).
+    trees_only: bool,
 }
 
 impl ContactSearch {
@@ -334,8 +336,10 @@ impl ContactSearch {
                 // A small moving body: its tets near the searching body's
                 // box, tested against each searching tet in turn, cost
                 // less than a tree built for this search.
-                let small =
-                    with_boundary && !tets.fixed[bb] && tets.boundary[bb].len() <= SMALL_BODY_TETS;
+                let small = with_boundary
+                    && !self.trees_only
+                    && !tets.fixed[bb]
+                    && tets.boundary[bb].len() <= SMALL_BODY_TETS;
                 let b_near: Vec<u32> = if small {
                     (0..boxes[bb].len() as u32)
                         .filter(|&l| overlap(&boxes[bb][l as usize], &body_box[ba], margin))
@@ -472,6 +476,16 @@ mod tests {
             };
             let tets = BodyTets::of_mesh(&m, &bt, |_| true, held, held);
             let all = ContactSearch::new().find(&tets, corners, |e| e, opts);
+            // Small moving bodies searched by list find what trees find.
+            let mut by_trees = ContactSearch {
+                trees_only: true,
+                ..ContactSearch::new()
+            }
+            .find(&tets, corners, |e| e, opts);
+            let mut by_lists = all.clone();
+            by_trees.sort_by_key(|c| (c.a, c.b));
+            by_lists.sort_by_key(|c| (c.a, c.b));
+            assert_eq!(by_lists, by_trees);
             let mut got: Vec<(u32, u32)> =
                 all.iter().map(|c| (c.a.min(c.b), c.a.max(c.b))).collect();
             got.sort_unstable();

@@ -67,7 +67,8 @@ pub(super) fn remove_if_present(path: &Path) -> Result<(), IoError> {
 
 /// Rank 0. Removes from the step directory of mesh file `h5` the step files
 /// of steps `first` and later, in step order, and any `.part` leftover of
-/// an interrupted run. Removing in step order keeps the steps present from
+/// an interrupted run (with the `<file>.part-<job>-<pid>.lock` file Open
+/// MPI's MPI-IO leaves beside it when a rank is killed while it is open). Removing in step order keeps the steps present from
 /// `000000.h5` on (what readers see) a prefix of the series at every moment.
 pub(super) fn remove_steps_from(h5: &Path, first: usize) -> Result<(), IoError> {
     let dir = steps_dir(h5);
@@ -80,7 +81,7 @@ pub(super) fn remove_steps_from(h5: &Path, first: usize) -> Result<(), IoError> 
     for entry in entries {
         let entry = entry.map_err(|e| IoError::io(&dir, "listing the step files", e))?;
         let name = entry.file_name().to_string_lossy().into_owned();
-        if name.ends_with(".part") {
+        if name.ends_with(".part") || (name.contains(".part-") && name.ends_with(".lock")) {
             doomed.push((0, entry.path()));
         } else if let Some(k) = step_of_file_name(&name).filter(|&k| k >= first) {
             doomed.push((k, entry.path()));

@@ -457,7 +457,11 @@ pub fn write_parallel(
             "rank 0 failed renaming the checkpoint",
         ));
     }
-    Ok(())
+    // A killed earlier writer's MPI-IO locks beside the `.tmp`.
+    match comm.rank() {
+        0 => super::remove_mpi_io_locks(&tmp),
+        _ => Ok(()),
+    }
 }
 
 fn write_parallel_to(

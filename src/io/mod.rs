@@ -230,7 +230,8 @@ pub fn step_path(h5: &Path, step: usize) -> PathBuf {
 /// Removes the time series `<stem>` from `dir`: first the index
 /// `<stem>.xdmf` (and a leftover `<stem>.xdmf.tmp`), then the step directory
 /// `<stem>_steps` with its files, then the mesh file `<stem>.h5` (and a
-/// leftover `<stem>.h5.part`); missing files are ignored. In that order no
+/// leftover `<stem>.h5.part` and its MPI-IO locks `<stem>.h5.part-*.lock`);
+/// missing files are ignored. In that order no
 /// index ever names a removed file.
 ///
 /// Not collective: call it on rank 0 (calling it on several ranks is harmless).
@@ -252,6 +253,36 @@ pub fn remove_outputs(dir: &Path, stem: &str) -> Result<(), IoError> {
     ignore_missing(&steps, std::fs::remove_dir_all(&steps))?;
     for path in [&h5, &part] {
         ignore_missing(path, std::fs::remove_file(path))?;
+    }
+    remove_mpi_io_locks(&part)
+}
+
+/// Removes the `<file>-<job>-<pid>.lock` files that Open MPI's MPI-IO
+/// leaves beside `file` when a rank is killed while it holds it open;
+/// a missing directory is ignored.
+pub(crate) fn remove_mpi_io_locks(file: &Path) -> Result<(), IoError> {
+    let dir = file.parent().unwrap_or(Path::new("."));
+    let prefix = format!(
+        "{}-",
+        file.file_name().unwrap_or_default().to_string_lossy()
+    );
+    let listing = |e| IoError::io(dir, "listing the output directory", e);
+    let entries = match std::fs::read_dir(dir) {
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()),
+        r => r.map_err(listing)?,
+    };
+    for entry in entries {
+        let name = entry.map_err(listing)?.file_name();
+        let name = name.to_string_lossy();
+        if name.starts_with(&prefix) && name.ends_with(".lock") {
+            let path = dir.join(&*name);
+            match std::fs::remove_file(&path) {
+                Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                    return Err(IoError::io(&path, "removing an MPI-IO lock", e))
+                }
+                _ => {}
+            }
+        }
     }
     Ok(())
 }
@@ -275,6 +306,29 @@ pub(crate) fn check_name(kind: &str, name: &str) -> Result<(), String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn remove_outputs_takes_the_mpi_io_locks_of_a_killed_run() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        let mine = [
+            "s.h5",
+            "s.xdmf",
+            "s.h5.part",
+            "s.h5.part-349306881-30771.lock",
+        ];
+        let others = ["t.h5.part-1-2.lock", "s.h5.lock", "other.h5"];
+        for f in mine.iter().chain(&others) {
+            std::fs::write(d.join(f), "old").unwrap();
+        }
+        remove_outputs(d, "s").unwrap();
+        let mut left: Vec<String> = std::fs::read_dir(d)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        left.sort();
+        assert_eq!(left, ["other.h5", "s.h5.lock", "t.h5.part-1-2.lock"]);
+    }
 
     /// XDMF `Tensor6` is xx, xy, xz, yy, yz, zz; a symmetric tensor with a
     /// distinct value in every place must come out in exactly that order.

@@ -90,6 +90,24 @@ every = 1
     )
 }
 
+/// The joint grid's last `status` of the crack's faces (mode 4, an
+/// initial crack) and of the other (intact) joints, from run `tag`.
+fn crack_statuses(ranks: usize, tag: &str) -> (Vec<f64>, Vec<f64>) {
+    let h5 = (root().join("target/test-output"))
+        .join(format!("crack-contact-{tag}-{ranks}"))
+        .join("bar_joints.h5");
+    let k = fdem::io::read_times(&h5).unwrap().len() - 1;
+    let mode = fdem::io::read_cell_field_step(&h5, "mode", k).unwrap();
+    let status = fdem::io::read_cell_field_step(&h5, "status", k).unwrap();
+    let pick = |crack: bool| {
+        (mode.iter().zip(&status))
+            .filter(|(&m, _)| (m == 4.0) == crack)
+            .map(|(_, &s)| s)
+            .collect()
+    };
+    (pick(true), pick(false))
+}
+
 /// Runs the cracked bar on `ranks` ranks; its last output and history.
 fn run(ranks: usize, traction: f64, tag: &str) -> (Mech, Vec<String>, Vec<Vec<f64>>) {
     let out = out_dir(&format!("crack-contact-{tag}-{ranks}"));
@@ -129,6 +147,11 @@ fn a_pressed_crack_conducts_with_the_contact_resistance() {
         let last = rows.last().unwrap();
         assert_eq!(last[col(&h, "closed_cracks")], 8.0, "{ranks} rank(s)");
         assert_eq!(last[col(&h, "broken_joints")], 0.0);
+        // The joint grid shows the crack's 8 faces closed (status 2, not
+        // sliding) and every other joint intact (−1).
+        let (crack, intact) = crack_statuses(ranks, "pressed");
+        assert_eq!(crack, [2.0; 8], "{ranks} rank(s)");
+        assert!(!intact.is_empty() && intact.iter().all(|&s| s == -1.0));
         // The load's work went into strain, joint and crack springs, the
         // mass damping and the crack's friction (1 %).
         assert_energy_balance(&h, &rows, 0.01, &format!("{ranks} rank(s)"));
@@ -198,6 +221,10 @@ fn an_open_initial_crack_conducts_nothing() {
     let k = m.times.len() - 1;
     let last = rows.last().unwrap();
     assert_eq!(last[col(&h, "closed_cracks")], 0.0);
+    // The joint grid shows the crack's faces free (status 0).
+    let (crack, intact) = crack_statuses(1, "open");
+    assert_eq!(crack, [0.0; 8]);
+    assert!(intact.iter().all(|&s| s == -1.0));
     for (c, &t) in m.coords.iter().zip(&m.temperature[k]) {
         if (c[0] - 0.05).abs() < 1e-9 {
             assert!(

@@ -79,6 +79,10 @@ pub struct JointRows {
     pub broke_at: Vec<f64>,
     /// Mean normal opening of the faces (m; negative when pressed).
     pub opening: Vec<f64>,
+    /// Contact status of a crack's faces, the codes of the boundary
+    /// faces' status grid (0 free, 2 closed, 3 sliding at the friction
+    /// limit); −1 while the joint is intact (no surface there).
+    pub status: Vec<f64>,
 }
 
 impl DomainJoints {
@@ -145,6 +149,7 @@ impl DomainJoints {
     /// This rank's joints for the output at positions `x`.
     pub(super) fn output_rows(&self, x: &[Vector3<f64>]) -> JointRows {
         let mut r = JointRows::default();
+        let crack_of: Vec<Vec<u32>> = self.sets.iter().map(|s| s.crack_index()).collect();
         for row in self.rows.iter().filter(|r| r.owned) {
             let f = &row.faces;
             r.gid.push(row.gid);
@@ -166,6 +171,17 @@ impl DomainJoints {
             r.mode
                 .push(state.broken.map_or(0.0, |m| f64::from(m.code())));
             r.broke_at.push(if t.is_nan() { -1.0 } else { t });
+            let crack = (self.sets.get(row.set as usize)).and_then(|s| {
+                s.cracks
+                    .get(crack_of[row.set as usize][row.index as usize] as usize)
+            });
+            r.status.push(match (state.broken, crack) {
+                (None, _) => -1.0,
+                (Some(_), Some((_, c))) => {
+                    f64::from(crate::run::face_status(c.closed, c.slipping, false))
+                }
+                (Some(_), None) => f64::from(crate::run::face_status(false, false, false)),
+            });
         }
         r
     }

@@ -23,6 +23,9 @@ pub struct CrackState {
     pub slip: Vector3<f64>,
     /// Whether the faces touched at the last evaluation.
     pub closed: bool,
+    /// Whether they slipped at the friction limit at the last evaluation
+    /// (output only: not saved, recomputed every substep).
+    pub slipping: bool,
     /// Energy this pair has dissipated by slip so far (J).
     pub lost: f64,
 }
@@ -46,6 +49,7 @@ impl CrackState {
         CrackState {
             slip: mean - n * mean.dot(&n),
             closed: false,
+            slipping: false,
             lost: 0.0,
         }
     }
@@ -110,6 +114,7 @@ pub fn crack_forces(
     if out.normal_force == 0.0 {
         st.slip = sliding;
         st.closed = false;
+        st.slipping = false;
         return out;
     }
     st.closed = true;
@@ -118,6 +123,7 @@ pub fn crack_forces(
     let mut elastic = sliding - slip;
     let trial = k * area * elastic.norm();
     let limit = mu * out.normal_force;
+    st.slipping = trial > limit;
     if trial > limit {
         // Return to the cone: keep |k A e| = μ N, slip along e.
         let keep = limit / trial;
@@ -188,6 +194,7 @@ mod tests {
         let fx: f64 = fb.iter().map(|f| f.x).sum();
         assert!((fx / (-K * s * AREA) - 1.0).abs() < 1e-9, "{fx}");
         assert_eq!(r.dissipated, 0.0);
+        assert!(st.closed && !st.slipping);
         // Slide: far beyond the stick limit μ N / (k A) = μ d, the
         // friction force is μ N and the work lost is μ N times the slip.
         let mut lost = 0.0;
@@ -197,6 +204,10 @@ mod tests {
             let (r, fb) = eval(face().map(|p| p + Vector3::new(s, 0.0, -d)), &mut st);
             lost += r.dissipated;
             fx = fb.iter().map(|f| f.x).sum();
+            // Past the stick limit (at μ d = 0.5 d), every step slips.
+            if (s - 0.5 * d).abs() > 0.01 * d {
+                assert_eq!(st.slipping, s > 0.5 * d, "step {i}");
+            }
         }
         assert!((fx / (-0.5 * n) - 1.0).abs() < 1e-9, "{fx}");
         // Total sliding 10 d, of which μ d stays elastic.
@@ -204,6 +215,7 @@ mod tests {
         assert!((lost / want - 1.0).abs() < 1e-9, "{lost} vs {want}");
         // Lifted apart, then pressed again: the spring starts relaxed.
         eval(face().map(|p| p + Vector3::new(20.0 * d, 0.0, d)), &mut st);
+        assert!(!st.closed && !st.slipping);
         let (r, fb) = eval(face().map(|p| p + Vector3::new(20.0 * d, 0.0, -d)), &mut st);
         assert!(fb.iter().all(|f| f.x.abs() < 1e-9 * r.normal_force));
     }

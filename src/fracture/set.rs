@@ -201,6 +201,7 @@ impl JointSet {
                 CrackState {
                     slip,
                     closed: v[7] != 0.0,
+                    slipping: false,
                     lost: v[8],
                 },
             ));

@@ -4,8 +4,10 @@
 //! corners), so ParaView shows the cracks over the bodies: per output the
 //! corners' `displacement` (warp by it) and per joint its `damage`, `mode`
 //! (0 intact, 1 opening, 2 sliding, 3 mixed, 4 initial crack),
-//! `broke_at` (s, −1 while intact) and `opening` (m, negative when
-//! pressed). Rows are the global joint numbers (body by body, each body's
+//! `broke_at` (s, −1 while intact), `opening` (m, negative when
+//! pressed) and `status`, the contact status of a crack's faces in the
+//! codes of the boundary faces' status grid (0 free, 2 closed, 3 sliding;
+//! −1 while intact), so the status follows the cracks. Rows are the global joint numbers (body by body, each body's
 //! joints in its mesh's order), so the files do not depend on the number
 //! of ranks.
 
@@ -107,11 +109,12 @@ impl JointOutput {
         let total = self.total;
         let (_, u) = to_blocks(comm, &point_ids, &rows.displacement, 3, 3 * total);
         let cell = |v: &[f64]| to_blocks(comm, &cell_ids, v, 1, total).1;
-        let (broke_at, damage, mode, opening) = (
+        let (broke_at, damage, mode, opening, status) = (
             cell(&rows.broke_at),
             cell(&rows.damage),
             cell(&rows.mode),
             cell(&rows.opening),
+            cell(&rows.status),
         );
         // Cell fields in name order.
         self.writer.write_step(
@@ -122,6 +125,7 @@ impl JointOutput {
                 ("damage", 1, &damage[..]),
                 ("mode", 1, &mode[..]),
                 ("opening", 1, &opening[..]),
+                ("status", 1, &status[..]),
             ],
         )?;
         Ok(())

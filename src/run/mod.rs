@@ -44,6 +44,7 @@ use rebalance::Balance;
 use schedule::Schedule;
 use settle::Settling;
 use setup::Contacts;
+pub use status_output::face_status;
 pub use summary::{
     allocator_settings, peak_rss, release_fragmented_memory, release_free_memory, trace_memory,
     BalanceSummary, MechanicsSummary, PhaseTimes, RunSummary, Settled,

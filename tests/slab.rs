@@ -236,3 +236,43 @@ fn theta_schemes_converge_at_their_orders() {
         );
     }
 }
+
+/// The default Cholesky (one rank, up to 10,000 unknowns) orders by the
+/// smaller factor: reverse Cuthill–McKee on the seed's long thin slab
+/// (1,025 unknowns in a 41 × 5 × 5 grid, where a band of 25 nodes is the
+/// best separator anyway), nested dissection on a cube of the same kind
+/// (1,331 unknowns, 11 × 11 × 11), whose separators are planes of 121
+/// nodes against RCM's band of about 121 × 11. Both solve the same
+/// problem: the answers do not depend on the ordering (1e-12).
+#[test]
+fn default_cholesky_orders_the_slab_by_rcm_and_a_cube_by_nd() {
+    let run = |size: &str, h: f64, tag: &str, extra: &[&str]| {
+        let out = out_dir(&format!("slab-ordering-{tag}"));
+        let mut args = vec![
+            "--set".to_string(),
+            format!("bodies.bar.mesh.size={size}"),
+            "--set".to_string(),
+            format!("bodies.bar.mesh.element_size={h}"),
+            "--set".to_string(),
+            "time.end_time=0.05".to_string(),
+            "--set".to_string(),
+            "output.times=[0.05]".to_string(),
+        ];
+        args.extend(extra.iter().map(|s| s.to_string()));
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let stdout = run_ok(1, &root().join("scenarios/slab-1d.toml"), &out, &args);
+        let solver = summary_line(&stdout, "solver").unwrap().to_string();
+        (solver, read_results(&out, "slab-1d"))
+    };
+    let (slab, r_slab) = run("[1.0, 0.1, 0.1]", 0.025, "slab", &[]);
+    assert!(slab.contains("preonly/cholesky (rcm ordering"), "{slab}");
+    let (cube, r_cube) = run("[0.1, 0.1, 0.1]", 0.01, "cube", &[]);
+    assert!(cube.contains("preonly/cholesky (nd ordering"), "{cube}");
+    // The other ordering forced gives the same temperatures.
+    let nd = ["-pc_factor_mat_ordering_type", "nd"];
+    let (forced, r_nd) = run("[1.0, 0.1, 0.1]", 0.025, "slab-nd", &nd);
+    assert!(!forced.contains("ordering;"), "{forced}");
+    let k = r_slab.times.len() - 1;
+    assert!(rel_diff(&r_slab.temperature[k], &r_nd.temperature[k]) < 1e-12);
+    assert!(r_cube.temperature[k].iter().all(|t| t.is_finite()));
+}

@@ -127,6 +127,40 @@ impl<'p> Matrix<'p> {
         self.raw
     }
 
+    /// One rank's matrix only. The nonzeros of the Cholesky factor that
+    /// PETSc's own solver makes of this symmetric matrix with the fill-
+    /// reducing ordering `ordering` (`c"nd"`, `c"rcm"`, ...): the symbolic
+    /// factorisation alone, which costs little beside the numeric one.
+    pub fn cholesky_fill(&self, ordering: &CStr) -> Result<f64> {
+        let (mut row, mut col): (ffi::IS, ffi::IS) = (std::ptr::null_mut(), std::ptr::null_mut());
+        petsc_call!(MatGetOrdering(
+            self.raw,
+            ordering.as_ptr(),
+            &mut row,
+            &mut col
+        ))?;
+        let mut factor: ffi::Mat = std::ptr::null_mut();
+        let fill = (|| {
+            petsc_call!(MatGetFactor(
+                self.raw,
+                c"petsc".as_ptr(),
+                ffi::MatFactorType::MAT_FACTOR_CHOLESKY,
+                &mut factor
+            ))?;
+            // SAFETY: plain C structs of numbers, filled in by PETSc below.
+            let mut info: ffi::MatFactorInfo = unsafe { std::mem::zeroed() };
+            petsc_call!(MatFactorInfoInitialize(&mut info))?;
+            petsc_call!(MatCholeskyFactorSymbolic(factor, self.raw, row, &info))?;
+            let mut got: ffi::MatInfo = unsafe { std::mem::zeroed() };
+            petsc_call!(MatGetInfo(factor, ffi::MatInfoType::MAT_LOCAL, &mut got))?;
+            Ok(got.nz_allocated)
+        })();
+        let _ = petsc_call!(MatDestroy(&mut factor));
+        let _ = petsc_call!(ISDestroy(&mut row));
+        let _ = petsc_call!(ISDestroy(&mut col));
+        fill
+    }
+
     /// A matrix PETSc owns (a callback's argument), wrapped for the safe
     /// methods and never destroyed by us.
     ///

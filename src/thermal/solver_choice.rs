@@ -4,7 +4,7 @@
 //! Fourier number. The options database always wins.
 
 use super::assembly::Operators;
-use crate::petsc::{Matrix, Result, Vector};
+use crate::petsc::{Matrix, Petsc, Result, Vector};
 
 /// Linear solver defaults by problem size (the options database wins).
 #[derive(Debug, Clone, PartialEq)]
@@ -101,6 +101,31 @@ impl SolverChoice {
 }
 
 impl SolverChoice {
+    /// Put this choice into the options database below the command line
+    /// and the scenario's `[solver]` options `scenario` (each is set only
+    /// where unset: the command line wins, then the scenario, then fdem's
+    /// defaults), its Cholesky ordering picked by fill for the step's
+    /// matrix `a` unless one of those chose it; returns the choice and
+    /// that ordering.
+    pub fn configure(
+        mut self,
+        petsc: &Petsc,
+        scenario: &std::collections::BTreeMap<String, String>,
+        a: &Matrix,
+    ) -> Result<(SolverChoice, Option<&'static str>)> {
+        for (k, v) in scenario {
+            petsc.set_default_option(k, if v.is_empty() { None } else { Some(v) })?;
+        }
+        let ordering = match petsc.has_option("pc_factor_mat_ordering_type")? {
+            true => None,
+            false => self.order_by_fill(a)?,
+        };
+        for (k, v) in &self.defaults {
+            petsc.set_own_default_option(k, Some(v))?;
+        }
+        Ok((self, ordering))
+    }
+
     /// With PETSc's own Cholesky (one rank), the fill-reducing ordering
     /// whose factor of the step's matrix `a` has fewer nonzeros: nested
     /// dissection for compact bodies, reverse Cuthill–McKee for long thin

@@ -381,20 +381,9 @@ impl<'p> ThermalSystem<'p> {
             }
 
             let fourier = super::solver_choice::cell_fourier(&ops, &free_mask, theta * dt)?;
-            let mut choice =
+            let choice =
                 super::SolverChoice::auto(part.num_global(), part.size, symmetric, fourier);
-            // The command line wins over the scenario's options, and both
-            // over fdem's own defaults (each is set only where unset).
-            for (k, v) in &solver.options {
-                petsc.set_default_option(k, if v.is_empty() { None } else { Some(v) })?;
-            }
-            let ordering = match petsc.has_option("pc_factor_mat_ordering_type")? {
-                true => None,
-                false => choice.order_by_fill(&a)?,
-            };
-            for (k, v) in &choice.defaults {
-                petsc.set_own_default_option(k, Some(v))?;
-            }
+            let (choice, ordering) = choice.configure(petsc, &solver.options, &a)?;
             if let Some(rad) = radiation.as_ref() {
                 let mut coef_free = rad.coef.duplicate()?;
                 coef_free.pointwise_mult(&rad.coef, &free_mask)?;

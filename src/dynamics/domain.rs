@@ -272,9 +272,9 @@ impl ExplicitDomain {
         let n_owned = part.num_owned();
         let particles = crate::parallel::agree(
             comm,
-            super::particles::DomainParticles::new(model, part, n_owned),
+            super::particles::DomainParticles::new(comm, model, part),
         )?;
-        let particle_w2 = particles.frequencies(&mass);
+        let particle_w2 = particles.frequencies(comm, &mass, n_owned);
         let (dt, substeps, min_len_all) = time_step(
             comm,
             model,
@@ -477,9 +477,15 @@ impl ExplicitDomain {
     /// The temperatures of this rank's particles numbered `gid` (global
     /// particle numbers; issue 21), from the thermal system's sphere rows:
     /// their bonds' free thermal elongations follow. Call after
-    /// [`Self::set_temperatures`] (the links read the nodes').
-    pub fn set_particle_temperatures(&mut self, gid: &[u64], t: &[f64]) -> Result<()> {
-        self.particles.set_temperatures(gid, t, &self.node_t)
+    /// [`Self::set_temperatures`] (the links read the nodes'). Collective
+    /// over the neighbours (the ghost spheres take their owners').
+    pub fn set_particle_temperatures(
+        &mut self,
+        comm: &SimpleCommunicator,
+        gid: &[u64],
+        t: &[f64],
+    ) -> Result<()> {
+        self.particles.set_temperatures(comm, gid, t, &self.node_t)
     }
 
     /// This rank's particles' motion and bond and link states for a

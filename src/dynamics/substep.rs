@@ -310,7 +310,7 @@ impl ExplicitDomain {
             comm.all_reduce_into(&mine[..], &mut self.touching[..], SystemOperation::max());
         }
         if !self.particles.is_empty() {
-            // Bonds and links after the element sum, in each body's fixed order (its rank holds it whole).
+            // Bonds and links after the element sum, in each body's fixed order (on any rank).
             let (x, v) = (&self.x, &self.v);
             self.strain_energy += self.particles.add_forces(x, v, self.dt, &mut self.f);
             let (touching, damping) = (&self.touching, self.damping);
@@ -332,6 +332,7 @@ impl ExplicitDomain {
                     error.get_or_insert(e);
                 }
             }
+            self.particles.forward_motion(comm);
         }
         let no = self.n_owned;
         let p = NodeUpdate {

@@ -84,6 +84,10 @@ impl Part {
         let files = model.open_checkpoints()?;
         let nb = model.bodies.len();
         let split = split_bodies(model, size);
+        let split_spheres = split
+            .iter()
+            .zip(&model.bodies)
+            .any(|(&s, body)| s && model.body_particles(body).is_some());
         let weight = |b: usize| {
             let body = &model.bodies[b];
             element_work(model, b) * f64::from(body.elem_range.1 - body.elem_range.0)
@@ -140,21 +144,51 @@ impl Part {
                 });
                 ids.push([b as u32, e as u32]);
             }
+            // Its spheres, numbered after its elements, cut with them (issue 21).
+            if let Some(p) = &src.particles {
+                let (s0, s1) = block(p.region.centres.len() as u64, size, rank);
+                for s in s0 as usize..s1 as usize {
+                    objects.push(super::rcb::Object {
+                        weight: w,
+                        point: motion.apply(p.region.centres[s]),
+                    });
+                    ids.push([b as u32, (ne as usize + s) as u32]);
+                }
+            }
         }
         let dest = match placement {
             Placement::Saved(f) if f.head.partition_ranks == Some(size as u64) => {
+                let is_sphere = |&[b, e]: &[u32; 2]| {
+                    let r = model.bodies[b as usize].elem_range;
+                    e != u32::MAX && e >= r.1 - r.0
+                };
                 let elems: Vec<u32> = ids
                     .iter()
-                    .map(|&[b, e]| {
-                        // A whole body: its first element's rank.
-                        model.bodies[b as usize].elem_range.0 + if e == u32::MAX { 0 } else { e }
+                    .map(|id| {
+                        // A whole body (or a sphere): its first element's rank.
+                        let e = if id[1] == u32::MAX || is_sphere(id) {
+                            0
+                        } else {
+                            id[1]
+                        };
+                        model.bodies[id[0] as usize].elem_range.0 + e
                     })
                     .collect();
                 let ranks = f.elem_ranks(&elems).map_err(|e| Error::Model {
                     path: f.path().display().to_string(),
                     message: e.to_string(),
                 });
-                agree(comm, ranks)?
+                let mut ranks = agree(comm, ranks)?;
+                // Spheres: the cut of the start, which the saved parts come from (no
+                // repartition moves a body with particles).
+                if split_spheres {
+                    let cut = super::rcb::rcb(comm, &objects, IMBALANCE).map_err(Error::Partition);
+                    let cut = agree(comm, cut)?;
+                    for (k, _) in ids.iter().enumerate().filter(|(_, id)| is_sphere(id)) {
+                        ranks[k] = cut[k];
+                    }
+                }
+                ranks
             }
             _ => agree(
                 comm,
@@ -190,13 +224,9 @@ impl Part {
             .collect();
         let local = make_bodies(model, &files, &held);
         let local = agree(comm, local)?;
-        // The particles of the whole bodies held here are thermal rows too (issue 21).
+        // The particles owned here are thermal rows too (issue 21).
         let particle_rows = if model.thermal_active {
-            whole
-                .iter()
-                .filter_map(|&b| model.body_particles(&model.bodies[b as usize]))
-                .map(|p| p.region.centres.len())
-                .sum()
+            local.spheres.iter().map(|s| s.owned.len()).sum()
         } else {
             0
         };
@@ -209,6 +239,9 @@ impl Part {
             });
         let mut part = number(comm, local, particle_rows, rows_across);
         part.whole_bodies = whole;
+        if model.has_particles() {
+            part.locate_ghost_spheres(comm, model);
+        }
         part.share_dirichlet(comm);
         Ok(part)
     }
@@ -218,7 +251,8 @@ impl Part {
 /// a copy of a template, nor from a checkpoint) when there are several
 /// ranks, in a mechanics run only if too large for the exact body
 /// frequency of the explicit step (a small body's elements stay together
-/// for it). Particles stay whole. A jointed body (issue 19), on all its
+/// for it). A body with particles is split as any, its spheres cut with
+/// its elements ([`super::spheres`]). A jointed body (issue 19), on all its
 /// tets or on a set, is split too ([`make_bodies`]: its joints go to
 /// every rank holding a tet at one of their corners).
 fn split_bodies(model: &Model, size: usize) -> Vec<bool> {
@@ -235,7 +269,6 @@ fn split_bodies(model: &Model, size: usize) -> Vec<bool> {
             BodySource::Mesh { mesh, .. } => {
                 size > 1
                     && users[mesh as usize] == 1
-                    && model.meshes[mesh as usize].particles.is_none()
                     && (model.mechanics.is_none()
                         || (b.node_range.1 - b.node_range.0) as usize > BODY_EIGEN_MAX_NODES)
             }
@@ -279,6 +312,8 @@ struct Made {
     /// class (global id of the lowest copy tied to it by intact joints,
     /// [`super::tied_rows`]).
     class_of: HashMap<u32, u32>,
+    /// The bonded particles here, per body with any.
+    spheres: Vec<super::spheres::PartSpheres>,
 }
 
 /// Make the bodies and elements `held` by this rank.
@@ -299,9 +334,18 @@ fn make_bodies(
             })?;
         let bc = model.body_bcs(b as usize, &mesh);
         let (n0, e0) = (body.node_range.0, body.elem_range.0);
-        let elems: Vec<u32> = match h {
-            Held::Whole => (0..mesh.tets.len() as u32).collect(),
-            Held::Elements(v) => v.clone(),
+        // Elements, and after them (numbered from the elements' count) spheres.
+        let ne = mesh.tets.len() as u32;
+        let particles = model.body_particles(body);
+        let (elems, own_spheres): (Vec<u32>, Vec<u32>) = match h {
+            Held::Whole => (
+                (0..ne).collect(),
+                (0..particles.map_or(0, |p| p.region.centres.len() as u32)).collect(),
+            ),
+            Held::Elements(v) => {
+                let k = v.partition_point(|&e| e < ne);
+                (v[..k].to_vec(), v[k..].iter().map(|&s| s - ne).collect())
+            }
         };
         let mut used = vec![false; mesh.nodes.len()];
         let mut face_of: HashMap<[u32; 3], ()> = HashMap::new();
@@ -352,6 +396,24 @@ fn make_bodies(
                     index: k as u32,
                 });
                 m.ties_rows.push(whole);
+            }
+        }
+        if let Some(p) = particles {
+            let mut held = vec![false; mesh.tets.len()];
+            elems.iter().for_each(|&e| held[e as usize] = true);
+            let (s, want) = super::spheres::PartSpheres::select(
+                b,
+                &p.region,
+                own_spheres,
+                &held,
+                &used,
+                &mesh.tets,
+            );
+            if !whole {
+                want.iter().for_each(|&n| wanted[n as usize] = true);
+            }
+            if !s.is_empty() {
+                m.spheres.push(s);
             }
         }
         let classes = match &mesh.joints {
@@ -652,6 +714,7 @@ fn number(comm: &SimpleCommunicator, m: Made, particle_rows: usize, rows_across:
         particle_rows,
         rows_across,
         own_dirichlet: None,
+        spheres: m.spheres,
         joints: m
             .joints
             .iter()

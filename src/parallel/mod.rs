@@ -15,6 +15,7 @@ mod halo;
 mod part;
 mod partition;
 pub mod rcb;
+mod spheres;
 mod tied_rows;
 
 pub use build::{element_work, Placement, IMBALANCE};
@@ -25,6 +26,7 @@ pub use partition::{
     dual_graph, dual_graph_with, partition_collective, partition_elements,
     partition_elements_weighted,
 };
+pub use spheres::PartSpheres;
 
 use mpi::collective::SystemOperation;
 use mpi::traits::*;

@@ -83,11 +83,14 @@ pub struct Part {
     /// nodes, tets by global id, by body and then in the order of the
     /// body's joints.
     pub joints: Vec<PartJoint>,
-    /// Thermal rows of the bonded particles of the bodies held here
-    /// (issue 21): the last ones of this rank's range, after the nodes'
-    /// (the whole bodies' particles in ascending body id, each body's in
-    /// its lattice's order). Zero without heat.
+    /// Thermal rows of the bonded particles owned here (issue 21): the
+    /// last ones of this rank's range, after the nodes' (bodies in
+    /// ascending id, each body's owned spheres in its lattice's order).
+    /// Zero without heat.
     pub particle_rows: usize,
+    /// The bonded particles here (issue 21), per body with any
+    /// ([`super::spheres`]): owned and ghost spheres, bonds and links.
+    pub spheres: Vec<super::spheres::PartSpheres>,
     /// Whether the copies of a split jointed body tie thermal rows across
     /// the ranks (issue 19; the same on every rank): an owned node's row
     /// may then be another rank's ([`Part::remote_rows`]).
@@ -505,6 +508,7 @@ impl Part {
             }),
             whole_bodies: Vec::new(),
             joints: Vec::new(),
+            spheres: Vec::new(),
             particle_rows: 0,
             rows_across: false,
             own_dirichlet: None,

@@ -470,7 +470,7 @@ impl Stages<'_, '_> {
                     m.set_temperatures(comm, &t, Some(span));
                 }
                 let sys = self.sys.as_ref();
-                particle_output::couple_particle_temperatures(model, part, sys, time, m)?;
+                particle_output::couple_particle_temperatures(comm, model, part, sys, time, m)?;
                 m.advance(comm, *n)?;
                 // Issue 20: the friction's heat, released over the next thermal step.
                 if let Some(s) = self.sys.as_mut() {

@@ -180,6 +180,7 @@ pub(super) fn temperature_range(
 /// value of the body at `time` (the nodes' rule, from the body's initial
 /// temperature).
 pub(super) fn couple_particle_temperatures(
+    comm: &SimpleCommunicator,
     model: &Model,
     part: &Part,
     sys: Option<&ThermalSystem>,
@@ -189,7 +190,7 @@ pub(super) fn couple_particle_temperatures(
     if let Some(s) = sys {
         let owned = s.t.to_local_vec()?;
         let (gid, _, t) = ParticleHeat::new(model, part).rows(part, Some(&owned));
-        m.set_particle_temperatures(&gid, &t)?;
+        m.set_particle_temperatures(comm, &gid, &t)?;
     } else if model.has_heating() {
         m.set_particle_body_temperatures(|b| {
             let body = &model.bodies[b as usize];

@@ -480,5 +480,5 @@ pub(super) fn couple_temperatures(
         }
     }
     let time = restart.map_or(0.0, |ck| ck.time);
-    super::particle_output::couple_particle_temperatures(model, part, sys, time, m)
+    super::particle_output::couple_particle_temperatures(comm, model, part, sys, time, m)
 }

@@ -3,10 +3,12 @@
 //! last rows of the rank's range ([`Part::first_particle_row`]), with the
 //! capacity ρ c (2r)³ of its cell, the bonds between spheres and the links
 //! to the elements as conduction blocks ([`super::lattice_heat`]), and the
-//! body's volumetric source over its cell. A body with particles is held
-//! whole by one rank, so every row a block touches is owned here; the
-//! blocks enter the same K and M as the elements', and the θ method and
-//! the energy account treat them alike.
+//! body's volumetric source over its cell. A sphere's row is its owner's
+//! (`parallel::spheres`); a bond is assembled by the owner of its first
+//! end, a link by the rank holding its element, into the one matrix
+//! (a ghost sphere's row may be another rank's); the blocks enter the same
+//! K and M as the elements', and the θ method and the energy account treat
+//! them alike.
 
 use crate::mechanics::bond::bond_conductance;
 use crate::model::Model;
@@ -30,9 +32,11 @@ struct LinkRows {
 pub struct BodyHeat {
     /// Global number of its first particle (the output's rows).
     pub first_gid: u64,
-    /// PETSc row of its first particle.
+    /// The owned spheres (numbers in the body, ascending).
+    pub owned: Vec<u32>,
+    /// PETSc row of its first owned particle (the others follow).
     pub first_row: usize,
-    /// Reference centres (m).
+    /// Reference centres (m) of the owned spheres.
     pub centres: Vec<[f64; 3]>,
     /// Initial temperature (the body's).
     pub initial: f64,
@@ -52,63 +56,85 @@ pub struct ParticleHeat {
 }
 
 impl ParticleHeat {
-    /// The particle rows of `part` (empty without heat or particles).
+    /// The particle rows of `part` (empty without heat or particles; a
+    /// rank without spheres of its own may assemble heat links).
     pub fn new(model: &Model, part: &Part) -> ParticleHeat {
-        if part.particle_rows == 0 {
+        if !model.thermal_active || part.spheres.is_empty() {
             return ParticleHeat::default();
         }
         let (offsets, _) = model.particle_offsets();
         let mut row = part.first_particle_row();
         let mut bodies = Vec::new();
-        for &b in &part.whole_bodies {
-            let body = &model.bodies[b as usize];
-            let Some(p) = model.body_particles(body) else {
-                continue;
-            };
+        for held in &part.spheres {
+            let b = held.body as usize;
+            let body = &model.bodies[b];
+            let p = model
+                .body_particles(body)
+                .expect("spheres of a body with particles");
             let region = &p.region;
             let mat = &model.materials[p.material as usize];
             let cell = (2.0 * region.radius).powi(3);
             let h = bond_conductance(mat.conductivity, region.radius);
-            let first = row as i32;
+            let n_owned = held.owned.len();
+            // Each sphere's row: owned ones from `row` on, ghosts their owners'.
+            let row_of = |s: u32| -> i32 {
+                match held.owned.binary_search(&s) {
+                    Ok(k) => (row + k) as i32,
+                    Err(_) => {
+                        let k = held.ghosts.binary_search(&s).expect("a ghost sphere");
+                        part.ghost_sphere_row(held, k) as i32
+                    }
+                }
+            };
             let node_rows = |src_elem: u32| -> [i32; 4] {
                 let e = part
                     .elem_gid
                     .binary_search(&(body.elem_range.0 + src_elem))
-                    .expect("a body with particles is held whole");
+                    .expect("a heat link's element is here");
                 part.mesh.tets[e].map(|l| part.petsc[l as usize] as i32)
             };
-            let bonds = region
+            let bonds = held
                 .bonds
                 .iter()
+                .map(|&k| &region.bonds[k as usize])
+                .filter(|bd| held.owned.binary_search(&bd.i).is_ok())
                 .map(|bd| {
                     let g = h[bd.kind as usize] * bd.weight;
-                    (first + bd.i as i32, first + bd.j as i32, g)
+                    (row_of(bd.i), row_of(bd.j), g)
                 })
                 .collect();
             // The half bonds for heat (mesh::heat_links): the links and the outward edge ones.
-            let links = region
+            let links = held
                 .heat_links
                 .iter()
-                .map(|l| LinkRows {
-                    sphere: first + l.sphere as i32,
-                    nodes: node_rows(l.point_elem),
-                    shape: l.point_shape,
-                    // The half bond: its weight is already twice the lattice's.
-                    g: h[l.kind as usize] * l.weight,
+                .map(|&k| {
+                    let l = &region.heat_links[k as usize];
+                    LinkRows {
+                        sphere: row_of(l.sphere),
+                        nodes: node_rows(l.point_elem),
+                        shape: l.point_shape,
+                        // The half bond: its weight is already twice the lattice's.
+                        g: h[l.kind as usize] * l.weight,
+                    }
                 })
                 .collect();
             bodies.push(BodyHeat {
-                first_gid: offsets[b as usize],
+                first_gid: offsets[b],
+                owned: held.owned.clone(),
                 first_row: row,
-                centres: region.centres.clone(),
+                centres: held
+                    .owned
+                    .iter()
+                    .map(|&s| region.centres[s as usize])
+                    .collect(),
                 initial: body.initial_temperature,
                 // seed 002's particle as its cell (mechanics::bond docs): capacity ρ c (2r)³.
                 capacity: mat.density * mat.specific_heat * cell,
-                source: model.thermal.source[b as usize] * cell,
+                source: model.thermal.source[b] * cell,
                 bonds,
                 links,
             });
-            row += region.centres.len();
+            row += n_owned;
         }
         ParticleHeat { bodies }
     }
@@ -168,7 +194,7 @@ impl ParticleHeat {
         let mut t = Vec::new();
         for b in &self.bodies {
             for (k, c) in b.centres.iter().enumerate() {
-                gid.push(b.first_gid + k as u64);
+                gid.push(b.first_gid + u64::from(b.owned[k]));
                 centres.extend_from_slice(c);
                 if let Some(r) = rows {
                     t.push(r[b.first_row + k - lo]);

@@ -274,3 +274,59 @@ fn a_bar_cut_through_its_particles_conducts_the_same_on_one_two_three_ranks() {
         assert_same_temperatures(&r1, &read_results(&out, "long"), 1e-10, "long heat bar");
     }
 }
+
+/// The long bar heated and expanding (`scenarios/fede-expansion-bar.toml`,
+/// heat and mechanics; a conductivity of 1e3 W/(m K) and its xmin end held
+/// at 20 °C, so a gradient crosses the lattice within the run and the
+/// bonds across the cuts expand with their ghost spheres' temperatures):
+/// on 2 and 3 ranks the spheres' temperatures and displacements at every
+/// output are those of one rank to 1e-9 of their largest value (the
+/// thermal solve's round-off differs with the partition).
+#[test]
+fn a_cut_bar_expands_with_its_temperatures_on_one_two_three_ranks() {
+    let dir = out_dir("particle-split-expansion");
+    let scen = long_bar("fede-expansion-bar.toml")
+        .replace("conductivity = 1.0", "conductivity = 1e3")
+        .replace("end_time = 1e-4", "end_time = 4e-5")
+        .replace("every = 4", "every = 2")
+        .replace(
+            "[thermal]\ntheta = 1.0\n",
+            "[thermal]\ntheta = 1.0\n\n[[thermal.bc]]\nkind = \"temperature\"\nset = \"bar.xmin\"\nvalue = 20.0\n",
+        );
+    assert!(scen.contains("bar.xmin") && scen.contains("1e3"));
+    let path = write(&dir, &scen);
+    let one = dir.join("ranks-1");
+    run_ok(1, &path, &one, &[]);
+    let (t1, p1) = particle_series(&one);
+    assert_eq!(t1.len(), 5);
+    let (disp, temp) = (&p1[0], &p1[2]);
+    let k = t1.len() - 1;
+    let (lo, hi) = temp[k]
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+            (a.min(x), b.max(x))
+        });
+    assert!(
+        hi - lo > 10.0,
+        "no gradient across the spheres: {lo} to {hi}"
+    );
+    let largest = |v: &[Vec<f64>]| v.iter().flatten().fold(0.0f64, |a, &x| a.max(x.abs()));
+    let (u_max, t_max) = (largest(disp), largest(temp));
+    assert!(u_max > 0.0);
+    for ranks in [2, 3] {
+        let out = dir.join(format!("ranks-{ranks}"));
+        let owned = run_counting(ranks, &path, &out, &[]);
+        assert!(owned.iter().all(|&n| n > 0), "{ranks} ranks: {owned:?}");
+        let (tn, pn) = particle_series(&out);
+        assert_eq!(tn, t1);
+        let off = |a: &[Vec<f64>], b: &[Vec<f64>]| {
+            a.iter()
+                .flatten()
+                .zip(b.iter().flatten())
+                .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
+        };
+        let (du, dt) = (off(disp, &pn[0]) / u_max, off(temp, &pn[2]) / t_max);
+        eprintln!("{ranks} ranks: displacements within {du:.2e}, temperatures {dt:.2e}");
+        assert!(du < 1e-9 && dt < 1e-9, "{ranks} ranks: {du:e} {dt:e}");
+    }
+}

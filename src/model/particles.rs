@@ -2,8 +2,9 @@
 //! set's elements leave the body's FE mesh and become a bonded sphere
 //! lattice ([`crate::mesh::particle_region`]) linked to the remaining
 //! elements by ghost particles. The lattice is part of the body's source
-//! mesh, like a jointed body's joints; a body with particles is never
-//! split over ranks, so its particles, bonds and links live with it.
+//! mesh, like a jointed body's joints (every rank reads it, as the source
+//! mesh); a rank makes the spheres, bonds and links of its part of the
+//! body (`parallel::spheres`).
 
 use super::{BodySource, Model};
 use crate::mesh::particle_region::{particle_region, ParticleRegion};

@@ -198,17 +198,8 @@ impl DomainParticles {
                 .map_err(|e| Error::Mechanics(format!("body `{}`: particles: {e}", body.name)))
                 .and_then(|halo| {
                     here.map(|h| {
-                        let firsts = [first_bond, first_link];
-                        BodyParticles::new(
-                            model,
-                            b,
-                            h,
-                            halo,
-                            &local_node,
-                            &node_x,
-                            offsets[b],
-                            firsts,
-                        )
+                        let firsts = [offsets[b], first_bond, first_link];
+                        BodyParticles::new(model, b, h, halo, &local_node, &node_x, firsts)
                     })
                     .transpose()
                 });
@@ -590,9 +581,8 @@ impl DomainParticles {
 impl BodyParticles {
     /// Body `b`'s particles `held` here, their ghosts forwarded by `halo`;
     /// `local_node` maps global node ids to local ones (reference
-    /// positions `node_x`), `first` is the
-    /// body's first particle number and `firsts` its first bond's and
-    /// link's. Errors name the body.
+    /// positions `node_x`), `firsts` the body's first particle's, bond's
+    /// and link's global numbers. Errors name the body.
     fn new(
         model: &Model,
         b: usize,
@@ -600,8 +590,7 @@ impl BodyParticles {
         halo: Halo,
         local_node: &std::collections::HashMap<u32, u32>,
         node_x: &[Vector3<f64>],
-        first: u64,
-        firsts: [u64; 2],
+        firsts: [u64; 3],
     ) -> Result<BodyParticles> {
         let body = &model.bodies[b];
         let p = model.body_particles(body).expect("a body with particles");
@@ -693,9 +682,9 @@ impl BodyParticles {
         let (n_bonds, n_links) = (bonds.len(), links.len());
         Ok(BodyParticles {
             body: b as u32,
-            first,
-            first_bond: firsts[0],
-            first_link: firsts[1],
+            first: firsts[0],
+            first_bond: firsts[1],
+            first_link: firsts[2],
             sphere_id,
             bond_id: held.bonds.clone(),
             link_id: held.links.clone(),

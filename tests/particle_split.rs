@@ -330,3 +330,70 @@ fn a_cut_bar_expands_with_its_temperatures_on_one_two_three_ranks() {
         assert!(du < 1e-9 && dt < 1e-9, "{ranks} ranks: {du:e} {dt:e}");
     }
 }
+
+/// Three FE | DE | FE bars (`scenarios/fede-bar.toml`'s, small, so each
+/// held whole), the third shot across the others at 200 m/s and pulled at
+/// 1 MPa, with repartitions every 2 steps at any imbalance: on two ranks
+/// bodies change owner, their spheres, bonds and links travel with them,
+/// and the particle series and the nodes' displacements are bitwise those
+/// of one rank.
+#[test]
+fn particles_travel_with_their_bodies_in_a_repartition() {
+    let text = std::fs::read_to_string(root().join("scenarios/fede-bar.toml")).unwrap();
+    let body_at = text.find("[[bodies]]").unwrap();
+    let mech_at = text.find("[mechanics]").unwrap();
+    let body = &text[body_at..mech_at];
+    let copy = |name: &str, extra: &str| {
+        body.replace("name = \"bar\"", &format!("name = \"{name}\""))
+            .replace("particles =", &format!("{extra}\nparticles ="))
+    };
+    let scen = format!(
+        "{}{body}{}{}[mechanics]\ndamping = 0.0\n\n[mechanics.rebalance]\nevery = 2\nthreshold = 1.0\n\n\
+         [[mechanics.bc]]\nkind = \"traction\"\nset = \"bar3.xmax\"\nvalue = [1e6, 0.0, 0.0]\n\n\
+         [output]\nevery = 2\n",
+        &text[..body_at],
+        copy("bar2", "translate = [0.0, 3e-3, 0.0]"),
+        copy(
+            "bar3",
+            "translate = [0.0, -6e-3, 0.0]\ninitial_velocity = [0.0, 200.0, 0.0]"
+        ),
+    )
+    .replace("end_time = 5e-5", "end_time = 1e-4");
+    let dir = out_dir("particle-split-rebalance");
+    let path = dir.join("bars.toml");
+    std::fs::write(&path, scen).unwrap();
+    let (o1, o2) = (dir.join("one"), dir.join("two"));
+    run_ok(1, &path, &o1, &[]);
+    let summary = run_ok(2, &path, &o2, &[]);
+    let line = summary
+        .lines()
+        .find(|l| l.trim_start().starts_with("balance"))
+        .unwrap_or_else(|| panic!("no balance line in\n{summary}"));
+    let words: Vec<&str> = line.split_whitespace().collect();
+    let before = |w: &str| -> u64 {
+        let i = words.iter().position(|x| x.starts_with(w)).unwrap();
+        words[i - 1].parse().unwrap()
+    };
+    let (done, moved) = (before("repartition"), before("bodies"));
+    eprintln!("2 ranks: {done} repartition(s), {moved} bodies moved");
+    assert!(done >= 1 && moved > 0, "{line}");
+    let series = |dir: &Path| {
+        let h5 = dir.join("bars_particles.h5");
+        let times = fdem::io::read_times(&h5).unwrap();
+        let f: Vec<Vec<f64>> = ["displacement", "velocity"]
+            .iter()
+            .flat_map(|name| {
+                (0..times.len()).map(|k| fdem::io::read_node_field_step(&h5, name, k).unwrap())
+            })
+            .collect();
+        (times, f)
+    };
+    let (a, b) = (series(&o1), series(&o2));
+    assert_eq!(a.0.len(), 11);
+    assert!(a == b, "the particle series differs on two ranks");
+    // The shot bar moved 20 mm (its spheres too: their mean y displacement).
+    let k = a.0.len() - 1;
+    let uy: f64 = a.1[k].chunks_exact(3).skip(128).map(|u| u[1]).sum::<f64>() / 64.0;
+    assert!((uy - 200.0 * 1e-4).abs() < 1e-3 * 200.0 * 1e-4, "{uy}");
+    assert!(read_mech(&o1, "bars").disp == read_mech(&o2, "bars").disp);
+}

@@ -129,6 +129,8 @@ pub(super) struct Snapshot {
     /// Per field (a checkpoint dataset's name): width, this rank's first
     /// row and its block of rows.
     fields: Vec<(&'static str, usize, u64, Vec<f64>)>,
+    /// The bonded particles' rows (issue 21).
+    pub particles: Option<super::particle_checkpoint::ParticleSnapshot>,
 }
 
 impl Snapshot {
@@ -160,6 +162,7 @@ impl Snapshot {
             head: c.head,
             total,
             fields,
+            particles: None,
         }
     }
 
@@ -344,12 +347,19 @@ pub(super) fn restore_thermal(
         };
         (part.nodes_to_rows(&t0), part.nodes_to_rows(&ts), rs)
     });
-    // The spheres' rows (issue 21; a repartition never holds particles).
-    if let Saved::File(r) = saved {
-        let acc = account
-            .as_mut()
-            .map(|(a, b, c)| (&mut a[..], &mut b[..], &mut c[..]));
-        super::particle_checkpoint::restore_heat(comm, model, part, r, &mut t, acc)?;
+    // The spheres' rows (issue 21).
+    let acc = account
+        .as_mut()
+        .map(|(a, b, c)| (&mut a[..], &mut b[..], &mut c[..]));
+    match saved {
+        Saved::File(r) => {
+            super::particle_checkpoint::restore_heat(comm, model, part, r, &mut t, acc)?;
+        }
+        Saved::Memory(s) => {
+            if let Some(p) = &s.particles {
+                p.restore_heat(comm, model, part, &mut t, acc);
+            }
+        }
     }
     let h = ck.heat;
     let heat = EnergyAccount {

@@ -2,15 +2,19 @@
 //! its particles (`io::checkpoint_particles`: the spheres' motion, the
 //! bonds' and links' incremental states, the spheres' thermal rows) and
 //! how a restart puts them back, by global number, so a checkpoint of P
-//! ranks restarts on Q. The spheres' temperatures reach the bonds'
+//! ranks restarts on Q; a repartition holds the same rows in memory
+//! ([`ParticleSnapshot`]). The spheres' temperatures reach the bonds'
 //! expansion afresh from the restored thermal rows
 //! (`particle_output::couple_particle_temperatures`).
 
 use mpi::topology::SimpleCommunicator;
 
 use crate::error::Result;
-use crate::io::checkpoint_particles::{GlobalRows, ParticleCheckpoint, SAVED_PARTICLE_HEAT};
+use crate::io::checkpoint_particles::{
+    GlobalRows, ParticleCheckpoint, SAVED_BOND, SAVED_PARTICLE, SAVED_PARTICLE_HEAT,
+};
 use crate::model::Model;
+use crate::parallel::exchange::{from_blocks, to_blocks};
 use crate::parallel::{agree, Part};
 use crate::thermal::particles::ParticleHeat;
 use crate::thermal::ThermalSystem;
@@ -118,6 +122,19 @@ pub(super) fn restore_heat(
     let ids: Vec<u32> = gid.iter().map(|&g| g as u32).collect();
     let rows = r.file.particle_heat(&ids, model.particle_offsets().1);
     let rows = agree(comm, rows.map_err(|e| unreadable(r.file.path(), e)))?;
+    put_heat(&ph, part, &rows, t, account);
+    Ok(())
+}
+
+/// Writes the spheres' saved heat rows `rows` (in the order of `ph`'s
+/// rows) into the owned rows `t` and the account.
+fn put_heat(
+    ph: &ParticleHeat,
+    part: &Part,
+    rows: &[f64],
+    t: &mut [f64],
+    account: Option<(&mut [f64], &mut [f64], &mut [f64])>,
+) {
     let lo = part.owned_range().0;
     let mut account = account;
     let mut k = 0;
@@ -136,5 +153,92 @@ pub(super) fn restore_heat(
             k += 1;
         }
     }
-    Ok(())
+}
+
+/// One set of rows by global number in blocks over the ranks.
+struct Blocks {
+    width: usize,
+    lo: u64,
+    rows: Vec<f64>,
+    total: u64,
+}
+
+impl Blocks {
+    /// Collective. `r`'s rows (`width` values each) moved into blocks.
+    fn take(comm: &SimpleCommunicator, r: &GlobalRows, width: usize) -> Blocks {
+        let (lo, rows) = to_blocks(comm, &r.gid, &r.values, width, r.total);
+        Blocks {
+            width,
+            lo,
+            rows,
+            total: r.total,
+        }
+    }
+
+    /// Collective. The rows of the global numbers `ids`.
+    fn rows(&self, comm: &SimpleCommunicator, ids: &[u32]) -> Vec<f64> {
+        from_blocks(comm, (self.lo, &self.rows), self.width, self.total, ids)
+    }
+}
+
+/// The particles of a run held in memory by global number while the
+/// ranks repartition (the rows a checkpoint holds): every rank's in
+/// blocks, read back by the new owners.
+pub(super) struct ParticleSnapshot {
+    motion: Option<[Blocks; 3]>,
+    heat: Option<Blocks>,
+}
+
+impl ParticleSnapshot {
+    /// Collective. This rank's particles moved into blocks (None without
+    /// particles).
+    pub fn take(
+        comm: &SimpleCommunicator,
+        model: &Model,
+        part: &Part,
+        sys: Option<&ThermalSystem>,
+        mech: Option<&Mechanics>,
+    ) -> Result<Option<ParticleSnapshot>> {
+        let Some(c) = capture(model, part, sys, mech)? else {
+            return Ok(None);
+        };
+        let motion = c.motion.map(|m| {
+            [
+                Blocks::take(comm, &m[0], SAVED_PARTICLE),
+                Blocks::take(comm, &m[1], SAVED_BOND),
+                Blocks::take(comm, &m[2], SAVED_BOND),
+            ]
+        });
+        let heat = c.heat.map(|h| Blocks::take(comm, &h, SAVED_PARTICLE_HEAT));
+        Ok(Some(ParticleSnapshot { motion, heat }))
+    }
+
+    /// Collective. The spheres' motion and the bonds' and links' states
+    /// into the new domain.
+    pub fn restore_motion(&self, comm: &SimpleCommunicator, mech: &mut Mechanics) {
+        if let Some(m) = &self.motion {
+            let (ids, _) = mech.domain.particle_ids();
+            let rows = [0, 1, 2].map(|k| m[k].rows(comm, &ids[k]));
+            mech.domain.restore_particles(&rows);
+        }
+    }
+
+    /// Collective. The spheres' owned thermal rows of the new `part`
+    /// into `t` and the account, as [`restore_heat`].
+    pub fn restore_heat(
+        &self,
+        comm: &SimpleCommunicator,
+        model: &Model,
+        part: &Part,
+        t: &mut [f64],
+        account: Option<(&mut [f64], &mut [f64], &mut [f64])>,
+    ) {
+        if let Some(h) = &self.heat {
+            let ph = ParticleHeat::new(model, part);
+            let (gid, _, _) = ph.rows(part, None);
+            let ids: Vec<u32> = gid.iter().map(|&g| g as u32).collect();
+            let rows = h.rows(comm, &ids);
+            put_heat(&ph, part, &rows, t, account);
+        }
+    }
 }

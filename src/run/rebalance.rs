@@ -343,9 +343,7 @@ impl Stages<'_, '_> {
     /// current positions, measure the balance, and repartition when it is
     /// past the threshold.
     pub(super) fn rebalance(&mut self, step: u64, out: &mut Output) -> Result<()> {
-        // Particles (issue 21) do not travel with a repartition yet: such a
-        // model keeps its first partition.
-        if !self.balance.due(step) || self.model.has_particles() {
+        if !self.balance.due(step) {
             return Ok(());
         }
         let Some(mech) = self.mech.as_mut() else {
@@ -391,6 +389,14 @@ impl Stages<'_, '_> {
         if all_same == 1 {
             return Ok(());
         }
+        // The bonded particles travel by global number (issue 21).
+        let particles = super::particle_checkpoint::ParticleSnapshot::take(
+            comm,
+            model,
+            &self.part,
+            self.sys.as_ref(),
+            Some(&*mech),
+        )?;
         let captured = checkpoint::capture(
             comm,
             model,
@@ -400,7 +406,8 @@ impl Stages<'_, '_> {
             step,
             &self.contacts.set,
         )?;
-        let snapshot = Snapshot::take(comm, model, &self.part, captured);
+        let mut snapshot = Snapshot::take(comm, model, &self.part, captured);
+        snapshot.particles = particles;
         // What the old stages counted goes on with the new ones.
         let old = self.mech.take().expect("mechanics");
         let (counters, substeps_per_step) = (old.domain.counters, old.substeps_per_step);
@@ -439,6 +446,9 @@ impl Stages<'_, '_> {
             substeps_per_step: n,
         };
         checkpoint::restore_mechanics(comm, part, Saved::Memory(&snapshot), &mut mech)?;
+        if let Some(p) = &snapshot.particles {
+            p.restore_motion(comm, &mut mech);
+        }
         // The counts go on; the detections of the rebuild are added.
         let fresh = mech.domain.counters;
         mech.domain.counters = counters;

@@ -331,35 +331,50 @@ fn a_cut_bar_expands_with_its_temperatures_on_one_two_three_ranks() {
     }
 }
 
-/// Three FE | DE | FE bars (`scenarios/fede-bar.toml`'s, small, so each
-/// held whole), the third shot across the others at 200 m/s and pulled at
-/// 1 MPa, with repartitions every 2 steps at any imbalance: on two ranks
-/// bodies change owner, their spheres, bonds and links travel with them,
-/// and the particle series and the nodes' displacements are bitwise those
-/// of one rank.
-#[test]
-fn particles_travel_with_their_bodies_in_a_repartition() {
-    let text = std::fs::read_to_string(root().join("scenarios/fede-bar.toml")).unwrap();
+/// The scenario `file` with its bar repeated three times: `bar`, `bar2`
+/// 3 mm beside it, `bar3` 6 mm on the other side shot across both at
+/// 200 m/s and pulled at 1 MPa; no damping, repartitions every 2 steps at
+/// any imbalance, outputs every 2 steps.
+fn three_bars(file: &str, after_body: &str) -> String {
+    let text = std::fs::read_to_string(root().join("scenarios").join(file)).unwrap();
     let body_at = text.find("[[bodies]]").unwrap();
-    let mech_at = text.find("[mechanics]").unwrap();
-    let body = &text[body_at..mech_at];
+    let end_at = text.find(after_body).unwrap();
+    let body = &text[body_at..end_at];
     let copy = |name: &str, extra: &str| {
         body.replace("name = \"bar\"", &format!("name = \"{name}\""))
             .replace("particles =", &format!("{extra}\nparticles ="))
     };
-    let scen = format!(
-        "{}{body}{}{}[mechanics]\ndamping = 0.0\n\n[mechanics.rebalance]\nevery = 2\nthreshold = 1.0\n\n\
-         [[mechanics.bc]]\nkind = \"traction\"\nset = \"bar3.xmax\"\nvalue = [1e6, 0.0, 0.0]\n\n\
-         [output]\nevery = 2\n",
+    let out = format!(
+        "{}{body}{}{}{}\n[[mechanics.bc]]\nkind = \"traction\"\nset = \"bar3.xmax\"\n\
+         value = [1e6, 0.0, 0.0]\n",
         &text[..body_at],
         copy("bar2", "translate = [0.0, 3e-3, 0.0]"),
         copy(
             "bar3",
             "translate = [0.0, -6e-3, 0.0]\ninitial_velocity = [0.0, 200.0, 0.0]"
         ),
+        &text[end_at..],
+    );
+    let damping = out
+        .lines()
+        .find(|l| l.starts_with("damping = "))
+        .unwrap()
+        .to_string();
+    let every = out
+        .lines()
+        .find(|l| l.starts_with("every = "))
+        .unwrap()
+        .to_string();
+    out.replace(
+        &damping,
+        "damping = 0.0\n\n[mechanics.rebalance]\nevery = 2\nthreshold = 1.0\n",
     )
-    .replace("end_time = 5e-5", "end_time = 1e-4");
-    let dir = out_dir("particle-split-rebalance");
+    .replace(&every, "every = 2")
+}
+
+/// Runs `scen` as `<dir>/bars.toml` on one and two ranks; asserts that two
+/// ranks repartitioned and moved bodies. Returns the output directories.
+fn one_and_two_rebalanced(dir: &Path, scen: &str) -> (PathBuf, PathBuf) {
     let path = dir.join("bars.toml");
     std::fs::write(&path, scen).unwrap();
     let (o1, o2) = (dir.join("one"), dir.join("two"));
@@ -377,18 +392,34 @@ fn particles_travel_with_their_bodies_in_a_repartition() {
     let (done, moved) = (before("repartition"), before("bodies"));
     eprintln!("2 ranks: {done} repartition(s), {moved} bodies moved");
     assert!(done >= 1 && moved > 0, "{line}");
-    let series = |dir: &Path| {
-        let h5 = dir.join("bars_particles.h5");
-        let times = fdem::io::read_times(&h5).unwrap();
-        let f: Vec<Vec<f64>> = ["displacement", "velocity"]
-            .iter()
-            .flat_map(|name| {
-                (0..times.len()).map(|k| fdem::io::read_node_field_step(&h5, name, k).unwrap())
-            })
-            .collect();
-        (times, f)
-    };
-    let (a, b) = (series(&o1), series(&o2));
+    (o1, o2)
+}
+
+/// The particle series' fields `names`, each output's rows in turn.
+fn bar_series(dir: &Path, names: &[&str]) -> (Vec<f64>, Vec<Vec<f64>>) {
+    let h5 = dir.join("bars_particles.h5");
+    let times = fdem::io::read_times(&h5).unwrap();
+    let f = names
+        .iter()
+        .flat_map(|name| {
+            (0..times.len()).map(|k| fdem::io::read_node_field_step(&h5, name, k).unwrap())
+        })
+        .collect();
+    (times, f)
+}
+
+/// Three FE | DE | FE bars (`scenarios/fede-bar.toml`'s, small, so each
+/// held whole; [`three_bars`]): on two ranks bodies change owner, their
+/// spheres, bonds and links travel with them, and the particle series and
+/// the nodes' displacements are bitwise those of one rank.
+#[test]
+fn particles_travel_with_their_bodies_in_a_repartition() {
+    let dir = out_dir("particle-split-rebalance");
+    let scen =
+        three_bars("fede-bar.toml", "[mechanics]").replace("end_time = 5e-5", "end_time = 1e-4");
+    let (o1, o2) = one_and_two_rebalanced(&dir, &scen);
+    let names = ["displacement", "velocity"];
+    let (a, b) = (bar_series(&o1, &names), bar_series(&o2, &names));
     assert_eq!(a.0.len(), 11);
     assert!(a == b, "the particle series differs on two ranks");
     // The shot bar moved 20 mm (its spheres too: their mean y displacement).
@@ -396,4 +427,45 @@ fn particles_travel_with_their_bodies_in_a_repartition() {
     let uy: f64 = a.1[k].chunks_exact(3).skip(128).map(|u| u[1]).sum::<f64>() / 64.0;
     assert!((uy - 200.0 * 1e-4).abs() < 1e-3 * 200.0 * 1e-4, "{uy}");
     assert!(read_mech(&o1, "bars").disp == read_mech(&o2, "bars").disp);
+}
+
+/// The same with heat (`scenarios/fede-expansion-bar.toml`'s bars, 1e3
+/// W/(m K), each bar's xmin end held at 20 °C from 120 °C, the bonds
+/// expanding): the spheres' temperatures travel with them in the
+/// repartitions, and on two ranks their temperatures and displacements
+/// are those of one rank to 1e-9 of the largest (the thermal solve's
+/// round-off differs with the partition).
+#[test]
+fn particle_temperatures_travel_with_their_bodies_in_a_repartition() {
+    let dir = out_dir("particle-split-rebalance-heat");
+    let mut scen = three_bars("fede-expansion-bar.toml", "[thermal]")
+        .replace("conductivity = 1.0", "conductivity = 1e3");
+    for bar in ["bar", "bar2", "bar3"] {
+        scen.push_str(&format!(
+            "\n[[thermal.bc]]\nkind = \"temperature\"\nset = \"{bar}.xmin\"\nvalue = 20.0\n"
+        ));
+    }
+    let (o1, o2) = one_and_two_rebalanced(&dir, &scen);
+    let names = ["displacement", "temperature"];
+    let (a, b) = (bar_series(&o1, &names), bar_series(&o2, &names));
+    assert_eq!(a.0, b.0);
+    let n = a.0.len();
+    assert_eq!(n, 11);
+    let largest = |v: &[Vec<f64>]| v.iter().flatten().fold(0.0f64, |m, &x| m.max(x.abs()));
+    let off = |x: &[Vec<f64>], y: &[Vec<f64>]| {
+        x.iter()
+            .flatten()
+            .zip(y.iter().flatten())
+            .fold(0.0f64, |m, (p, q)| m.max((p - q).abs()))
+    };
+    let (du, dt) = (
+        off(&a.1[..n], &b.1[..n]) / largest(&a.1[..n]),
+        off(&a.1[n..], &b.1[n..]) / largest(&a.1[n..]),
+    );
+    eprintln!("2 ranks: displacements within {du:.2e}, temperatures {dt:.2e}");
+    assert!(du < 1e-9 && dt < 1e-9, "{du:e} {dt:e}");
+    // The spheres cooled from 120 °C: their temperatures moved with them.
+    let t = &a.1[2 * n - 1];
+    let lo = t.iter().copied().fold(f64::INFINITY, f64::min);
+    assert!(lo < 110.0, "the spheres did not cool: {lo}");
 }

@@ -188,3 +188,81 @@ impl Part {
         self.starts[s.ghost_owner[k] as usize + 1] - s.ghost_row_from_end[k] as usize
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::generate::box_mesh;
+    use crate::mesh::particle_region::particle_region;
+    use crate::mesh::without::without_elements;
+
+    /// A bar 0..12r × 0..4r × 0..4r of elements of side r, x in [4r, 8r]
+    /// particles (2 × 2 × 2 spheres of radius r), cut at x = 6r for the
+    /// spheres and at x = 3r for the elements: the rank owns the left
+    /// spheres and holds the elements left of the cut, not the interface's.
+    #[test]
+    fn a_rank_left_of_the_cut_gets_the_bonds_links_and_nodes_it_needs() {
+        let r = 1e-3;
+        let mut m = box_mesh([0.0; 3], [12.0 * r, 4.0 * r, 4.0 * r], r).unwrap();
+        m.add_box_set("middle", [4.0 * r, 0.0, 0.0], [8.0 * r, 4.0 * r, 4.0 * r])
+            .unwrap();
+        let mut in_set = vec![false; m.tets.len()];
+        m.elem_sets["middle"]
+            .iter()
+            .for_each(|&e| in_set[e as usize] = true);
+        let (fe, index) = without_elements(&m, &in_set);
+        let region = particle_region(&m, "middle", &in_set, &index, r).unwrap();
+        assert_eq!(region.centres.len(), 8);
+        let left = |s: u32| region.centres[s as usize][0] < 6.0 * r;
+        let owned: Vec<u32> = (0..8).filter(|&s| left(s)).collect();
+        assert_eq!(owned.len(), 4);
+        let centroid_x = |e: usize| {
+            fe.tets[e]
+                .iter()
+                .map(|&n| fe.nodes[n as usize][0])
+                .sum::<f64>()
+                / 4.0
+        };
+        let held: Vec<bool> = (0..fe.tets.len())
+            .map(|e| centroid_x(e) < 3.0 * r)
+            .collect();
+        let mut used = vec![false; fe.nodes.len()];
+        for (_, t) in fe.tets.iter().enumerate().filter(|(e, _)| held[*e]) {
+            t.iter().for_each(|&n| used[n as usize] = true);
+        }
+        let (s, wanted) = PartSpheres::select(0, &region, owned.clone(), &held, &used, &fe.tets);
+        // The bonds with an end left of the cut, in the body's order.
+        let with_left: Vec<u32> = (0..region.bonds.len() as u32)
+            .filter(|&k| {
+                let b = &region.bonds[k as usize];
+                left(b.i) || left(b.j)
+            })
+            .collect();
+        assert!(with_left.len() < region.bonds.len());
+        assert_eq!(s.bonds, with_left);
+        // The right spheres are ghosts (each bonded to a left one).
+        let right: Vec<u32> = (0..8).filter(|&s| !left(s)).collect();
+        assert_eq!(s.ghosts, right);
+        // The links here are those of the owned spheres (the right
+        // interface's elements have no node here).
+        let mine: Vec<u32> = (0..region.links.len() as u32)
+            .filter(|&k| left(region.links[k as usize].sphere))
+            .collect();
+        assert!(!mine.is_empty());
+        assert_eq!(s.links, mine);
+        // Their elements' nodes are here or wanted, and some are wanted (x = 4r).
+        assert!(!wanted.is_empty());
+        assert!(wanted.iter().all(|&n| !used[n as usize]));
+        for &k in &s.links {
+            let l = &region.links[k as usize];
+            for n in fe.tets[l.point_elem as usize]
+                .iter()
+                .chain(&fe.tets[l.ghost_elem as usize])
+            {
+                assert!(used[*n as usize] || wanted.binary_search(n).is_ok());
+            }
+        }
+        // No element at the interface is held: no heat link is assembled here.
+        assert!(s.heat_links.is_empty());
+    }
+}

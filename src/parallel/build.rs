@@ -179,8 +179,8 @@ impl Part {
                     message: e.to_string(),
                 });
                 let mut ranks = agree(comm, ranks)?;
-                // Spheres: the cut of the start, which the saved parts come from (no
-                // repartition moves a body with particles).
+                // A split body's spheres: the cut of the start, as its elements had
+                // it (repartitions since may have moved that cut; any cut is correct).
                 if split_spheres {
                     let cut = super::rcb::rcb(comm, &objects, IMBALANCE).map_err(Error::Partition);
                     let cut = agree(comm, cut)?;

@@ -196,6 +196,7 @@ impl ExplicitDomain {
     /// reorder elements so those touching the halo come first.
     pub(super) fn detect(&mut self, comm: &SimpleCommunicator) -> Result<()> {
         self.flush_friction();
+        self.cracks_marked = false;
         let clock = std::time::Instant::now();
         let linearized_before = self.linearized.len();
         let planes_before = self.pair_planes.len();

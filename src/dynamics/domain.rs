@@ -193,6 +193,11 @@ pub struct ExplicitDomain {
     pub(super) friction_work: f64,
     pub(super) active_pairs: u64,
     pub(super) redetect: bool,
+    /// Crack faces became boundary faces since the last detection: the
+    /// candidates must be found again before the next substep, so that
+    /// every pair touching a crack face is a candidate whenever it
+    /// overlaps (and a restart, which detects afresh, repeats the run).
+    pub(super) cracks_marked: bool,
     /// Counters.
     pub counters: MechanicsCounters,
 }
@@ -429,6 +434,7 @@ impl ExplicitDomain {
             friction_work: 0.0,
             active_pairs: 0,
             redetect: false,
+            cracks_marked: false,
             counters: MechanicsCounters::default(),
         };
         dom.pieces = Pieces::new(&dom.part_tets);

@@ -395,7 +395,9 @@ impl super::ExplicitDomain {
     /// two faces meet through its crack contact ([`crate::fracture::crack`]).
     pub(super) fn mark_cracks(&mut self) {
         let own = &mut self.part_tets;
-        for (tets, sides) in self.joints.take_new_cracks() {
+        let cracks = self.joints.take_new_cracks();
+        self.cracks_marked |= !cracks.is_empty();
+        for (tets, sides) in cracks {
             for (gid, face) in tets.iter().zip(&sides) {
                 // Every corner here, as on one rank: a continuum node of a
                 // body jointed on a set may be in tets here though the

@@ -50,7 +50,10 @@ impl ExplicitDomain {
             }
             let local = self.substep(comm);
             // Agree on errors and on the need to re-detect contacts.
-            let moved = if self.penalty.is_some() {
+            // New crack faces call for candidates at once (as any rank's).
+            let moved = if self.penalty.is_some() && self.cracks_marked {
+                f64::INFINITY
+            } else if self.penalty.is_some() {
                 self.x[..self.n_owned]
                     .iter()
                     .zip(&self.x_detect)

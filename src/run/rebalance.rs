@@ -72,10 +72,7 @@ impl Balance {
             .mechanics
             .as_ref()
             .map(|m| m.rebalance)
-            .filter(|r| r.every > 0 && size > 1)
-            // Not yet with joints: their damage would not move with the
-            // bodies (a repartition rebuilds the parts from the model).
-            .filter(|_| !model.meshes.iter().any(|m| m.joints.is_some()));
+            .filter(|r| r.every > 0 && size > 1);
         Balance {
             spec,
             ..Balance::default()
@@ -408,6 +405,8 @@ impl Stages<'_, '_> {
         )?;
         let mut snapshot = Snapshot::take(comm, model, &self.part, captured);
         snapshot.particles = particles;
+        // The joints' damage travels by joint number (issue 19).
+        let joints = super::joint_migration::JointSnapshot::take(comm, model, mech);
         // What the old stages counted goes on with the new ones.
         let old = self.mech.take().expect("mechanics");
         let (counters, substeps_per_step) = (old.domain.counters, old.substeps_per_step);
@@ -431,10 +430,9 @@ impl Stages<'_, '_> {
 
         let all_moved = bodies_moved(comm, &self.part.whole_bodies, &part);
         self.part = part;
-        let part = &self.part;
 
         let clock = Instant::now();
-        let (domain, n) = ExplicitDomain::new(comm, model, part, model.dt)?;
+        let (domain, n) = ExplicitDomain::new(comm, model, &self.part, model.dt)?;
         if n != substeps_per_step {
             return Err(Error::Mechanics(format!(
                 "the repartition at step {step} changed the substeps per step from \
@@ -445,10 +443,14 @@ impl Stages<'_, '_> {
             domain,
             substeps_per_step: n,
         };
-        checkpoint::restore_mechanics(comm, part, Saved::Memory(&snapshot), &mut mech)?;
+        checkpoint::restore_mechanics(comm, &self.part, Saved::Memory(&snapshot), &mut mech)?;
         if let Some(p) = &snapshot.particles {
             p.restore_motion(comm, &mut mech);
         }
+        if let Some(j) = &joints {
+            j.restore(comm, model, &mut self.part, &mut mech);
+        }
+        let part = &self.part;
         // The counts go on; the detections of the rebuild are added.
         let fresh = mech.domain.counters;
         mech.domain.counters = counters;

@@ -33,6 +33,27 @@ pub fn vertex_classes(n: usize, ties: impl IntoIterator<Item = (u32, u32)>) -> V
     (0..n as u32).map(|g| root(&mut parent, g)).collect()
 }
 
+/// The class (lowest id joined to it) of every id that appears in the
+/// corner pairs `ties`, for ids scattered over a large range (global node
+/// ids): the union-find of [`vertex_classes`] over the ids numbered
+/// densely in ascending order, so the lowest dense index is the lowest id.
+pub fn id_classes(
+    ties: impl IntoIterator<Item = (u32, u32)> + Clone,
+) -> std::collections::HashMap<u32, u32> {
+    let mut ids: Vec<u32> = ties.clone().into_iter().flat_map(|(a, b)| [a, b]).collect();
+    ids.sort_unstable();
+    ids.dedup();
+    let dense = |g: u32| ids.binary_search(&g).expect("an id of the ties") as u32;
+    let class = vertex_classes(
+        ids.len(),
+        ties.into_iter().map(|(a, b)| (dense(a), dense(b))),
+    );
+    ids.iter()
+        .zip(&class)
+        .map(|(&g, &c)| (g, ids[c as usize]))
+        .collect()
+}
+
 /// Whether two tets (corners as node classes) shared no vertex.
 pub fn share_no_vertex(a: &[u32; 4], b: &[u32; 4]) -> bool {
     a.iter().all(|v| !b.contains(v))
@@ -66,6 +87,18 @@ mod tests {
                 assert_eq!(share_no_vertex(&of(s), &of(t)), !shared);
             }
         }
+    }
+
+    #[test]
+    fn scattered_ids_take_their_lowest_tied_id() {
+        let c = id_classes([(900, 40), (7, 900), (5000, 6000)]);
+        assert_eq!(c.len(), 5);
+        for g in [7, 40, 900] {
+            assert_eq!(c[&g], 7);
+        }
+        assert_eq!(c[&5000], 5000);
+        assert_eq!(c[&6000], 5000);
+        assert!(id_classes(std::iter::empty::<(u32, u32)>()).is_empty());
     }
 
     #[test]

@@ -416,18 +416,24 @@ fn make_bodies(
                 m.spheres.push(s);
             }
         }
+        // A split body's copies by their class over the joints at their
+        // vertices (those intact from the start).
         let classes = match &mesh.joints {
             Some(j) if !whole && model.thermal_active => {
-                super::tied_rows::mesh_classes(mesh.nodes.len(), j)
+                let here: Vec<u32> = (0..mesh.nodes.len() as u32)
+                    .filter(|&n| used[n as usize] || wanted[n as usize])
+                    .collect();
+                let at = super::tied_rows::joints_at(j, &here);
+                super::tied_rows::local_classes(j, &here, &at, |k| !j.broken[k])
             }
-            _ => Vec::new(),
+            _ => HashMap::new(),
         };
         for (n, &u) in used.iter().enumerate() {
             let ghost = !u && wanted.get(n).copied().unwrap_or(false);
             if !u && !ghost {
                 continue;
             }
-            if let Some(&c) = classes.get(n) {
+            if let Some(&c) = classes.get(&(n as u32)) {
                 m.class_of.insert(n0 + n as u32, n0 + c);
             }
             m.node_gid.push(n0 + n as u32);
@@ -466,45 +472,16 @@ fn make_bodies(
     Ok(m)
 }
 
-/// The nodes tied by the joints `joints` (global ids; each pair of
-/// corners a[i], b[i] is one node of the continuous mesh while the joint
-/// is intact), each mapped to the lowest id of its class.
+/// The nodes tied by the intact joints of `joints` (global ids; each
+/// pair of corners a[i], b[i] is one node of the continuous mesh while
+/// the joint is intact), each mapped to the lowest id of its class.
 fn joint_classes(joints: &[super::PartJoint]) -> HashMap<u32, u32> {
-    let mut parent: HashMap<u32, u32> = HashMap::new();
-    fn root(parent: &mut HashMap<u32, u32>, g: u32) -> u32 {
-        let mut r = g;
-        while let Some(&p) = parent.get(&r) {
-            if p == r {
-                break;
-            }
-            r = p;
-        }
-        // Path compression.
-        let mut x = g;
-        while x != r {
-            let next = parent[&x];
-            parent.insert(x, r);
-            x = next;
-        }
-        r
-    }
-    for j in joints.iter().filter(|j| !j.broken) {
-        for (&a, &b) in j.faces.a.iter().zip(&j.faces.b) {
-            parent.entry(a).or_insert(a);
-            parent.entry(b).or_insert(b);
-            let (ra, rb) = (root(&mut parent, a), root(&mut parent, b));
-            // The lower id becomes the root, so roots are the classes' lowest.
-            if ra < rb {
-                parent.insert(rb, ra);
-            } else if rb < ra {
-                parent.insert(ra, rb);
-            }
-        }
-    }
-    let keys: Vec<u32> = parent.keys().copied().collect();
-    keys.into_iter()
-        .map(|g| (g, root(&mut parent, g)))
-        .collect()
+    crate::fracture::vertices::id_classes(
+        joints
+            .iter()
+            .filter(|j| !j.broken)
+            .flat_map(|j| j.faces.a.iter().copied().zip(j.faces.b.iter().copied())),
+    )
 }
 
 /// Collective. The PETSc rows of this rank's owned nodes `owned` (global

@@ -435,3 +435,77 @@ fn a_cylinder_jointed_on_a_set_restarts_on_other_rank_counts() {
         );
     }
 }
+
+/// The fully jointed bar of scenarios/fracture-bar.toml on 3 ranks: each
+/// rank's part holds only the joints at its own tets (the per-rank count
+/// of the `FDEM_LOG=memory=debug` line), none all of them, and together
+/// they hold each joint at least once and only a layer along the cuts
+/// twice.
+#[test]
+fn no_rank_holds_all_the_joints_of_a_split_bar() {
+    let out = out_dir("joint-set-split-counts");
+    let bin = env!("CARGO_BIN_EXE_fdem");
+    let scen = root().join("scenarios/fracture-bar.toml");
+    let o = std::process::Command::new("mpirun")
+        .args(["-n", "3", "--oversubscribe", bin, "run"])
+        .arg(&scen)
+        .args(["--quiet", "--output"])
+        .arg(&out)
+        .args(["--set", "time.end_time=1e-3"])
+        .env("FDEM_LOG", "memory=debug")
+        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+        .output()
+        .expect("cannot start fdem");
+    let (stdout, stderr) = (
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr),
+    );
+    assert!(o.status.success(), "fdem failed:\n{stdout}\n{stderr}");
+    // The summary's "fracture  N joints, ...".
+    let total: usize = stdout
+        .lines()
+        .find_map(|l| l.trim_start().strip_prefix("fracture"))
+        .and_then(|l| l.split_whitespace().next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("no fracture line in\n{stdout}"));
+    // Tracing's fields, colours stripped: "rank=R ... joints=N".
+    let plain: String = {
+        let mut s = String::new();
+        let mut esc = false;
+        for c in stderr.chars() {
+            match (esc, c) {
+                (false, '\u{1b}') => esc = true,
+                (true, 'm') => esc = false,
+                (true, _) => {}
+                (false, c) => s.push(c),
+            }
+        }
+        s
+    };
+    let field = |line: &str, name: &str| -> Option<usize> {
+        line.split_whitespace()
+            .find_map(|w| w.strip_prefix(&format!("{name}=")))
+            .and_then(|v| v.parse().ok())
+    };
+    let mut by_rank = [None; 3];
+    for line in plain.lines().filter(|l| l.contains("whole_bodies=")) {
+        if let (Some(r), Some(j)) = (field(line, "rank"), field(line, "joints")) {
+            by_rank[r] = Some(j);
+        }
+    }
+    let counts: Vec<usize> = by_rank
+        .iter()
+        .map(|c| c.unwrap_or_else(|| panic!("a rank logged no joint count:\n{plain}")))
+        .collect();
+    let sum: usize = counts.iter().sum();
+    assert!(
+        counts.iter().all(|&c| c > 0 && c < total),
+        "each rank must hold some but not all of the {total} joints: {counts:?}"
+    );
+    assert!(
+        sum >= total && sum < 2 * total,
+        "the ranks hold {sum} joints in all for {total}: {counts:?}"
+    );
+    eprintln!("{total} joints; held per rank {counts:?}");
+}

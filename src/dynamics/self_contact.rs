@@ -26,9 +26,10 @@ pub(super) struct SelfContact {
     /// (empty without jointed bodies).
     vertex: Vec<u32>,
     /// The free jointed bodies split over the ranks (ascending), each
-    /// with its first node's global id and the class (lowest copy, global
-    /// id) of every node of it.
-    split: Vec<(u32, u32, Vec<u32>)>,
+    /// with its first node's global id and each node's vertex of the
+    /// continuous mesh (the model's `SourceJoints::origin`, shared: no
+    /// rank makes an array of the whole body for it).
+    split: Vec<(u32, u32, std::sync::Arc<[u32]>)>,
 }
 
 impl SelfContact {
@@ -58,7 +59,7 @@ impl SelfContact {
         if bodies.is_empty() {
             return SelfContact::default();
         }
-        let split: Vec<(u32, u32, Vec<u32>)> = bodies
+        let split: Vec<(u32, u32, std::sync::Arc<[u32]>)> = bodies
             .iter()
             .filter(|&&b| is_split(b))
             .filter_map(|&b| {
@@ -67,14 +68,7 @@ impl SelfContact {
                     return None;
                 };
                 let j = model.meshes[mesh as usize].joints.as_ref()?;
-                let n0 = body.node_range.0;
-                let n = (body.node_range.1 - n0) as usize;
-                let ties = j
-                    .faces
-                    .iter()
-                    .flat_map(|f| f.a.iter().copied().zip(f.b.iter().copied()));
-                let class = vertex_classes(n, ties).iter().map(|&c| n0 + c).collect();
-                Some((b, n0, class))
+                Some((b, body.node_range.0, j.origin.clone()))
             })
             .collect();
         let ties = part
@@ -83,13 +77,13 @@ impl SelfContact {
             .filter(|j| !is_split(j.body))
             .flat_map(|j| j.faces.a.iter().copied().zip(j.faces.b.iter().copied()));
         let mut vertex = vertex_classes(part.mesh.nodes.len(), ties);
-        // A split body's nodes by their classes over the whole body.
+        // A split body's nodes by their vertex of the continuous mesh.
         for (e, t) in part.mesh.tets.iter().enumerate() {
             let b = part.mesh.body[e];
             if let Ok(i) = split.binary_search_by_key(&b, |s| s.0) {
-                let (_, n0, class) = &split[i];
+                let (_, n0, origin) = &split[i];
                 for &l in t {
-                    vertex[l as usize] = class[(part.node_gid[l as usize] - n0) as usize];
+                    vertex[l as usize] = origin[(part.node_gid[l as usize] - n0) as usize];
                 }
             }
         }
@@ -133,8 +127,8 @@ impl SelfContact {
                 .split
                 .binary_search_by_key(&og.ghosts.body[g], |s| s.0)
                 .ok()?;
-            let (_, n0, class) = &self.split[i];
-            Some(og.ghosts.tets[g].map(|n| class[(og.ghosts.node_gid[n as usize] - n0) as usize]))
+            let (_, n0, origin) = &self.split[i];
+            Some(og.ghosts.tets[g].map(|n| origin[(og.ghosts.node_gid[n as usize] - n0) as usize]))
         };
         find_within(
             tets,

@@ -36,6 +36,10 @@ pub struct SourceJoints {
     pub material: u32,
     /// Per joint: broken from the start (an initial crack).
     pub broken: Vec<bool>,
+    /// Per node of the jointed mesh: its node of the continuous mesh (the
+    /// vertex its copies share), so that a rank names the copies of a
+    /// vertex without a union-find over the whole body.
+    pub origin: std::sync::Arc<[u32]>,
 }
 
 impl SourceMesh {
@@ -78,6 +82,7 @@ impl SourceMesh {
                 broken: vec![false; j.joints.len()],
                 faces: j.joints,
                 material: fracture,
+                origin: j.origin.into(),
             }),
             particles: None,
         }

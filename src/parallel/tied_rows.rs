@@ -18,17 +18,89 @@ use mpi::traits::*;
 use super::exchange::all_to_all;
 use super::Part;
 
-/// The class of each of the `n` nodes of a jointed source mesh with
-/// joints `j` (its lowest copy tied to it by intact joints; node numbers
-/// of the mesh).
-pub(super) fn mesh_classes(n: usize, j: &crate::model::SourceJoints) -> Vec<u32> {
-    let ties = j
-        .faces
+/// The joints of a jointed source mesh `j` at the vertices of the nodes
+/// `nodes` (node numbers of the mesh): every joint with a corner at one
+/// of their vertices, so every tie between two copies of such a vertex.
+/// A scan of the joints, holding only what is asked for.
+pub(super) fn joints_at(j: &crate::model::SourceJoints, nodes: &[u32]) -> Vec<usize> {
+    let vertices: std::collections::HashSet<u32> =
+        nodes.iter().map(|&n| j.origin[n as usize]).collect();
+    j.faces
         .iter()
-        .zip(&j.broken)
-        .filter(|(_, &b)| !b)
-        .flat_map(|(f, _)| f.a.iter().copied().zip(f.b.iter().copied()));
-    crate::fracture::vertices::vertex_classes(n, ties)
+        .enumerate()
+        .filter(|(_, f)| {
+            f.a.iter()
+                .any(|&n| vertices.contains(&j.origin[n as usize]))
+        })
+        .map(|(k, _)| k)
+        .collect()
+}
+
+/// The class (lowest copy tied to it by the intact joints among `at`,
+/// those for which `intact` holds) of each node of `nodes` (node numbers
+/// of the jointed mesh `j`), when `at` holds every joint at their
+/// vertices ([`joints_at`]): the copies of one vertex are tied only by
+/// joints at it. Local: no union-find over the whole body.
+pub(super) fn local_classes(
+    j: &crate::model::SourceJoints,
+    nodes: &[u32],
+    at: &[usize],
+    intact: impl Fn(usize) -> bool,
+) -> HashMap<u32, u32> {
+    let tied =
+        crate::fracture::vertices::id_classes(at.iter().filter(|&&k| intact(k)).flat_map(|&k| {
+            j.faces[k]
+                .a
+                .iter()
+                .copied()
+                .zip(j.faces[k].b.iter().copied())
+        }));
+    nodes
+        .iter()
+        .map(|&n| (n, tied.get(&n).copied().unwrap_or(n)))
+        .collect()
+}
+
+/// Collective. Which of the joints `asked` (each by its two tets' global
+/// ids) are broken, from the ranks that hold them and offer their broken
+/// joints `offered`: a rendezvous at rank (lower tet) mod P, so each rank
+/// sends and receives only the joints at its own nodes.
+fn broken_elsewhere(
+    comm: &SimpleCommunicator,
+    asked: &[[u32; 2]],
+    offered: impl Iterator<Item = [u32; 2]>,
+) -> std::collections::HashSet<[u32; 2]> {
+    let size = comm.size() as usize;
+    let at = |t: &[u32; 2]| t[0].min(t[1]) as usize % size;
+    // Records [kind, tet, tet]: 0 asks, 1 offers.
+    let mut send: Vec<Vec<u32>> = vec![Vec::new(); size];
+    for t in asked {
+        send[at(t)].extend_from_slice(&[0, t[0], t[1]]);
+    }
+    for t in offered {
+        send[at(&t)].extend_from_slice(&[1, t[0], t[1]]);
+    }
+    let got = all_to_all(comm, send);
+    let known: std::collections::HashSet<[u32; 2]> = got
+        .iter()
+        .flat_map(|v| v.chunks_exact(3))
+        .filter(|r| r[0] == 1)
+        .map(|r| [r[1], r[2]])
+        .collect();
+    let reply: Vec<Vec<u32>> = got
+        .iter()
+        .map(|v| {
+            v.chunks_exact(3)
+                .filter(|r| r[0] == 0 && known.contains(&[r[1], r[2]]))
+                .flat_map(|r| [r[1], r[2]])
+                .collect()
+        })
+        .collect();
+    all_to_all(comm, reply)
+        .iter()
+        .flat_map(|v| v.chunks_exact(2))
+        .map(|r| [r[0], r[1]])
+        .collect()
 }
 
 /// Collective. The rows of the classes `wanted` (global ids of the lowest
@@ -98,8 +170,11 @@ impl Part {
     /// Collective when [`Part::rows_across`]. The class of every local
     /// node of the split jointed bodies here (global ids), over their
     /// joints that are intact: not broken at the start, nor in `broken`
-    /// (this rank's broken joints by their tets' global ids; merged over
-    /// the ranks here). Empty without `rows_across`.
+    /// (this rank's broken joints by their tets' global ids), nor broken
+    /// on another rank. Each rank looks only at the joints at its nodes'
+    /// vertices ([`joints_at`]) and learns the state of those it does not
+    /// hold from the ranks that do ([`broken_elsewhere`]). Empty without
+    /// `rows_across`.
     pub(super) fn split_classes(
         &self,
         comm: &SimpleCommunicator,
@@ -110,37 +185,56 @@ impl Part {
         if !self.rows_across {
             return class_of;
         }
-        let mine: Vec<u32> = broken.iter().flatten().copied().collect();
-        let all: std::collections::HashSet<[u32; 2]> = super::exchange::all_gather(comm, &mine)
-            .chunks_exact(2)
-            .map(|t| [t[0], t[1]])
-            .collect();
         let mut bodies: Vec<u32> = self
-            .joints
+            .mesh
+            .body
             .iter()
-            .map(|j| j.body)
+            .copied()
             .filter(|b| self.whole_bodies.binary_search(b).is_err())
             .collect();
+        bodies.sort_unstable();
         bodies.dedup();
+        // Per split jointed body here: its joints at the nodes here, and
+        // those of them this rank does not hold (by their tets).
+        let mut found = Vec::new();
+        let mut asked: Vec<[u32; 2]> = Vec::new();
         for b in bodies {
             let body = &model.bodies[b as usize];
             let crate::model::BodySource::Mesh { mesh, .. } = body.source else {
                 continue;
             };
-            let src = &model.meshes[mesh as usize];
-            let Some(j) = &src.joints else { continue };
+            let Some(j) = &model.meshes[mesh as usize].joints else {
+                continue;
+            };
             let (n0, e0) = (body.node_range.0, body.elem_range.0);
-            let ties = j
-                .faces
+            let nodes: Vec<u32> = self
+                .node_gid
                 .iter()
-                .zip(&j.broken)
-                .filter(|(f, &b)| !b && !all.contains(&f.tets.map(|e| e0 + e)))
-                .flat_map(|(f, _)| f.a.iter().copied().zip(f.b.iter().copied()));
-            let classes = crate::fracture::vertices::vertex_classes(src.mesh.nodes.len(), ties);
-            for &g in &self.node_gid {
-                if (n0..body.node_range.1).contains(&g) {
-                    class_of.insert(g, n0 + classes[(g - n0) as usize]);
-                }
+                .filter(|&&g| (n0..body.node_range.1).contains(&g))
+                .map(|&g| g - n0)
+                .collect();
+            let at = joints_at(j, &nodes);
+            let held: std::collections::HashSet<u32> = self
+                .joints
+                .iter()
+                .filter(|pj| pj.body == b)
+                .map(|pj| pj.index)
+                .collect();
+            asked.extend(
+                at.iter()
+                    .filter(|&&k| !held.contains(&(k as u32)) && !j.broken[k])
+                    .map(|&k| j.faces[k].tets.map(|e| e0 + e)),
+            );
+            found.push((j, n0, e0, nodes, at));
+        }
+        let elsewhere = broken_elsewhere(comm, &asked, broken.iter().copied());
+        for (j, n0, e0, nodes, at) in found {
+            let intact = |k: usize| {
+                let t = j.faces[k].tets.map(|e| e0 + e);
+                !j.broken[k] && !broken.contains(&t) && !elsewhere.contains(&t)
+            };
+            for (n, c) in local_classes(j, &nodes, &at, intact) {
+                class_of.insert(n0 + n, n0 + c);
             }
         }
         class_of
@@ -221,6 +315,48 @@ impl Part {
                 if ramps {
                     self.bc.dirichlet_ramp.push(r[2]);
                 }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The classes a rank finds from the joints at its nodes' vertices are
+    /// those of the union-find over every intact joint of the body, for
+    /// any subset of the nodes, with joints broken here and there.
+    #[test]
+    fn local_classes_are_the_whole_bodys() {
+        let m = crate::mesh::generate::box_mesh([0.0; 3], [1.0, 0.5, 0.5], 0.25).unwrap();
+        let mut in_set = vec![false; m.tets.len()];
+        for (t, s) in in_set.iter_mut().enumerate() {
+            *s = t % 3 != 0;
+        }
+        let src = crate::model::SourceMesh::jointed(m, vec![0; in_set.len()], &in_set, 0);
+        let j = src.joints.as_ref().unwrap();
+        let n = src.mesh.nodes.len();
+        let intact = |k: usize| k % 5 != 2;
+        let whole = crate::fracture::vertices::vertex_classes(
+            n,
+            (0..j.faces.len()).filter(|&k| intact(k)).flat_map(|k| {
+                j.faces[k]
+                    .a
+                    .iter()
+                    .copied()
+                    .zip(j.faces[k].b.iter().copied())
+            }),
+        );
+        for stride in [1usize, 3, 7, 11] {
+            let nodes: Vec<u32> = (0..n as u32)
+                .filter(|v| *v as usize % stride == 0)
+                .collect();
+            let at = joints_at(j, &nodes);
+            let local = local_classes(j, &nodes, &at, intact);
+            assert_eq!(local.len(), nodes.len());
+            for &v in &nodes {
+                assert_eq!(local[&v], whole[v as usize], "node {v}, every {stride}");
             }
         }
     }

@@ -234,7 +234,7 @@ impl<'a, 'p> Stages<'a, 'p> {
             mech.as_mut(),
             &mut balance,
         )?;
-        tracing::debug!(target: "memory", rank, elements = part.elem_gid.len(), nodes = part.node_gid.len(), owned = part.n_owned, thermal_pairs = contacts.set.local.len(), whole_bodies = part.whole_bodies.len());
+        tracing::debug!(target: "memory", rank, elements = part.elem_gid.len(), nodes = part.node_gid.len(), owned = part.n_owned, thermal_pairs = contacts.set.local.len(), whole_bodies = part.whole_bodies.len(), joints = part.joints.len());
         let sys = setup::thermal(
             petsc,
             comm,

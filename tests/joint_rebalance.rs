@@ -111,7 +111,10 @@ fn jointed_blocks_repartitioned_on_two_ranks_fall_and_crack_bitwise_as_on_one() 
     assert!(changed > 0, "2 ranks: no element changed rank");
     assert_eq!(two.disp.len(), one.disp.len(), "outputs");
     for k in 0..one.disp.len() {
-        assert!(two.disp[k] == one.disp[k], "output {k}: displacements differ");
+        assert!(
+            two.disp[k] == one.disp[k],
+            "output {k}: displacements differ"
+        );
         assert!(two.vel[k] == one.vel[k], "output {k}: velocities differ");
     }
     assert_eq!(two.joints.len(), one.joints.len(), "joint outputs");
@@ -199,7 +202,11 @@ fn jointed_blocks_restarted_after_breaking_continue_bitwise() {
             .iter()
             .position(|&t| t == b.times[k])
             .unwrap_or_else(|| panic!("time {} not in the full run", b.times[k]));
-        assert!(a.disp[at] == b.disp[k], "t = {}: displacements differ", b.times[k]);
+        assert!(
+            a.disp[at] == b.disp[k],
+            "t = {}: displacements differ",
+            b.times[k]
+        );
     }
     for f in ["damage", "mode", "broke_at", "opening"] {
         let x = fdem::io::read_cell_field_step(&ja, f, na - 1).unwrap();

@@ -350,7 +350,7 @@ mod tests {
         );
         for stride in [1usize, 3, 7, 11] {
             let nodes: Vec<u32> = (0..n as u32)
-                .filter(|v| *v as usize % stride == 0)
+                .filter(|v| (*v as usize).is_multiple_of(stride))
                 .collect();
             let at = joints_at(j, &nodes);
             let local = local_classes(j, &nodes, &at, intact);

@@ -224,7 +224,7 @@ impl<'a, 'p> Stages<'a, 'p> {
         trace_held(rank, mech.as_ref());
         let mut contacts = Contacts::new(comm, model, &part, restart, mech.as_mut(), true)?;
         summary::trace_memory(rank, "contacts");
-        let mut balance = Balance::new(model, comm.size() as usize);
+        let mut balance = Balance::new(comm, model, &part);
         rebalance::set_up_thermal_balance(
             comm,
             model,

@@ -66,13 +66,20 @@ struct Imbalance {
 }
 
 impl Balance {
-    /// The repartition schedule of `model` on `size` ranks.
-    pub fn new(model: &Model, size: usize) -> Balance {
+    /// Collective. The repartition schedule of `model` on the ranks of
+    /// `comm`, cut into parts like `part`. None without whole bodies on
+    /// any rank: a repartition moves whole bodies only (a split body's
+    /// elements keep their model places), so a check could only detect.
+    pub fn new(comm: &SimpleCommunicator, model: &Model, part: &Part) -> Balance {
+        let size = comm.size() as usize;
+        let mine = i32::from(!part.whole_bodies.is_empty());
+        let mut any = 0i32;
+        comm.all_reduce_into(&mine, &mut any, SystemOperation::max());
         let spec = model
             .mechanics
             .as_ref()
             .map(|m| m.rebalance)
-            .filter(|r| r.every > 0 && size > 1);
+            .filter(|r| r.every > 0 && size > 1 && any != 0);
         Balance {
             spec,
             ..Balance::default()

@@ -1267,6 +1267,8 @@ fn base_reductions(name: &str, binary: bool) -> Vec<(&'static str, Value)> {
             "bodies.1.pack.count",
             Value::Integer(if binary { 20 } else { 50 }),
         )],
+        // 97,500 jointed tets: a second a case to build.
+        "bench-jointed-box" => vec![("bodies.0.mesh.element_size", Value::Float(0.02))],
         "nut-lattice-heatup-20k" => vec![(
             "bodies.1.lattice.count",
             Value::Array(vec![Value::Integer(3); 3]),

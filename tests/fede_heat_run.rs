@@ -317,3 +317,41 @@ fn one_and_two_ranks_give_the_same_temperatures() {
     );
     assert!(a > 10.0 && (b / a - 0.5).abs() < 1e-9, "{a} {b}");
 }
+
+/// `thermal.initial` on an element set that holds finite elements and
+/// part of the lattice (x < 1.5 mm: the first FE third and the first two
+/// layers of spheres) starts its nodes and its spheres at its value and
+/// leaves the rest at the body's; the same on 1 and 2 ranks.
+#[test]
+fn an_initial_temperature_on_a_set_reaches_its_spheres() {
+    let text = std::fs::read_to_string(root().join("scenarios/fede-heat-bar.toml")).unwrap();
+    let head = &text[..text.find("[thermal]").unwrap()];
+    let scen = head.replace(
+        "element_sets = { middle",
+        "element_sets = { hot = { min = [-1.0, -1.0, -1.0], max = [1.5e-3, 1.0, 1.0] }, middle",
+    ) + "[thermal]\ntheta = 1.0\ninitial = [{ set = \"bar.hot\", value = 80.0 }]\n\n\
+         [output]\ntimes = [0.0, 5e-3]\n";
+    assert!(scen.contains("hot = {"), "{scen}");
+    let dir = out_dir("fede-heat-initial");
+    let path = dir.join("hot.toml");
+    std::fs::write(&path, scen).unwrap();
+    let mut spheres = Vec::new();
+    for ranks in [1, 2] {
+        let o = dir.join(format!("r{ranks}"));
+        run_ok(ranks, &path, &o, &[]);
+        let (r, p) = (read_results(&o, "hot"), read_particles(&o, "hot"));
+        assert_eq!(r.times[0], 0.0);
+        for (c, &t) in r.coords.iter().zip(&r.temperature[0]) {
+            let want = if c[0] <= 1e-3 + 1e-12 { 80.0 } else { 0.0 };
+            assert_eq!(t, want, "{ranks} rank(s): node at {c:?}");
+        }
+        assert_eq!(p.centres.len(), 64);
+        for (c, &t) in p.centres.iter().zip(&p.temperature[0]) {
+            let want = if c[0] < 1.5e-3 { 80.0 } else { 0.0 };
+            assert_eq!(t, want, "{ranks} rank(s): sphere at {c:?}");
+        }
+        spheres.push(p.temperature[1].clone());
+    }
+    // One step on: the heat spreads from the hot half alike on 1 and 2 ranks.
+    assert!(rel_diff(&spheres[0], &spheres[1]) < 1e-10);
+}

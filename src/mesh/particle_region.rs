@@ -50,6 +50,9 @@ pub struct ParticleRegion {
     pub radius: f64,
     /// Sphere centres (m), in the grid's cell order.
     pub centres: Vec<[f64; 3]>,
+    /// Per sphere, the element of the set its centre lies in (the given
+    /// mesh's numbering; the lowest where it lies on a shared face).
+    pub source_elem: Vec<u32>,
     /// Sphere–sphere bonds (indices into `centres`), each once.
     pub bonds: Vec<LatticeBond>,
     /// Sphere–FE half bonds, in the lattice's bond order.
@@ -105,6 +108,7 @@ pub fn particle_region(
         std::array::from_fn(|a| lo[a] + radius * (2 * c[a] + 1) as f64)
     };
     let mut cells = vec![Cell::Empty; n[0] * n[1] * n[2]];
+    let mut sphere_elem = vec![u32::MAX; cells.len()];
     // Per cell, the remaining elements whose boxes reach it (to locate points).
     let mut near: Vec<Vec<u32>> = vec![Vec::new(); cells.len()];
     for e in 0..mesh.tets.len() {
@@ -141,6 +145,8 @@ pub fn particle_region(
                     let cell = &mut cells[at(c)];
                     if in_set[e] {
                         *cell = Cell::Sphere;
+                        let at_c = &mut sphere_elem[at(c)];
+                        *at_c = (*at_c).min(e as u32);
                     } else if *cell == Cell::Empty {
                         *cell = Cell::Fe(fe_index[e], 0);
                     }
@@ -191,10 +197,12 @@ pub fn particle_region(
     let member: Vec<[usize; 3]> = lattice.centres.iter().map(|&x| cell_of(x)).collect();
     let mut sphere_of = vec![u32::MAX; member.len()];
     let mut centres = Vec::new();
+    let mut source_elem = Vec::new();
     for (p, c) in member.iter().enumerate() {
         if cells[at(*c)] == Cell::Sphere {
             sphere_of[p] = centres.len() as u32;
             centres.push(lattice.centres[p]);
+            source_elem.push(sphere_elem[at(*c)]);
         }
     }
     if centres.is_empty() {
@@ -309,6 +317,7 @@ pub fn particle_region(
     Ok(ParticleRegion {
         radius,
         centres,
+        source_elem,
         bonds,
         links,
         heat_links,

@@ -142,6 +142,21 @@ pub fn set_nodes(mesh: &TetMesh, set: &str) -> Vec<u32> {
     mesh.set_nodes(set).unwrap_or_default()
 }
 
+/// The nodes an initial temperature on `set` reaches: a node or face
+/// set's, or the nodes of an element set's elements (sorted, unique).
+pub fn initial_nodes(mesh: &TetMesh, set: &str) -> Vec<u32> {
+    match (mesh.set_nodes(set), mesh.elem_sets.get(set)) {
+        (Some(n), _) => n,
+        (None, Some(elems)) => {
+            let mut n: Vec<u32> = elems.iter().flat_map(|&e| mesh.tets[e as usize]).collect();
+            n.sort_unstable();
+            n.dedup();
+            n
+        }
+        (None, None) => Vec::new(),
+    }
+}
+
 /// The body-wide conditions of one body and the set conditions `thermal`
 /// and `mechanics` (in scenario order, those on this body) applied to its
 /// mesh `source` (None for a body without sets) of `nn` nodes; `held` the
@@ -168,7 +183,7 @@ pub fn body_bcs(
     for (t, kind) in thermal {
         match *kind {
             ThermalKind::Initial(v) => {
-                for n in set_nodes(mesh, &t.set) {
+                for n in initial_nodes(mesh, &t.set) {
                     bc.initial_t[n as usize] = v;
                 }
             }

@@ -688,7 +688,11 @@ impl Model {
             ..Default::default()
         };
         for (i, init) in thermal_spec.initial.iter().enumerate() {
-            let t = nodes_target(&init.set)
+            let source = |k: usize| match &bodies[k].source {
+                BodySource::Mesh { mesh, .. } => Some(&meshes[*mesh as usize]),
+                BodySource::Saved { .. } => None,
+            };
+            let t = particles::initial_target(&init.set, &names, source)
                 .map_err(|m| model_err(format!("thermal.initial[{i}]: {m}")))?;
             thermal.bcs.push((t, ThermalKind::Initial(init.value)));
         }

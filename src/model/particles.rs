@@ -19,6 +19,93 @@ use crate::scenario::BodySpec;
 pub struct SourceParticles {
     pub region: ParticleRegion,
     pub material: u32,
+    /// The spheres (ascending) of each set of the mesh as given that
+    /// holds some: an element set's, those whose centre lies in one of its
+    /// elements; a node set's, those whose element has all four nodes in
+    /// it (what a `thermal.initial` on the set gives them).
+    pub sphere_sets: std::collections::BTreeMap<String, Vec<u32>>,
+}
+
+/// The spheres of each element and node set of `m` ([`SourceParticles::sphere_sets`]).
+fn sphere_sets(
+    m: &TetMesh,
+    region: &ParticleRegion,
+) -> std::collections::BTreeMap<String, Vec<u32>> {
+    let mut out = std::collections::BTreeMap::new();
+    let mut mark = vec![false; m.tets.len()];
+    for (name, elems) in &m.elem_sets {
+        mark.iter_mut().for_each(|x| *x = false);
+        elems.iter().for_each(|&e| mark[e as usize] = true);
+        let s: Vec<u32> = (0..region.centres.len() as u32)
+            .filter(|&k| mark[region.source_elem[k as usize] as usize])
+            .collect();
+        if !s.is_empty() {
+            out.insert(name.clone(), s);
+        }
+    }
+    let mut node = vec![false; m.nodes.len()];
+    for (name, nodes) in &m.node_sets {
+        node.iter_mut().for_each(|x| *x = false);
+        nodes.iter().for_each(|&n| node[n as usize] = true);
+        let s: Vec<u32> = (0..region.centres.len() as u32)
+            .filter(|&k| {
+                let e = region.source_elem[k as usize] as usize;
+                m.tets[e].iter().all(|&n| node[n as usize])
+            })
+            .collect();
+        if !s.is_empty() {
+            out.entry(name.clone()).or_insert(s);
+        }
+    }
+    out
+}
+
+/// The body and set a `thermal.initial` names (`<body>.<set>` or `<set>`,
+/// as [`super::bcs::resolve`]): a node, face or element set of a body's
+/// mesh, or a set of the mesh as given that holds some of its particles
+/// (`sphere_sets`); its nodes and spheres together not empty. `source(k)`
+/// is body k's source mesh, if it has one.
+pub(super) fn initial_target<'a>(
+    name: &str,
+    names: &[String],
+    source: impl Fn(usize) -> Option<&'a super::bodies::SourceMesh>,
+) -> Result<super::bcs::SetTarget, String> {
+    let nodes = |k: usize, set: &str| {
+        source(k).map_or(0, |s| super::bcs::initial_nodes(&s.mesh, set).len())
+    };
+    let spheres = |k: usize, set: &str| {
+        let p = source(k).and_then(|s| s.particles.as_ref());
+        p.and_then(|p| p.sphere_sets.get(set)).map_or(0, Vec::len)
+    };
+    let sets_of = |k: usize| -> Vec<String> {
+        let Some(s) = source(k) else {
+            return Vec::new();
+        };
+        let m = &s.mesh;
+        let mut v: Vec<String> = (m.node_sets.keys().chain(m.face_sets.keys()))
+            .chain(m.elem_sets.keys())
+            .chain(s.particles.iter().flat_map(|p| p.sphere_sets.keys()))
+            .cloned()
+            .collect();
+        v.sort();
+        v.dedup();
+        v
+    };
+    let has = |k: usize, set: &str| {
+        source(k).is_some_and(|s| {
+            let m = &s.mesh;
+            m.node_sets.contains_key(set)
+                || m.face_sets.contains_key(set)
+                || m.elem_sets.contains_key(set)
+                || spheres(k, set) > 0
+        })
+    };
+    let t = super::bcs::resolve(name, names, sets_of, has)?;
+    let k = t.body as usize;
+    if nodes(k, &t.set) + spheres(k, &t.set) == 0 {
+        return Err(format!("set `{}.{}` is empty", names[k], t.set));
+    }
+    Ok(t)
 }
 
 /// The body `b`'s mesh `m` (element materials `material`) without the
@@ -52,6 +139,7 @@ pub(super) fn split_off(
     let (fe, index) = without_elements(&m, &in_set);
     let region = particle_region(&m, &p.set, &in_set, &index, p.radius)
         .map_err(|e| format!("body `{}`: particles: {e}", b.name))?;
+    let sphere_sets = sphere_sets(&m, &region);
     if region.links.is_empty() {
         return Err(format!(
             "body `{}`: particles.set: no sphere of `{}` borders the body's finite elements",
@@ -68,6 +156,7 @@ pub(super) fn split_off(
         Some(SourceParticles {
             region,
             material: mat,
+            sphere_sets,
         }),
     ))
 }

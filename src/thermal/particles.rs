@@ -12,6 +12,7 @@
 
 use crate::mechanics::bond::bond_conductance;
 use crate::model::Model;
+use crate::model::ThermalKind;
 use crate::parallel::Part;
 use crate::petsc::{Matrix, Pattern, Result, Vector};
 
@@ -38,8 +39,9 @@ pub struct BodyHeat {
     pub first_row: usize,
     /// Reference centres (m) of the owned spheres.
     pub centres: Vec<[f64; 3]>,
-    /// Initial temperature (the body's).
-    pub initial: f64,
+    /// Initial temperature of each owned sphere: the body's, or that of
+    /// the last `thermal.initial` whose set holds the sphere.
+    pub initial: Vec<f64>,
     /// Heat capacity of each sphere's cell, ρ c (2r)³ (J/K).
     capacity: f64,
     /// Source of each sphere's cell, q (2r)³ (W).
@@ -127,7 +129,7 @@ impl ParticleHeat {
                     .iter()
                     .map(|&s| region.centres[s as usize])
                     .collect(),
-                initial: body.initial_temperature,
+                initial: initial_of(model, b, &p.sphere_sets, &held.owned),
                 // seed 002's particle as its cell (mechanics::bond docs): capacity ρ c (2r)³.
                 capacity: mat.density * mat.specific_heat * cell,
                 source: model.thermal.source[b] * cell,
@@ -205,6 +207,29 @@ impl ParticleHeat {
     }
 }
 
+/// The initial temperatures of body `b`'s spheres `owned` (ascending):
+/// the body's, then each `thermal.initial` on a set of `sets` holding
+/// some of them, in the scenario's order (as for nodes).
+fn initial_of(
+    model: &Model,
+    b: usize,
+    sets: &std::collections::BTreeMap<String, Vec<u32>>,
+    owned: &[u32],
+) -> Vec<f64> {
+    let mut t = vec![model.bodies[b].initial_temperature; owned.len()];
+    for (target, kind) in &model.thermal.bcs {
+        let (ThermalKind::Initial(v), true) = (kind, target.body as usize == b) else {
+            continue;
+        };
+        for s in sets.get(&target.set).into_iter().flatten() {
+            if let Ok(k) = owned.binary_search(s) {
+                t[k] = *v;
+            }
+        }
+    }
+    t
+}
+
 fn link_rows(l: &LinkRows) -> [i32; 5] {
     [l.sphere, l.nodes[0], l.nodes[1], l.nodes[2], l.nodes[3]]
 }
@@ -216,7 +241,7 @@ pub fn initial_rows(model: &Model, part: &Part) -> Vec<f64> {
     let lo = part.owned_range().0;
     for b in &ParticleHeat::new(model, part).bodies {
         for k in 0..b.centres.len() {
-            rows[b.first_row + k - lo] = b.initial;
+            rows[b.first_row + k - lo] = b.initial[k];
         }
     }
     rows

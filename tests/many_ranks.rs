@@ -100,20 +100,6 @@ fn eight_body_drop_bitwise_on_one_to_four_ranks() {
     let _ = bitwise_on_one_to_four("drop8", "scenarios/drop8.toml", "drop8", &[]);
 }
 
-/// The numbers before "repartition(s)" and "bodies moved" in a summary.
-fn repartitions(summary: &str) -> (u64, u64) {
-    let line = summary
-        .lines()
-        .find(|l| l.trim_start().starts_with("balance"))
-        .unwrap_or_else(|| panic!("no balance line in\n{summary}"));
-    let words: Vec<&str> = line.split_whitespace().collect();
-    let before = |w: &str| -> u64 {
-        let i = words.iter().position(|x| x.starts_with(w)).unwrap();
-        words[i - 1].parse().unwrap()
-    };
-    (before("repartition"), before("bodies"))
-}
-
 /// Bodies change owner during the run (repartitions every 2 steps, at
 /// any imbalance) and the trajectories stay bitwise those of 1 rank.
 #[test]

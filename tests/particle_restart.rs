@@ -19,18 +19,7 @@ struct Particles {
 }
 
 fn read_particles(dir: &Path, stem: &str) -> Particles {
-    let h5 = dir.join(format!("{stem}_particles.h5"));
-    let times = fdem::io::read_times(&h5).unwrap();
-    let ids = fdem::io::read_static_node_field_i32(&h5, "particle_id").unwrap();
-    assert!(ids.iter().enumerate().all(|(r, &i)| i as usize == r));
-    let fields = ["displacement", "velocity", "temperature"]
-        .iter()
-        .filter_map(|name| {
-            (0..times.len())
-                .map(|k| fdem::io::read_node_field_step(&h5, name, k).ok())
-                .collect()
-        })
-        .collect();
+    let (times, fields) = particle_fields(dir, stem);
     Particles { times, fields }
 }
 

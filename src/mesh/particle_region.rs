@@ -349,13 +349,15 @@ fn extended(
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::mesh::generate::box_mesh;
     use crate::mesh::without::without_elements;
 
-    /// A bar 0..8r × 0..4r × 0..4r, elements of side r, the middle third in x as particles.
-    fn bar(r: f64) -> (TetMesh, TetMesh, ParticleRegion) {
+    /// A bar 0..12r × 0..4r × 0..4r, elements of side r, the middle third
+    /// in x (4r..8r) as particles: the mesh, its remaining elements, the
+    /// particles.
+    pub(crate) fn bar(r: f64) -> (TetMesh, TetMesh, ParticleRegion) {
         let mut m = box_mesh([0.0; 3], [12.0 * r, 4.0 * r, 4.0 * r], r).unwrap();
         m.add_box_set("middle", [4.0 * r, 0.0, 0.0], [8.0 * r, 4.0 * r, 4.0 * r])
             .unwrap();

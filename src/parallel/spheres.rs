@@ -192,9 +192,6 @@ impl Part {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mesh::generate::box_mesh;
-    use crate::mesh::particle_region::particle_region;
-    use crate::mesh::without::without_elements;
 
     /// A bar 0..12r × 0..4r × 0..4r of elements of side r, x in [4r, 8r]
     /// particles (2 × 2 × 2 spheres of radius r), cut at x = 6r for the
@@ -203,15 +200,7 @@ mod tests {
     #[test]
     fn a_rank_left_of_the_cut_gets_the_bonds_links_and_nodes_it_needs() {
         let r = 1e-3;
-        let mut m = box_mesh([0.0; 3], [12.0 * r, 4.0 * r, 4.0 * r], r).unwrap();
-        m.add_box_set("middle", [4.0 * r, 0.0, 0.0], [8.0 * r, 4.0 * r, 4.0 * r])
-            .unwrap();
-        let mut in_set = vec![false; m.tets.len()];
-        m.elem_sets["middle"]
-            .iter()
-            .for_each(|&e| in_set[e as usize] = true);
-        let (fe, index) = without_elements(&m, &in_set);
-        let region = particle_region(&m, "middle", &in_set, &index, r).unwrap();
+        let (_, fe, region) = crate::mesh::particle_region::tests::bar(r);
         assert_eq!(region.centres.len(), 8);
         let left = |s: u32| region.centres[s as usize][0] < 6.0 * r;
         let owned: Vec<u32> = (0..8).filter(|&s| left(s)).collect();

@@ -632,3 +632,38 @@ pub fn cracking_run(
     let mode = fdem::io::read_cell_field_step(&jh5, "mode", k).unwrap();
     (read_results(out, stem), mode)
 }
+
+/// Every output of the particle series `<stem>_particles.h5` in `dir`: its
+/// times and, per field (displacement, velocity, temperature where
+/// written), per output the values by global particle number (the rows
+/// are checked to be in that order).
+pub fn particle_fields(dir: &Path, stem: &str) -> (Vec<f64>, Vec<Vec<Vec<f64>>>) {
+    let h5 = dir.join(format!("{stem}_particles.h5"));
+    let times = fdem::io::read_times(&h5).unwrap();
+    let ids = fdem::io::read_static_node_field_i32(&h5, "particle_id").unwrap();
+    assert!(ids.iter().enumerate().all(|(r, &i)| i as usize == r));
+    let fields = ["displacement", "velocity", "temperature"]
+        .iter()
+        .filter_map(|name| {
+            (0..times.len())
+                .map(|k| fdem::io::read_node_field_step(&h5, name, k).ok())
+                .collect()
+        })
+        .collect();
+    (times, fields)
+}
+
+/// The numbers before "repartition(s)" and "bodies moved" on a run
+/// summary's `balance` line.
+pub fn repartitions(summary: &str) -> (u64, u64) {
+    let line = summary
+        .lines()
+        .find(|l| l.trim_start().starts_with("balance"))
+        .unwrap_or_else(|| panic!("no balance line in\n{summary}"));
+    let words: Vec<&str> = line.split_whitespace().collect();
+    let before = |w: &str| -> u64 {
+        let i = words.iter().position(|x| x.starts_with(w)).unwrap();
+        words[i - 1].parse().unwrap()
+    };
+    (before("repartition"), before("bodies"))
+}

@@ -155,6 +155,14 @@ cargo build --release --example joint_kernel_bench
 joint_lines=$(target/release/examples/joint_kernel_bench)
 echo "$joint_lines" >&2
 
+# Bonded-lattice kernel throughput (issue 21) and the exact tet-tet
+# overlap kernel of the penalty contact (issue 22).
+cargo build --release --example bond_kernel_bench --example overlap_kernel_bench
+bond_lines=$(target/release/examples/bond_kernel_bench)
+echo "$bond_lines" >&2
+overlap_line=$(target/release/examples/overlap_kernel_bench)
+echo "$overlap_line" >&2
+
 {
   echo "# Benchmarks"
   echo
@@ -241,6 +249,22 @@ echo "$joint_lines" >&2
   echo "issue 19 asks at least 20 million joint updates per second per core):"
   echo
   echo "$joint_lines" | sed 's/^/- /'
+  echo
+  echo "## Bond kernel"
+  echo
+  echo "\`cargo run --release --example bond_kernel_bench\` (every bond of a 40^3 cubic"
+  echo "lattice with its 26 neighbours, seed 002's cantilever constants, spheres moving and"
+  echo "spinning; one core; issue 21 asks at least 20 million bond updates per second per core):"
+  echo
+  echo "$bond_lines" | sed 's/^/- /'
+  echo
+  echo "## Contact overlap kernel"
+  echo
+  echo "\`cargo run --release --example overlap_kernel_bench\` (the exact overlap state of the"
+  echo "touching tet pairs of two nuts pressed together, one core; the checksum checks that a"
+  echo "change of the kernel keeps its results bitwise):"
+  echo
+  echo "- $overlap_line"
   echo
   echo "## Commands"
   echo

@@ -366,3 +366,114 @@ fn a_sphere_on_a_deformable_tet4_block_loads_its_nodes_with_its_weight() {
         "{reaction} {total}"
     );
 }
+
+/// A steel sphere on the rigid block's top under gravity tilted by
+/// `theta` about y (the block stands still; the slope is in the gravity),
+/// starting at rest at its static overlap. Returns the centre's
+/// displacement along x after `time` and the spin about y.
+fn down_the_slope(theta: f64, friction: f64, time: f64) -> (f64, f64) {
+    let (faces, nodes) = block();
+    let contact = SphereContact {
+        damping: 0.3,
+        friction,
+        resistance: 0.0,
+    };
+    let (m, _) = STEEL.mass_inertia();
+    let g = 9.81;
+    let e_star = fdem::contact::sphere::effective_modulus(2e11, 0.3, BLOCK.0, BLOCK.1);
+    let delta =
+        fdem::contact::sphere::hertz_static_overlap(m * g * theta.cos(), e_star, STEEL.radius);
+    let x0 = V3::new(0.02, 0.05, 0.02 + STEEL.radius - delta);
+    let mut s = FreeSpheres::new(STEEL, contact, vec![x0], vec![]);
+    s.gravity = V3::new(g * theta.sin(), 0.0, -g * theta.cos());
+    let dt = s.stable_dt(&faces, 4.0 * delta);
+    let steps = (time / dt).round() as usize;
+    let dt = time / steps as f64;
+    let still = vec![V3::zeros(); nodes.len()];
+    let (mut force, mut heat) = (vec![V3::zeros(); nodes.len()], vec![0.0; nodes.len()]);
+    for _ in 0..steps {
+        s.step(
+            dt,
+            &faces,
+            NodeSide {
+                x: &nodes,
+                v: &still,
+                temperature: None,
+                force: &mut force,
+                heat: &mut heat,
+            },
+        );
+    }
+    (s.x[0].x - x0.x, s.w[0].y)
+}
+
+#[test]
+fn a_sphere_rolls_down_a_slope_at_five_sevenths_g_sin_theta_and_slides_on_a_steep_one() {
+    let time = 0.2;
+    let g = 9.81;
+    // Rolling without slip needs μ ≥ (2/7) tan θ: at 10° and μ = 0.5 the
+    // centre accelerates at (5/7) g sin θ and spins at v/r.
+    let theta = 10f64.to_radians();
+    let (x, w) = down_the_slope(theta, 0.5, time);
+    let want = 0.5 * 5.0 / 7.0 * g * theta.sin() * time * time;
+    let err = (x - want).abs() / want;
+    println!("rolling: x = {x:.6e} m against {want:.6e} m ({err:.2e}), spin {w:.4} rad/s");
+    assert!(err < 0.01, "rolling: {x} against {want}");
+    let v = 5.0 / 7.0 * g * theta.sin() * time;
+    assert!(
+        (w - v / STEEL.radius).abs() < 0.01 * v / STEEL.radius,
+        "spin {w}"
+    );
+    // At 30° with μ = 0.1 < (2/7) tan 30° it slides: a = g (sin θ − μ cos θ).
+    // (0.15 s, so it stays on the block's top.)
+    let (theta, time) = (30f64.to_radians(), 0.15);
+    let (x, w) = down_the_slope(theta, 0.1, time);
+    let want = 0.5 * g * (theta.sin() - 0.1 * theta.cos()) * time * time;
+    let err = (x - want).abs() / want;
+    println!("sliding: x = {x:.6e} m against {want:.6e} m ({err:.2e}), spin {w:.4} rad/s");
+    assert!(err < 0.01, "sliding: {x} against {want}");
+    // Friction's moment spins it at (5/2) μ g cos θ t / r, below rolling.
+    let spin = 2.5 * 0.1 * g * theta.cos() * time / STEEL.radius;
+    assert!((w - spin).abs() < 0.01 * spin, "spin {w} against {spin}");
+}
+
+#[test]
+fn an_undamped_sphere_bounces_back_to_its_drop_height() {
+    let (faces, nodes) = block();
+    let contact = SphereContact {
+        damping: 0.0,
+        friction: 0.3,
+        resistance: 0.0,
+    };
+    let drop = 1e-3;
+    let x0 = V3::new(0.047, 0.031, 0.02 + STEEL.radius + drop);
+    let mut s = FreeSpheres::new(STEEL, contact, vec![x0], vec![]);
+    s.gravity = V3::new(0.0, 0.0, -9.81);
+    let dt = s.stable_dt(&faces, 1e-5);
+    let still = vec![V3::zeros(); nodes.len()];
+    let (mut force, mut heat) = (vec![V3::zeros(); nodes.len()], vec![0.0; nodes.len()]);
+    let (mut touched, mut top) = (false, f64::NEG_INFINITY);
+    // Fall (14 ms), impact, rise (14 ms): the highest point after impact.
+    let steps = (0.04 / dt) as usize;
+    for _ in 0..steps {
+        let st = s.step(
+            dt,
+            &faces,
+            NodeSide {
+                x: &nodes,
+                v: &still,
+                temperature: None,
+                force: &mut force,
+                heat: &mut heat,
+            },
+        );
+        touched |= st.faces > 0;
+        if touched && st.faces == 0 {
+            top = top.max(s.x[0].z);
+        }
+    }
+    assert!(touched, "it hit the block");
+    let back = top - (0.02 + STEEL.radius);
+    println!("bounce: back to {back:.6e} m of {drop:.1e} m");
+    assert!((back - drop).abs() < 0.01 * drop, "{back}");
+}

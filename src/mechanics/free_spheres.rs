@@ -7,9 +7,14 @@
 //! One step ([`FreeSpheres::step`]):
 //! 1. sphere pairs from a uniform cell grid (cell = one diameter), taken
 //!    in ascending (i, j) order; sphere–triangle touches per (sphere, body)
-//!    through [`distinct_features`], in ascending triangle order;
+//!    from a grid of the triangles (cells a diameter or the largest
+//!    triangle wide) through [`distinct_features`], in ascending triangle
+//!    order;
 //! 2. Hertz normal force, viscous damping and Coulomb friction with a
-//!    tangential history per pair (`contact::sphere`), with the moments
+//!    tangential history per sphere pair, and per sphere and body the
+//!    history of the contact with the nearest normal the step before
+//!    (so rolling from triangle to triangle keeps it) (`contact::sphere`),
+//!    with the moments
 //!    about each sphere's centre; a triangle's share goes to its nodes with
 //!    the contact point's barycentric weights;
 //! 3. translation and rotation by the damped central difference of the
@@ -143,7 +148,8 @@ pub struct FreeSpheres {
     /// Spheres held still.
     pub fixed: Vec<bool>,
     pair_history: HashMap<(u32, u32), V3>,
-    face_history: HashMap<(u32, u32), V3>,
+    /// Per sphere, its face contacts' histories: (body, normal, ξ).
+    face_history: HashMap<u32, Vec<(u32, V3, V3)>>,
     force: Vec<V3>,
     moment: Vec<V3>,
     heat: Vec<f64>,
@@ -270,20 +276,28 @@ impl FreeSpheres {
             report.max_overlap = report.max_overlap.max(delta);
         }
         self.pair_history = kept;
-        // Sphere against the faces: per sphere, the touches of each body.
+        // Sphere against the faces: per sphere, the touches of each body,
+        // from the triangles of the grid cells its box meets.
         let mut history = std::mem::take(&mut self.face_history);
-        let mut kept = HashMap::with_capacity(history.len());
+        let mut kept: HashMap<u32, Vec<(u32, V3, V3)>> = HashMap::with_capacity(history.len());
         let tri_of = |f: usize| faces.nodes[f].map(|n| nodes.x[n as usize]);
+        let grid = FaceGrid::new(faces.nodes.len(), 2.0 * r, tri_of);
+        let cos = crate::contact::sphere::DISTINCT_NORMAL_DEG
+            .to_radians()
+            .cos();
+        let mut near = Vec::new();
         for s in 0..self.x.len() {
+            grid.near(&self.x[s], r, &mut near);
             let mut by_body: BTreeMap<u32, Vec<_>> = BTreeMap::new();
-            for f in 0..faces.nodes.len() {
-                if let Some(touch) = sphere_triangle(&self.x[s], r, &tri_of(f)) {
+            for &f in &near {
+                if let Some(touch) = sphere_triangle(&self.x[s], r, &tri_of(f as usize)) {
                     by_body
-                        .entry(faces.body[f])
+                        .entry(faces.body[f as usize])
                         .or_default()
-                        .push((f as u32, touch));
+                        .push((f, touch));
                 }
             }
+            let old = history.remove(&(s as u32)).unwrap_or_default();
             for (body, touches) in by_body {
                 let (eb, nub) = faces.elastic[body as usize];
                 let law = self.law(
@@ -298,9 +312,19 @@ impl FreeSpheres {
                     let arm = touch.point - self.x[s];
                     let vs = self.v[s] + self.w[s].cross(&arm);
                     let vf: V3 = (0..3).map(|c| nodes.v[tri[c] as usize] * wts[c]).sum();
-                    let mut xi = history.remove(&(s as u32, f)).unwrap_or_else(V3::zeros);
+                    // The history of this body's contact with the nearest
+                    // normal last step (within the distinct-normal angle),
+                    // whichever triangle had it: rolling over the
+                    // tessellation keeps its spring.
+                    let mut xi = old
+                        .iter()
+                        .filter(|h| h.0 == body && h.1.dot(&touch.normal) >= cos)
+                        .max_by(|a, b| a.1.dot(&touch.normal).total_cmp(&b.1.dot(&touch.normal)))
+                        .map_or_else(V3::zeros, |h| h.2);
                     let out = law.force(touch.depth, &touch.normal, &(vs - vf), dt, &mut xi);
-                    kept.insert((s as u32, f), xi);
+                    kept.entry(s as u32)
+                        .or_default()
+                        .push((body, touch.normal, xi));
                     self.force[s] += out.force;
                     self.moment[s] += arm.cross(&out.force);
                     for c in 0..3 {
@@ -371,5 +395,59 @@ impl FreeSpheres {
         let a = (k.radius * max_overlap).sqrt();
         let g = 1.0 / pipe_resistance(k.conductivity, None, a, self.contact.resistance);
         0.5 * sphere_capacity(k.density, k.specific_heat, k.radius) / (touches.max(1) as f64 * g)
+    }
+}
+
+/// The faces binned on a grid of cubes at least a sphere diameter and the
+/// largest triangle's box wide, so a triangle lies in at most 8 cells and
+/// a sphere's box meets at most 8.
+struct FaceGrid {
+    h: f64,
+    cells: HashMap<[i64; 3], Vec<u32>>,
+}
+
+impl FaceGrid {
+    fn new(n: usize, diameter: f64, tri: impl Fn(usize) -> [V3; 3]) -> FaceGrid {
+        let boxes: Vec<(V3, V3)> = (0..n)
+            .map(|f| {
+                let t = tri(f);
+                (t[0].inf(&t[1]).inf(&t[2]), t[0].sup(&t[1]).sup(&t[2]))
+            })
+            .collect();
+        let h = boxes
+            .iter()
+            .map(|(lo, hi)| (hi - lo).max())
+            .fold(diameter, f64::max);
+        let mut cells: HashMap<[i64; 3], Vec<u32>> = HashMap::new();
+        for (f, (lo, hi)) in boxes.iter().enumerate() {
+            for_cells(lo, hi, h, |c| cells.entry(c).or_default().push(f as u32));
+        }
+        FaceGrid { h, cells }
+    }
+
+    /// The faces (ascending, once each) in the cells the box of the sphere
+    /// at `x` of radius `r` meets.
+    fn near(&self, x: &V3, r: f64, out: &mut Vec<u32>) {
+        out.clear();
+        let e = V3::repeat(r);
+        for_cells(&(x - e), &(x + e), self.h, |c| {
+            if let Some(list) = self.cells.get(&c) {
+                out.extend_from_slice(list);
+            }
+        });
+        out.sort_unstable();
+        out.dedup();
+    }
+}
+
+/// Each grid cell (side `h`) the box [lo, hi] meets.
+fn for_cells(lo: &V3, hi: &V3, h: f64, mut f: impl FnMut([i64; 3])) {
+    let c = |v: f64| (v / h).floor() as i64;
+    for i in c(lo.x)..=c(hi.x) {
+        for j in c(lo.y)..=c(hi.y) {
+            for k in c(lo.z)..=c(hi.z) {
+                f([i, j, k]);
+            }
+        }
     }
 }

@@ -62,17 +62,19 @@ fn settle(x: f64, y: f64) -> (f64, V3, usize) {
     let mut last = Default::default();
     for _ in 0..20_000 {
         force.iter_mut().for_each(|f| *f = V3::zeros());
-        last = s.step(
-            dt,
-            &faces,
-            NodeSide {
-                x: &nodes,
-                v: &still,
-                temperature: None,
-                force: &mut force,
-                heat: &mut heat,
-            },
-        );
+        last = s
+            .step(
+                dt,
+                &faces,
+                NodeSide {
+                    x: &nodes,
+                    v: &still,
+                    temperature: None,
+                    force: &mut force,
+                    heat: &mut heat,
+                },
+            )
+            .unwrap();
     }
     assert!(s.v[0].norm() < 1e-9, "still moving: {:?}", s.v[0]);
     (
@@ -146,7 +148,8 @@ fn two_touching_spheres_exchange_heat_as_the_pipe_network() {
                 force: &mut [],
                 heat: &mut [],
             },
-        );
+        )
+        .unwrap();
     }
     let (ea, eb) = net.exact(0.0, 1.0, tau);
     let (got, want) = (s.t[1] - s.t[0], eb - ea);
@@ -196,7 +199,8 @@ fn a_sphere_on_a_hot_tet4_face_heats_with_one_time_constant() {
                 force: &mut force,
                 heat: &mut heat,
             },
-        );
+        )
+        .unwrap();
         // What the nodes give is what the sphere takes.
         let q: f64 = heat.iter().sum();
         assert!((q * dt + cap * (s.t[0] - t_before)).abs() < 1e-9 * cap * 80.0);
@@ -231,17 +235,19 @@ fn spheres_among_themselves_conserve_momentum_and_stack_in_order() {
         let dt = s.stable_dt(&Faces::default(), 1e-4);
         let mut touched = 0;
         for _ in 0..5000 {
-            let st = s.step(
-                dt,
-                &Faces::default(),
-                NodeSide {
-                    x: &[],
-                    v: &[],
-                    temperature: None,
-                    force: &mut [],
-                    heat: &mut [],
-                },
-            );
+            let st = s
+                .step(
+                    dt,
+                    &Faces::default(),
+                    NodeSide {
+                        x: &[],
+                        v: &[],
+                        temperature: None,
+                        force: &mut [],
+                        heat: &mut [],
+                    },
+                )
+                .unwrap();
             touched = touched.max(st.pairs);
         }
         (s.x, s.v, s.w, touched)
@@ -335,7 +341,8 @@ fn a_sphere_on_a_deformable_tet4_block_loads_its_nodes_with_its_weight() {
                 force: &mut f,
                 heat: &mut heat,
             },
-        );
+        )
+        .unwrap();
         update_nodes_damped(&p, |_| 300.0, &mass, &f, None, &bc, &mut x, &mut v).unwrap();
     }
     assert!(s.v[0].norm() < 1e-8, "still moving: {:?}", s.v[0]);
@@ -402,7 +409,8 @@ fn down_the_slope(theta: f64, friction: f64, time: f64) -> (f64, f64) {
                 force: &mut force,
                 heat: &mut heat,
             },
-        );
+        )
+        .unwrap();
     }
     (s.x[0].x - x0.x, s.w[0].y)
 }
@@ -456,17 +464,19 @@ fn an_undamped_sphere_bounces_back_to_its_drop_height() {
     // Fall (14 ms), impact, rise (14 ms): the highest point after impact.
     let steps = (0.04 / dt) as usize;
     for _ in 0..steps {
-        let st = s.step(
-            dt,
-            &faces,
-            NodeSide {
-                x: &nodes,
-                v: &still,
-                temperature: None,
-                force: &mut force,
-                heat: &mut heat,
-            },
-        );
+        let st = s
+            .step(
+                dt,
+                &faces,
+                NodeSide {
+                    x: &nodes,
+                    v: &still,
+                    temperature: None,
+                    force: &mut force,
+                    heat: &mut heat,
+                },
+            )
+            .unwrap();
         touched |= st.faces > 0;
         if touched && st.faces == 0 {
             top = top.max(s.x[0].z);
@@ -476,4 +486,37 @@ fn an_undamped_sphere_bounces_back_to_its_drop_height() {
     let back = top - (0.02 + STEEL.radius);
     println!("bounce: back to {back:.6e} m of {drop:.1e} m");
     assert!((back - drop).abs() < 0.01 * drop, "{back}");
+}
+
+#[test]
+fn a_step_far_above_the_stable_one_is_an_error_naming_the_sphere() {
+    let contact = SphereContact {
+        damping: 0.0,
+        friction: 0.0,
+        resistance: 0.0,
+    };
+    let r = STEEL.radius;
+    // Two held spheres touching (δ = 1 µm) with their temperatures
+    // stepped at 1e6 times the stable heat step: forward Euler amplifies
+    // the difference about 5e5-fold a step, past the largest f64.
+    let x = vec![V3::zeros(), V3::new(2.0 * r - 1e-6, 0.0, 0.0)];
+    let mut s = FreeSpheres::new(STEEL, contact, x, vec![0.0, 1.0]);
+    s.fixed = vec![true, true];
+    let dt = 1e6 * s.stable_heat_dt(1, 1e-6);
+    let mut err = None;
+    for _ in 0..100 {
+        let side = NodeSide {
+            x: &[],
+            v: &[],
+            temperature: None,
+            force: &mut [],
+            heat: &mut [],
+        };
+        if let Err(e) = s.step(dt, &Faces::default(), side) {
+            err = Some(e);
+            break;
+        }
+    }
+    let e = err.expect("an error");
+    assert!(e.contains("free sphere") && e.contains("non-finite"), "{e}");
 }

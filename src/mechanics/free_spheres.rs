@@ -229,7 +229,10 @@ impl FreeSpheres {
     /// `faces` over the nodes of `nodes`, then the motion and the
     /// temperatures. A thermal step (`t` not empty) exchanges heat with the
     /// faces only where `nodes.temperature` is given.
-    pub fn step(&mut self, dt: f64, faces: &Faces, nodes: NodeSide) -> SphereStep {
+    ///
+    /// Errors if a sphere's position, velocity or temperature became
+    /// non-finite (an unstable step), naming the sphere.
+    pub fn step(&mut self, dt: f64, faces: &Faces, nodes: NodeSide) -> Result<SphereStep, String> {
         let k = self.kind;
         let (mass, inertia) = k.mass_inertia();
         let r = k.radius;
@@ -370,7 +373,20 @@ impl FreeSpheres {
                 *t += dt * q / c;
             }
         }
-        report
+        let bad = (0..self.x.len()).find(|&i| {
+            !(self.x[i]
+                .iter()
+                .chain(self.v[i].iter())
+                .all(|c| c.is_finite())
+                && self.t.get(i).is_none_or(|t| t.is_finite()))
+        });
+        match bad {
+            Some(i) => Err(format!(
+                "free sphere {i} became non-finite (NaN or infinite): the step {dt:e} s is \
+                 above the contacts' stable step (FreeSpheres::stable_dt, stable_heat_dt)"
+            )),
+            None => Ok(report),
+        }
     }
 
     /// The stable step of the spheres' contacts at overlap up to

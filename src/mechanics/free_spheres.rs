@@ -157,8 +157,16 @@ pub struct FreeSpheres {
 
 impl FreeSpheres {
     /// Spheres at rest at `x`, with temperatures `t` (empty without heat).
+    ///
+    /// # Panics
+    /// If `t` is neither empty nor one temperature per sphere.
     pub fn new(kind: SphereKind, contact: SphereContact, x: Vec<V3>, t: Vec<f64>) -> Self {
         let n = x.len();
+        assert!(
+            t.is_empty() || t.len() == n,
+            "free spheres: {} temperatures for {n} spheres",
+            t.len()
+        );
         FreeSpheres {
             kind,
             contact,
@@ -251,7 +259,8 @@ impl FreeSpheres {
             let (a, b) = (i as usize, j as usize);
             let d = self.x[b] - self.x[a];
             let dist = d.norm();
-            let n = d / dist;
+            // Coincident centres (never from `box_sites`) push along x.
+            let n = if dist > 0.0 { d / dist } else { V3::x() };
             let delta = 2.0 * r - dist;
             // Contact point velocities: v + ω × (arm), arms ±r n.
             let va = self.v[a] + self.w[a].cross(&(n * r));
@@ -390,8 +399,11 @@ impl FreeSpheres {
     }
 
     /// The stable step of the spheres' contacts at overlap up to
-    /// `max_overlap`: 0.2 √(m*/k_n) with k_n the Hertz stiffness there
-    /// against the stiffer partner (a sphere or `faces`' stiffest body).
+    /// `max_overlap`: 0.1 √(m/k_n) with m a sphere's mass and k_n the Hertz
+    /// stiffness there against the stiffer partner (a sphere or `faces`'
+    /// stiffest body). A pair alone allows 2 √(m*/k_n) = 1.4 √(m/k_n); its
+    /// tangential springs and spins (k_t/k_n = 4 G*/E*, I = 0.4 m r²) and
+    /// up to 12 touching neighbours bring that to about 0.24 √(m/k_n).
     pub fn stable_dt(&self, faces: &Faces, max_overlap: f64) -> f64 {
         let k = self.kind;
         let (mass, _) = k.mass_inertia();
@@ -400,7 +412,7 @@ impl FreeSpheres {
             e = e.max(effective_modulus(k.young, k.poisson, eb, nub));
         }
         let kn = 2.0 * e * (k.radius * max_overlap).sqrt();
-        0.2 * (mass / kn).sqrt()
+        0.1 * (mass / kn).sqrt()
     }
 
     /// The largest forward-Euler heat step: the spheres' capacity over

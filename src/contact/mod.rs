@@ -13,6 +13,8 @@ pub mod gap;
 pub mod penalty;
 pub mod search;
 pub mod self_search;
+pub mod sphere;
+pub mod sphere_heat;
 mod surface;
 pub mod table;
 mod tets;

@@ -22,6 +22,9 @@
 //! - [`bond`]: bonded sphere lattice of seed 002 (eqs 2–4, 12–15): spring
 //!   and conductance constants, incremental bond kernel with rotations,
 //!   bond heat flows, damped particle update.
+//! - [`free_spheres`]: free DE spheres of one kind (issue 21): Hertz
+//!   contact with friction among themselves and on Tet4 faces, pipe-network
+//!   heat, explicit update.
 //! - [`ghost`]: ghost particles of the FE–DE interface (seed 002 eqs 5,
 //!   16–17): placement, interpolation, force and heat return with N_I.
 //! - `error`: [`MechanicsError`].
@@ -34,6 +37,7 @@ pub mod bond;
 pub mod element;
 mod error;
 pub mod explicit;
+pub mod free_spheres;
 pub mod frequency;
 pub mod ghost;
 pub mod hex8;

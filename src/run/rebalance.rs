@@ -210,10 +210,9 @@ pub(super) struct Probe {
 }
 
 /// Whether a run detects its contacts again at `step` because it may
-/// repartition there: a thermal run with `mechanics.rebalance.every` = N
-/// > 0 and a contact model, at a multiple of N before its last step, on
-/// any number of ranks.
-/// A repartition finds the thermal contacts afresh at the current
+/// repartition there: a thermal run with a contact model and
+/// `mechanics.rebalance.every` = N (N > 0), at a multiple of N before its
+/// last step, on any number of ranks. A repartition finds the thermal contacts afresh at the current
 /// positions; detecting at every step where one may happen, on one rank
 /// too, keeps the contact set, and so the temperatures, independent of
 /// the ranks and the repartitions (with `contact.every = 0` a one-rank

@@ -3,7 +3,8 @@
 //! joints) crack where they land, and on 2 ranks the whole blocks change
 //! rank during the run (repartitions every 2 steps at any imbalance). The
 //! joints' damage travels with their tets, so trajectories, the joint
-//! grid and the broken joints are bitwise those of one rank.
+//! grid and the broken joints are bitwise those of one rank; on a hot
+//! floor with thermal contact, temperatures agree with one rank's to 1e-8.
 
 mod common;
 
@@ -25,22 +26,6 @@ fn scenario() -> String {
     .replacen(block, &format!("fracture = {{}}\n{block}"), 1)
 }
 
-/// The numbers before "repartition(s)" and "bodies moved" in a summary.
-fn repartitions(summary: &str) -> (u64, u64) {
-    let Some(line) = summary
-        .lines()
-        .find(|l| l.trim_start().starts_with("balance"))
-    else {
-        return (0, 0);
-    };
-    let words: Vec<&str> = line.split_whitespace().collect();
-    let before = |w: &str| -> u64 {
-        let i = words.iter().position(|x| x.starts_with(w)).unwrap();
-        words[i - 1].parse().unwrap()
-    };
-    (before("repartition"), before("bodies"))
-}
-
 struct Drop {
     disp: Vec<Vec<[f64; 3]>>,
     vel: Vec<Vec<f64>>,
@@ -48,12 +33,15 @@ struct Drop {
     history: (Vec<String>, Vec<Vec<f64>>),
     summary: String,
     owners: Vec<Vec<f64>>,
+    /// A coupled run's temperatures.
+    temperatures: Option<Results>,
 }
 
-fn drop(ranks: usize) -> Drop {
-    let dir = out_dir(&format!("joint-rebalance-{ranks}"));
+/// The jointed drop `text` on `ranks` ranks, repartitioned every 2 steps.
+fn drop(tag: &str, text: &str, ranks: usize) -> Drop {
+    let dir = out_dir(&format!("joint-rebalance-{tag}{ranks}"));
     let scen = dir.join("drop.toml");
-    std::fs::write(&scen, scenario()).unwrap();
+    std::fs::write(&scen, text).unwrap();
     let out = dir.join("out");
     let summary = run_ok(
         ranks,
@@ -70,8 +58,6 @@ fn drop(ranks: usize) -> Drop {
     );
     let m = read_mech(&out, "drop");
     let h5 = out.join("drop.h5");
-    let jh5 = out.join("drop_joints.h5");
-    let steps = fdem::io::read_times(&jh5).unwrap().len();
     Drop {
         vel: velocities_by_node_id(&h5, m.times.len()),
         // The field exists where a repartition may move elements.
@@ -80,26 +66,61 @@ fn drop(ranks: usize) -> Drop {
             .map(|k| fdem::io::read_cell_field_step(&h5, "owner_rank", k).unwrap())
             .collect(),
         disp: m.disp,
-        joints: (0..steps)
-            .map(|k| {
-                ["damage", "mode", "broke_at", "opening"]
-                    .map(|f| fdem::io::read_cell_field_step(&jh5, f, k).unwrap())
-            })
-            .collect(),
+        joints: joint_fields(&out, "drop"),
         history: history(&out, "drop"),
+        temperatures: text
+            .contains("[thermal]")
+            .then(|| read_results(&out, "drop")),
         summary,
     }
 }
 
 #[test]
 fn jointed_blocks_repartitioned_on_two_ranks_fall_and_crack_bitwise_as_on_one() {
-    let one = drop(1);
+    repartitioned_bitwise("", &scenario());
+}
+
+/// The jointed blocks at 20 C dropped onto a floor at 300 C with thermal
+/// contact (R_c = 1e-3 m² K/W, detected at the start and again when
+/// cracks change, `contact.every = 0`) and no expansion: repartitioned on
+/// 2 ranks, the trajectories and joints are bitwise those of one rank and
+/// the temperatures agree to 1e-8 relative (the direct solver's round-off)
+/// before and after joints break. Before the runs detected the contacts
+/// at every step where a repartition may happen, the repartitions found
+/// the blocks on the floor a step before one rank did (6e-5 apart).
+#[test]
+fn jointed_blocks_on_a_hot_floor_repartitioned_heat_as_on_one_rank() {
+    let text = scenario()
+        .replacen(
+            "density = 1500.0",
+            "density = 1500.0\nconductivity = 2.0\nspecific_heat = 800.0",
+            1,
+        )
+        .replacen(
+            "rotate = [3.0, 5.0, 7.0]",
+            "rotate = [3.0, 5.0, 7.0]\ninitial_temperature = 20.0",
+            1,
+        )
+        .replacen(
+            "fixed = true",
+            "fixed = true\ninitial_temperature = 300.0",
+            1,
+        )
+        + "\n[thermal]\ntheta = 1.0\n\n[contact]\nresistance = 1e-3\n";
+    assert!(text.contains("conductivity") && text.contains("initial_temperature = 300.0"));
+    repartitioned_bitwise("hot-", &text);
+}
+
+/// `text` run on 1 and on 2 ranks (repartitioned): the same trajectories,
+/// joint grid, broken joints and joint counts, and temperatures to 1e-8.
+fn repartitioned_bitwise(tag: &str, text: &str) {
+    let one = drop(tag, text, 1);
     let want = broken(&one.joints.last().expect("joint outputs")[1]);
     assert!(
         !want.is_empty(),
         "the blocks must crack where they land: no joint broke"
     );
-    let two = drop(2);
+    let two = drop(tag, text, 2);
     let (done, moved) = repartitions(&two.summary);
     assert!(
         done >= 1 && moved > 0,
@@ -146,6 +167,19 @@ fn jointed_blocks_repartitioned_on_two_ranks_fall_and_crack_bitwise_as_on_one() 
             assert_eq!(a[c], b[c], "history {name} at step {}", b[0]);
         }
     }
+    if let (Some(a), Some(b)) = (&one.temperatures, &two.temperatures) {
+        let (_, rows) = &one.history;
+        let (c, t) = (
+            col(&one.history.0, "broken_joints"),
+            col(&one.history.0, "time"),
+        );
+        let first = rows.iter().find(|r| r[c] > 0.0).expect("a joint broke")[t];
+        assert!(
+            a.times.iter().any(|&t| t > first),
+            "no output after the first joint broke (t = {first})"
+        );
+        assert_same_temperatures(a, b, 1e-8, "hot jointed drop: 1 vs 2 ranks");
+    }
     eprintln!(
         "{} joints broken; {done} repartitions moved {moved} blocks; {changed} elements changed rank",
         want.len()
@@ -191,11 +225,6 @@ fn jointed_blocks_restarted_after_breaking_continue_bitwise() {
     );
     let (a, b) = (read_mech(&full, "drop"), read_mech(&rest, "drop"));
     assert!(b.times.len() > 1, "the restart wrote no outputs");
-    let (ja, jb) = (full.join("drop_joints.h5"), rest.join("drop_joints.h5"));
-    let (na, nb) = (
-        fdem::io::read_times(&ja).unwrap().len(),
-        fdem::io::read_times(&jb).unwrap().len(),
-    );
     for k in 0..b.times.len() {
         let at = a
             .times
@@ -208,10 +237,10 @@ fn jointed_blocks_restarted_after_breaking_continue_bitwise() {
             b.times[k]
         );
     }
-    for f in ["damage", "mode", "broke_at", "opening"] {
-        let x = fdem::io::read_cell_field_step(&ja, f, na - 1).unwrap();
-        let y = fdem::io::read_cell_field_step(&jb, f, nb - 1).unwrap();
-        assert!(x == y, "last joint output: {f} differs");
+    let (ja, jb) = (joint_fields(&full, "drop"), joint_fields(&rest, "drop"));
+    let (x, y) = (ja.last().unwrap(), jb.last().unwrap());
+    for (f, name) in ["damage", "mode", "broke_at", "opening"].iter().enumerate() {
+        assert!(x[f] == y[f], "last joint output: {name} differs");
     }
     eprintln!(
         "{broke} joints broken at the checkpoint; {} outputs after it bitwise",

@@ -180,17 +180,10 @@ fn pulled_bar(set: Set, ranks: usize) -> BarRun {
     run_ok(ranks, &scen, &out, &[]);
     let m = read_mech(&out, "bar");
     let h5 = out.join("bar.h5");
-    let jh5 = out.join("bar_joints.h5");
-    let steps = fdem::io::read_times(&jh5).unwrap().len();
     BarRun {
         vel: velocities_by_node_id(&h5, m.times.len()),
         disp: m.disp,
-        joints: (0..steps)
-            .map(|k| {
-                ["damage", "mode", "broke_at", "opening"]
-                    .map(|f| fdem::io::read_cell_field_step(&jh5, f, k).unwrap())
-            })
-            .collect(),
+        joints: joint_fields(&out, "bar"),
         history: history(&out, "bar"),
         ranks: ranks_of(&h5),
         by_rank: tets_by_rank(&out, "bar", |c| set.holds(c)),

@@ -48,14 +48,7 @@ fn run(ranks: usize) -> SplitRun {
     let m = read_mech(&out, STEM);
     let h5 = out.join(format!("{STEM}.h5"));
     let vel = velocities_by_node_id(&h5, m.times.len());
-    let jh5 = out.join(format!("{STEM}_joints.h5"));
-    let steps = fdem::io::read_times(&jh5).unwrap().len();
-    let joints = (0..steps)
-        .map(|k| {
-            ["damage", "mode", "broke_at", "opening"]
-                .map(|f| fdem::io::read_cell_field_step(&jh5, f, k).unwrap())
-        })
-        .collect();
+    let joints = joint_fields(&out, STEM);
     SplitRun {
         disp: m.disp,
         vel,
@@ -239,9 +232,7 @@ fn a_split_jointed_run_restarts_from_its_checkpoint() {
     let last = |dir: &std::path::Path| {
         let m = read_mech(dir, STEM);
         let k = m.times.len() - 1;
-        let h5 = dir.join(format!("{STEM}_joints.h5"));
-        let kj = fdem::io::read_times(&h5).unwrap().len() - 1;
-        let d = fdem::io::read_cell_field_step(&h5, "damage", kj).unwrap();
+        let [d, ..] = joint_fields(dir, STEM).pop().expect("joint outputs");
         (m.times[k], m.disp[k].clone(), d)
     };
     let full = out_dir("joint-split-restart-full");

@@ -41,7 +41,7 @@ type SharedFace = ([u32; 3], (u32, usize), (u32, usize));
 
 /// Local faces of a tet: the three corners opposite corner k, oriented
 /// outwards for a positively oriented tet.
-const FACES: [[usize; 3]; 4] = [[1, 2, 3], [0, 3, 2], [0, 1, 3], [0, 2, 1]];
+pub(crate) const FACES: [[usize; 3]; 4] = [[1, 2, 3], [0, 3, 2], [0, 1, 3], [0, 2, 1]];
 
 fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
@@ -57,6 +57,45 @@ fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
 
 fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+/// The joint of the face `fa` of tet `ta` shared with tet `tb` (`ta` <
+/// `tb`): its corners in the new numbering (`new_a`, `new_b`: the two
+/// tets' corners there), `a` counter-clockwise seen from `tb`.
+pub(crate) fn joint_faces(
+    nodes: &[[f64; 3]],
+    tets: &[[u32; 4]],
+    (ta, fa): (u32, usize),
+    tb: u32,
+    new_a: [u32; 4],
+    new_b: [u32; 4],
+) -> JointFaces {
+    let (ta_u, tb_u) = (ta as usize, tb as usize);
+    let mut loc = FACES[fa];
+    let x = |g: u32| nodes[g as usize];
+    let g: [u32; 3] = loc.map(|l| tets[ta_u][l]);
+    // Orient a's corners so that the normal points out of tet a.
+    let nrm = cross(sub(x(g[1]), x(g[0])), sub(x(g[2]), x(g[0])));
+    let apex = x(tets[ta_u][fa]);
+    if dot(nrm, sub(apex, x(g[0]))) > 0.0 {
+        loc.swap(1, 2);
+    }
+    let g: [u32; 3] = loc.map(|l| tets[ta_u][l]);
+    let a = loc.map(|l| new_a[l]);
+    let b = g.map(|gi| {
+        let k = tets[tb_u]
+            .iter()
+            .position(|&c| c == gi)
+            .unwrap_or_else(|| unreachable!("a shared face's corner is a corner of both tets"));
+        new_b[k]
+    });
+    let n = cross(sub(x(g[1]), x(g[0])), sub(x(g[2]), x(g[0])));
+    JointFaces {
+        a,
+        b,
+        tets: [ta, tb],
+        area: 0.5 * dot(n, n).sqrt(),
+    }
 }
 
 /// Make the tets of `in_set` discontinuous (`in_set[t]` per tet).
@@ -102,32 +141,9 @@ pub fn make_discontinuous(nodes: &[[f64; 3]], tets: &[[u32; 4]], in_set: &[bool]
     shared_faces.sort_unstable_by_key(|s| s.0);
     let joints = shared_faces
         .into_iter()
-        .map(|(_, (ta, fa), (tb, _))| {
-            let (ta_u, tb_u) = (ta as usize, tb as usize);
-            let mut loc = FACES[fa];
-            let x = |g: u32| nodes[g as usize];
-            let g: [u32; 3] = loc.map(|l| tets[ta_u][l]);
-            // Orient a's corners so that the normal points out of tet a.
-            let nrm = cross(sub(x(g[1]), x(g[0])), sub(x(g[2]), x(g[0])));
-            let apex = x(tets[ta_u][fa]);
-            if dot(nrm, sub(apex, x(g[0]))) > 0.0 {
-                loc.swap(1, 2);
-            }
-            let g: [u32; 3] = loc.map(|l| tets[ta_u][l]);
-            let a = loc.map(|l| new_tets[ta_u][l]);
-            let b = g.map(|gi| {
-                let k = tets[tb_u].iter().position(|&c| c == gi).unwrap_or_else(|| {
-                    unreachable!("a shared face's corner is a corner of both tets")
-                });
-                new_tets[tb_u][k]
-            });
-            let n = cross(sub(x(g[1]), x(g[0])), sub(x(g[2]), x(g[0])));
-            JointFaces {
-                a,
-                b,
-                tets: [ta, tb],
-                area: 0.5 * dot(n, n).sqrt(),
-            }
+        .map(|(_, a, (tb, _))| {
+            let (ta, tb_u) = (a.0 as usize, tb as usize);
+            joint_faces(nodes, tets, a, tb, new_tets[ta], new_tets[tb_u])
         })
         .collect();
     let new_nodes = origin.iter().map(|&g| nodes[g as usize]).collect();

@@ -3,13 +3,15 @@
 //! the 6-node joint element's forces ([`joint`]), the contact of a broken
 //! joint's faces ([`crack`]), a rank's joints advanced
 //! together with their totals ([`set`]), the continuous mesh's vertex of
-//! each node copy ([`vertices`], for self-contact). Physics kernels only: no MPI, no
+//! each node copy ([`vertices`], for self-contact), the copies and joints
+//! of a part numbered as the whole body's ([`numbering`]). Physics kernels only: no MPI, no
 //! PETSc.
 
 pub mod crack;
 pub mod insert;
 pub mod joint;
 pub mod law;
+pub mod numbering;
 pub mod set;
 pub mod vertices;
 

@@ -283,7 +283,8 @@ impl Stages<'_, '_> {
     /// due and needed, and write the checkpoint when due.
     fn stop(&mut self, at: &mut Position, out: &mut Output) -> Result<()> {
         let step = at.step;
-        if self.sys.is_some() && at.schedule.is_detection(step) {
+        let balance_step = rebalance::finds_contacts_again(self.model, step);
+        if self.sys.is_some() && (at.schedule.is_detection(step) || balance_step) {
             self.redetect(step)?;
         }
         if at.schedule.is_finite_check(step) {

@@ -667,3 +667,16 @@ pub fn repartitions(summary: &str) -> (u64, u64) {
     };
     (before("repartition"), before("bodies"))
 }
+
+/// The joint grid's fields damage, mode, broke_at and opening of every
+/// output of `<stem>_joints.h5` in `dir` (each by global joint number).
+pub fn joint_fields(dir: &Path, stem: &str) -> Vec<[Vec<f64>; 4]> {
+    let h5 = dir.join(format!("{stem}_joints.h5"));
+    let steps = fdem::io::read_times(&h5).unwrap().len();
+    (0..steps)
+        .map(|k| {
+            ["damage", "mode", "broke_at", "opening"]
+                .map(|f| fdem::io::read_cell_field_step(&h5, f, k).unwrap())
+        })
+        .collect()
+}

@@ -42,6 +42,10 @@ pub struct PenaltyParams {
     /// cannot reverse the sliding within one step (the explicit stability
     /// limit of the friction "damper" c = μ F_n / v_r is c Δt / m* ≤ 1).
     pub time_step: f64,
+    /// Tangential spring k_t as a fraction of the normal stiffness
+    /// k_n = κ |g|² (0: regularised friction, no spring). With a spring
+    /// (and a positive `time_step`), friction sticks: [`penalty_forces_with`].
+    pub tangential_ratio: f64,
 }
 
 /// Forces and diagnostics of one contacting pair.
@@ -230,6 +234,29 @@ pub fn penalty_forces(
     vb: &[[f64; 3]; 4],
     params: &PenaltyParams,
 ) -> PenaltyResult {
+    penalty_forces_with(s, volume, va, vb, params, None)
+}
+
+/// [`penalty_forces`] of a pair with a tangential spring: `spring` holds the
+/// elastic force F_e (N, on a) of the pair's tangential spring, carried
+/// from substep to substep while the pair touches (zero when it starts
+/// to). With `params.tangential_ratio` > 0 and a positive time step,
+/// friction is Cundall and Strack's (1979) spring–slider instead of the
+/// regularised law: F_e is turned into the current tangent plane (its
+/// size kept) and advanced by −k_t v_t Δt (k_t = ratio × k_n, k_n = κ |g|²),
+/// and F_t = F_e − c_t v_t is capped at μ F_n, where sliding leaves
+/// F_e = F_t. A pair then sticks under a tangential load below μ F_n (no
+/// creep). The force, not a displacement, is kept, since k_t follows the
+/// overlap: a displacement stored while k_t is small would give a force
+/// far beyond μ F_n once the overlap deepens.
+pub fn penalty_forces_with(
+    s: &OverlapState,
+    volume: f64,
+    va: &[[f64; 3]; 4],
+    vb: &[[f64; 3]; 4],
+    params: &PenaltyParams,
+    spring: Option<&mut Spring>,
+) -> PenaltyResult {
     let (kappa, v, grad) = (params.stiffness, volume, &s.grad);
     // Not in the seeds: W = ½ κ V² (Feng, Han & Owen 2012), f = −∂W/∂x = −κ V ∂V/∂x.
     let energy = 0.5 * kappa * v * v;
@@ -289,11 +316,19 @@ pub fn penalty_forces(
         params.slip_velocity
     };
     let scale = params.friction * f_n / vt_len.max(v_reg);
+    let mut f_t = [-scale * v_t[0], -scale * v_t[1], -scale * v_t[2]];
+    let mut friction_power = scale * vt_len * vt_len;
+    let mut spring_energy = 0.0;
+    let dt = params.time_step;
+    if let (Some(xi), true) = (spring, params.tangential_ratio > 0.0 && dt > 0.0) {
+        let r = spring_slider(xi, n, v_t, f_n, kappa * g_len * g_len, params);
+        (f_t, friction_power, spring_energy) = (r.force, r.dissipation, r.energy);
+    }
     // Force at p on a; b gets −f_p.
     let f_p = [
-        -f_damp * n[0] - scale * v_t[0],
-        -f_damp * n[1] - scale * v_t[1],
-        -f_damp * n[2] - scale * v_t[2],
+        -f_damp * n[0] + f_t[0],
+        -f_damp * n[1] + f_t[1],
+        -f_damp * n[2] + f_t[2],
     ];
     // Not in the seeds: f_p spread with N^a(p) on a and −f_p with N^b(p) on b
     // (Σ N = 1 and Σ N x = p: zero net force and torque).
@@ -303,9 +338,9 @@ pub fn penalty_forces(
             forces_b[k][d] -= nb[k] * f_p[d];
         }
     }
-    // Not in the seeds: dissipation −f_p·v_rel = (F_n − F_el) v_n + μ F_n |v_t|²/max(|v_t|, v_r) ≥ 0.
-    let friction_power = scale * vt_len * vt_len;
+    // Not in the seeds: dissipation −f_p·v_rel = (F_n − F_el) v_n + μ F_n |v_t|²/max(|v_t|, v_r) ≥ 0 (regularised).
     let dissipation = f_damp * v_n + friction_power;
+    let energy = energy + spring_energy;
 
     PenaltyResult {
         forces_a,
@@ -317,6 +352,88 @@ pub fn penalty_forces(
         volume: v,
         normal: n,
         point: p,
+    }
+}
+
+/// The tangential force of a spring–slider step ([`spring_slider`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SpringSlider {
+    /// Tangential force on a at the contact point (N).
+    pub force: [f64; 3],
+    /// Power dissipated by the slider and the tangential dashpot (W).
+    pub dissipation: f64,
+    /// Energy ½ k_t |ξ|² held by the spring after the step (J).
+    pub energy: f64,
+}
+
+/// A pair's tangential spring: its elastic force F_e on a (N, three
+/// components) and the energy it holds (J), zero while the pair is apart.
+pub type Spring = [f64; 4];
+
+/// One step of the tangential spring–slider of a contact with unit
+/// normal `n`, tangential velocity `v_t` (of a relative to b), normal
+/// force `f_n` and normal stiffness `k_n`; updates `spring` (see
+/// [`penalty_forces_with`]).
+pub fn spring_slider(
+    spring: &mut Spring,
+    n: [f64; 3],
+    v_t: [f64; 3],
+    f_n: f64,
+    k_n: f64,
+    params: &PenaltyParams,
+) -> SpringSlider {
+    let kt = params.tangential_ratio * k_n;
+    let dt = params.time_step;
+    // Not in the seeds (Cundall & Strack 1979): the spring's force turned into the tangent plane, its size kept.
+    let held = [spring[0], spring[1], spring[2]];
+    let size = dot(held, held).sqrt();
+    let fn_part = dot(held, n);
+    let mut e = [
+        spring[0] - fn_part * n[0],
+        spring[1] - fn_part * n[1],
+        spring[2] - fn_part * n[2],
+    ];
+    let in_plane = dot(e, e).sqrt();
+    if in_plane > 0.0 {
+        let r = size / in_plane;
+        e = [e[0] * r, e[1] * r, e[2] * r];
+    }
+    // Not in the seeds: the spring's energy |F_e|² / 2k_t (k_t follows the overlap).
+    let energy_of = |e: [f64; 3]| if kt > 0.0 { 0.5 * dot(e, e) / kt } else { 0.0 };
+    // What the turn and the new k_t took from the energy held since the last substep.
+    let lost_to_stiffness = spring[3] - energy_of(e);
+    // Not in the seeds (Cundall & Strack 1979): F_e ← F_e − k_t v_t Δt, F_t = F_e − c_t v_t, c_t = 2 ζ √(k_t m*).
+    let trial = [
+        e[0] - kt * v_t[0] * dt,
+        e[1] - kt * v_t[1] * dt,
+        e[2] - kt * v_t[2] * dt,
+    ];
+    let ct = 2.0 * params.damping_ratio * (kt * params.reduced_mass).sqrt();
+    let mut f = [
+        trial[0] - ct * v_t[0],
+        trial[1] - ct * v_t[1],
+        trial[2] - ct * v_t[2],
+    ];
+    let f_len = dot(f, f).sqrt();
+    let cap = params.friction * f_n;
+    // Not in the seeds (Cundall & Strack 1979): Coulomb's cap |F_t| ≤ μ F_n; sliding leaves the spring at F_t.
+    let e = if f_len > cap {
+        let r = cap / f_len;
+        f = [f[0] * r, f[1] * r, f[2] * r];
+        f
+    } else {
+        trial
+    };
+    let energy = energy_of(e);
+    *spring = [e[0], e[1], e[2], energy];
+    // Not in the seeds: the elastic part F_e is a spring at x^n (its energy conserved as the normal penalty's);
+    // dissipated: the energy the cap took, the work −(F_t − F_e)·v_t of the rest, and the stiffness change.
+    let extra = [f[0] - trial[0], f[1] - trial[1], f[2] - trial[2]];
+    let dissipation = (lost_to_stiffness + energy_of(trial) - energy) / dt - dot(extra, v_t);
+    SpringSlider {
+        force: f,
+        dissipation,
+        energy,
     }
 }
 
@@ -413,6 +530,7 @@ mod tests {
             friction: 0.0,
             slip_velocity: 1e-6,
             time_step: 0.0,
+            tangential_ratio: 0.0,
         }
     }
 
@@ -424,6 +542,7 @@ mod tests {
             friction: 0.4,
             slip_velocity: 1e-3,
             time_step: 0.0,
+            tangential_ratio: 0.0,
         }
     }
 
@@ -455,6 +574,74 @@ mod tests {
     fn energy(xa: &[[f64; 3]; 4], xb: &[[f64; 3]; 4], kappa: f64) -> f64 {
         let v = tet_tet_intersection(xa, xb).volume;
         0.5 * kappa * v * v
+    }
+
+    fn sticky(kt_ratio: f64, friction: f64) -> PenaltyParams {
+        PenaltyParams {
+            stiffness: 1.0,
+            damping_ratio: 0.0,
+            reduced_mass: 1.0,
+            friction,
+            slip_velocity: 1e-3,
+            time_step: 1e-3,
+            tangential_ratio: kt_ratio,
+        }
+    }
+
+    /// The spring–slider: below μ F_n the force is the spring's,
+    /// −k_t Σ v_t Δt, with no dissipation; beyond, it is μ F_n against the
+    /// sliding, the spring left at that force, and the work of sliding
+    /// is dissipated; a turned normal turns the spring, its size kept.
+    #[test]
+    fn spring_slider_sticks_then_slides_at_the_coulomb_force() {
+        let (k_n, f_n, n) = (2.0e4, 10.0, [0.0, 0.0, 1.0]);
+        let p = sticky(0.5, 0.4);
+        let kt = 0.5 * k_n;
+        let v = [1e-2, 0.0, 0.0];
+        let mut spring: Spring = [0.0; 4];
+        let mut work = 0.0;
+        for step in 1..=100 {
+            let r = spring_slider(&mut spring, n, v, f_n, k_n, &p);
+            let sticking = kt * 1e-5 * step as f64;
+            if sticking < 0.4 * f_n {
+                assert!(
+                    (r.force[0] + sticking).abs() < 1e-12 * f_n,
+                    "step {step}: {:?}",
+                    r.force
+                );
+                assert!(r.dissipation.abs() < 1e-9, "step {step}: {}", r.dissipation);
+                assert!((r.energy - 0.5 * sticking * sticking / kt).abs() < 1e-12);
+            } else {
+                assert!(
+                    (r.force[0] + 0.4 * f_n).abs() < 1e-12 * f_n,
+                    "step {step}: {:?}",
+                    r.force
+                );
+                work += r.dissipation * p.time_step;
+            }
+            assert_eq!(r.force[1], 0.0);
+        }
+        // Sliding from step 40 on: μ F_n times the slip v Δt a step.
+        assert!(
+            work > 0.0 && (work - 0.4 * f_n * 60.0 * 1e-5).abs() < 0.05 * work,
+            "{work}"
+        );
+        // The normal turns by 30° about y: the spring follows into the new
+        // tangent plane, its size kept.
+        let before = spring;
+        let m = [0.5, 0.0, 0.75f64.sqrt()];
+        let r = spring_slider(&mut spring, m, [0.0; 3], f_n, k_n, &p);
+        let along = spring[0] * m[0] + spring[2] * m[2];
+        let size = |s: &Spring| (s[0] * s[0] + s[1] * s[1] + s[2] * s[2]).sqrt();
+        assert!(
+            along.abs() < 1e-12 && (size(&spring) - size(&before)).abs() < 1e-12,
+            "{spring:?}"
+        );
+        assert!((r.energy - before[3]).abs() < 1e-12 * before[3]);
+        // No normal force: nothing to stick with.
+        let mut s: Spring = [0.0; 4];
+        let r = spring_slider(&mut s, n, v, 0.0, k_n, &p);
+        assert_eq!(r.force, [0.0; 3]);
     }
 
     /// (a) Elastic forces are −∂W/∂x (central differences).

@@ -199,6 +199,7 @@ impl ExplicitDomain {
         self.cracks_marked = false;
         let clock = std::time::Instant::now();
         let linearized_before = self.linearized.len();
+        let springs = self.has_springs().then(|| self.springs_before_detection());
         let planes_before = self.pair_planes.len();
         self.release_pair_arrays();
         self.thermal_only.clear();
@@ -252,6 +253,9 @@ impl ExplicitDomain {
         self.lin_of = vec![super::NONE; self.candidates.len()];
         self.linearized = self.linearized_room(linearized_before);
         self.witness = vec![super::substep::UNSEEN; self.candidates.len()];
+        if let Some(held) = springs {
+            self.springs_after_detection(comm, held);
+        }
         let ghosts: Vec<(u32, u32, u32)> = (self.n_owned..self.node_gid.len())
             .map(|l| (self.node_gid[l], self.node_owner[l], l as u32))
             .collect();

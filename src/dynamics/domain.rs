@@ -134,6 +134,12 @@ pub struct ExplicitDomain {
     /// overlap (`geometry::separating_axis`; `substep::UNSEEN` before its
     /// first evaluation, `OVERLAPPED` when none separated it).
     pub(super) witness: Vec<u8>,
+    /// Tangential springs ξ per candidate (`springs`), zero while apart;
+    /// the substep each last touched; springs to hand out at the next
+    /// detection.
+    pub(super) springs: Vec<crate::contact::penalty::Spring>,
+    pub(super) spring_seen: Vec<u64>,
+    pub(super) spring_pool: Vec<(super::springs::PairKey, crate::contact::penalty::Spring)>,
     pub(super) x_detect: Vec<Vector3<f64>>,
     /// Element force contributions: 4 per element, then those received
     /// from neighbours' elements for shared nodes.
@@ -269,6 +275,7 @@ impl ExplicitDomain {
                     friction: c.friction,
                     slip_velocity: c.slip_velocity,
                     time_step: 0.0,
+                    tangential_ratio: c.tangential_stiffness,
                 },
                 c.penalty,
             )
@@ -395,6 +402,9 @@ impl ExplicitDomain {
             lin_of: Vec::new(),
             linearized: Vec::new(),
             witness: Vec::new(),
+            springs: Vec::new(),
+            spring_seen: Vec::new(),
+            spring_pool: Vec::new(),
             x_detect: Vec::new(),
             v_prev: Vec::new(),
             contrib: Vec::new(),

@@ -63,6 +63,7 @@ mod joints;
 mod pair_sum;
 mod particles;
 mod self_contact;
+mod springs;
 mod state;
 mod substep;
 mod time_step;

@@ -12,7 +12,9 @@ use mpi::traits::*;
 use super::force_sum::pair_key;
 use super::pair_sum::NodeRoutes;
 use super::{ExplicitDomain, NONE};
-use crate::contact::penalty::{overlap_state, penalty_forces, LinearizedOverlap, PenaltyParams};
+use crate::contact::penalty::{
+    overlap_state, penalty_forces_with, LinearizedOverlap, PenaltyParams,
+};
 use crate::error::{Error, Result};
 use crate::geometry::{separated_along, separating_axis, tet_bounds, TetPlanes};
 use crate::mechanics::explicit::{element_forces, update_nodes_damped, NodeUpdate, ThermalLoad};
@@ -102,6 +104,7 @@ impl ExplicitDomain {
             self.substep_id += 1;
             let now = self.substep_id;
             let tolerance = self.linear_tolerance;
+            let with_springs = self.has_springs();
             let geo = &self.pair_geometry;
             let (planes_of, planes) = (&mut self.planes_of, &mut self.pair_planes);
             let (lin_of, linearized) = (&mut self.lin_of, &mut self.linearized);
@@ -143,8 +146,15 @@ impl ExplicitDomain {
                     time_step: self.dt,
                     ..*params
                 };
+                // The pair's tangential spring, when friction sticks.
+                let spring = if with_springs {
+                    self.spring_seen[j] = now;
+                    Some(&mut self.springs[j])
+                } else {
+                    None
+                };
                 let result = match lin_volume {
-                    Some((m, v)) => Some(penalty_forces(&m.state, v, &va, &vb, &p)),
+                    Some((m, v)) => Some(penalty_forces_with(&m.state, v, &va, &vb, &p, spring)),
                     None => {
                         for t in [ta, tb] {
                             let at = planes_of[t] as usize;
@@ -169,11 +179,16 @@ impl ExplicitDomain {
                                         linearized.push(m);
                                     }
                                 }
-                                Some(penalty_forces(&s, s.volume, &va, &vb, &p))
+                                Some(penalty_forces_with(&s, s.volume, &va, &vb, &p, spring))
                             }
                             None => {
                                 lin_of[j] = NONE;
                                 witness[j] = separating_axis(xa, xb).unwrap_or(OVERLAPPED);
+                                if let Some(x) = spring {
+                                    // The contact ended: its spring's energy is dissipated.
+                                    power += x[3] / self.dt;
+                                    *x = [0.0; 4];
+                                }
                                 None
                             }
                         }
@@ -201,6 +216,9 @@ impl ExplicitDomain {
             self.dissipated += power * self.dt;
             self.counters.pair_updates += self.candidates.len() as u64;
             self.counters.exact_overlaps += exact;
+            if with_springs {
+                self.release_apart_springs(now);
+            }
         }
         // Elements next to the halo, then the interior while messages fly.
         let nb = self.n_boundary;

@@ -419,6 +419,8 @@ pub struct CheckpointRows<'a> {
     pub joints: Option<(&'a [u32], &'a [f64], u64)>,
     /// Bonded particles (issue 21), by global numbers.
     pub particles: Option<&'a super::checkpoint_particles::ParticleCheckpoint>,
+    /// Tangential springs: `checkpoint_springs::sorted_rows`.
+    pub springs: Option<(&'a [u32], &'a [f64], u64)>,
 }
 
 /// Collective. Write a checkpoint: every rank its rows (moved to
@@ -655,6 +657,9 @@ fn write_parallel_to(
     }
     if let Some(p) = rows.particles {
         super::checkpoint_particles::write(comm, &file, path, &xfer, p)?;
+    }
+    if let Some(r) = rows.springs {
+        super::checkpoint_springs::write(comm, &file, path, &xfer, r)?;
     }
     let mut sc = [0.0; SCALARS];
     sc[0] = head.step as f64;
@@ -1062,6 +1067,7 @@ mod tests {
             account_rad_sum: c.account.as_ref().and_then(|a| a.rad_sum.as_deref()),
             joints: None,
             particles: None,
+            springs: None,
         };
         crate::testutil::on_one_rank(|comm| write_parallel(comm, p, &head, &rows))
     }

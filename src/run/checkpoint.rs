@@ -131,6 +131,8 @@ pub(super) struct Snapshot {
     fields: Vec<(&'static str, usize, u64, Vec<f64>)>,
     /// The bonded particles' rows (issue 21).
     pub particles: Option<super::particle_checkpoint::ParticleSnapshot>,
+    /// This rank's tangential springs (any rank's after the repartition).
+    pub springs: Vec<crate::io::checkpoint_springs::SavedSpring>,
 }
 
 impl Snapshot {
@@ -163,6 +165,7 @@ impl Snapshot {
             total,
             fields,
             particles: None,
+            springs: Vec::new(),
         }
     }
 
@@ -259,6 +262,17 @@ pub(super) fn restore_mechanics(
         Ok((x, v, vp))
     };
     let (x, v, vp) = agree(comm, read().map_err(|e| unreadable(saved.origin(), e)))?;
+    // The springs reach their pairs' holders at the restore's detection.
+    let springs = match saved {
+        Saved::File(r) => r
+            .file
+            .spring_block(comm.rank() as usize, comm.size() as usize),
+        Saved::Memory(s) => Ok(s.springs.clone()),
+    };
+    m.set_spring_pool(agree(
+        comm,
+        springs.map_err(|e| unreadable(saved.origin(), e)),
+    )?);
     let saved = crate::dynamics::SavedMotion {
         positions: &x,
         velocities: &v,
@@ -430,6 +444,13 @@ pub(super) fn save_checkpoint(
     let total_joints = model.joint_offsets().1;
     let particles =
         super::particle_checkpoint::capture(model, part, sys.as_ref(), mech.as_deref())?;
+    // Tangential springs, sorted by pair over the ranks.
+    let springs = match &mech {
+        Some(m) if m.domain.tangential_springs() => Some(
+            crate::io::checkpoint_springs::sorted_rows(comm, &m.domain.held_springs()),
+        ),
+        _ => None,
+    };
     let mut c = capture(comm, model, part, sys, mech, step, contacts)?;
     c.head.peak_kinetic = peak_kinetic;
     c.head.settled = settled;
@@ -461,6 +482,7 @@ pub(super) fn save_checkpoint(
             .as_ref()
             .map(|(ids, v)| (&ids[..], &v[..], total_joints)),
         particles: particles.as_ref(),
+        springs: springs.as_ref().map(|(i, v, t)| (&i[..], &v[..], *t)),
     };
     crate::io::checkpoint::write_parallel(comm, path, &c.head, &rows).map_err(Error::from)
 }

@@ -432,6 +432,7 @@ impl Stages<'_, '_> {
         )?;
         let mut snapshot = Snapshot::take(comm, model, &self.part, captured);
         snapshot.particles = particles;
+        snapshot.springs = mech.domain.held_springs();
         // The joints' damage travels by joint number (issue 19).
         let joints = super::joint_migration::JointSnapshot::take(comm, model, mech);
         // What the old stages counted goes on with the new ones.

@@ -961,6 +961,14 @@ pub struct PenaltySpec {
     /// the start of every step, so a restart repeats the run bitwise.
     #[serde(default)]
     pub linear_tolerance: f64,
+    /// Tangential spring k_t / k_n of Coulomb friction with stick
+    /// (`contact::penalty::penalty_forces_with`): each touching tet pair
+    /// keeps its tangential spring's force from substep to substep
+    /// (across detections, repartitions and restarts) and slides only at
+    /// μ F_n. 0 (default): regularised friction (creeps below μ F_n at
+    /// speeds up to `slip_velocity`).
+    #[serde(default)]
+    pub tangential_stiffness: f64,
 }
 
 fn default_slip() -> f64 {

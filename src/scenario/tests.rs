@@ -158,6 +158,26 @@ fn linear_tolerance_and_rms_settle_are_checked() {
     .unwrap_err()
     .to_string();
     assert!(e.contains("mechanics.contact.linear_tolerance"), "{e}");
+    let s = parse_str(
+        &mech("tangential_stiffness = 0.8", "rms_speed = 0.03"),
+        p(),
+        &[],
+    );
+    let c = s.unwrap().scenario.mechanics.unwrap().contact.unwrap();
+    assert_eq!(c.tangential_stiffness, 0.8);
+    for bad in ["1.5", "-0.1", "nan"] {
+        let e = parse_str(
+            &mech(&format!("tangential_stiffness = {bad}"), "rms_speed = 0.03"),
+            p(),
+            &[],
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("mechanics.contact.tangential_stiffness"),
+            "{bad}: {e}"
+        );
+    }
     let e = parse_str(&mech("", "rms_speed = -1.0"), p(), &[])
         .unwrap_err()
         .to_string();

@@ -833,6 +833,14 @@ impl Scenario {
                     );
                 }
             }
+            // k_t ≤ k_n keeps the explicit step of the normal spring stable for the tangential one.
+            let kt = c.tangential_stiffness;
+            if !(kt.is_finite() && (0.0..=1.0).contains(&kt)) {
+                return bad(
+                    "mechanics.contact.tangential_stiffness",
+                    format!("must be a fraction of the normal stiffness in [0, 1], got {kt}"),
+                );
+            }
             if let Some(g) = c.margin {
                 if !(g.is_finite() && g > 0.0) {
                     return bad(

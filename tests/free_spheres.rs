@@ -6,7 +6,9 @@
 
 use std::f64::consts::PI;
 
-use fdem::mechanics::free_spheres::{Faces, FreeSpheres, NodeSide, SphereContact, SphereKind};
+use fdem::mechanics::free_spheres::{
+    Faces, FreeSpheres, NodeSide, SphereContact, SphereKind, SphereStep,
+};
 use fdem::mesh::generate::box_mesh;
 use fdem::validation::pipe_network::PipeNetwork;
 use nalgebra::Vector3;
@@ -36,6 +38,28 @@ fn block() -> (Faces, Vec<V3>) {
     (faces, m.nodes.iter().map(|&p| V3::from(p)).collect())
 }
 
+/// One step of `s` against `faces`, over nodes held still at `nodes`
+/// (temperatures `t`), adding to their `force` and `heat`.
+fn step_held(
+    s: &mut FreeSpheres,
+    dt: f64,
+    faces: &Faces,
+    nodes: &[V3],
+    t: Option<&[f64]>,
+    force: &mut [V3],
+    heat: &mut [f64],
+) -> SphereStep {
+    let still = vec![V3::zeros(); nodes.len()];
+    let side = NodeSide {
+        x: nodes,
+        v: &still,
+        temperature: t,
+        force,
+        heat,
+    };
+    s.step(dt, faces, side).unwrap()
+}
+
 /// A sphere dropped from touching the block's top at (x, y) settles; its
 /// overlap and the force the block's nodes take.
 fn settle(x: f64, y: f64) -> (f64, V3, usize) {
@@ -58,23 +82,10 @@ fn settle(x: f64, y: f64) -> (f64, V3, usize) {
     let delta = fdem::contact::sphere::hertz_static_overlap(m * 9.81, e_star, STEEL.radius);
     let dt = s.stable_dt(&faces, 4.0 * delta);
     let (mut force, mut heat) = (vec![V3::zeros(); nodes.len()], vec![0.0; nodes.len()]);
-    let still = vec![V3::zeros(); nodes.len()];
     let mut last = Default::default();
     for _ in 0..20_000 {
         force.iter_mut().for_each(|f| *f = V3::zeros());
-        last = s
-            .step(
-                dt,
-                &faces,
-                NodeSide {
-                    x: &nodes,
-                    v: &still,
-                    temperature: None,
-                    force: &mut force,
-                    heat: &mut heat,
-                },
-            )
-            .unwrap();
+        last = step_held(&mut s, dt, &faces, &nodes, None, &mut force, &mut heat);
     }
     assert!(s.v[0].norm() < 1e-9, "still moving: {:?}", s.v[0]);
     (
@@ -138,18 +149,7 @@ fn two_touching_spheres_exchange_heat_as_the_pipe_network() {
     assert!(dt < s.stable_heat_dt(1, overlap));
     let faces = Faces::default();
     for _ in 0..steps {
-        s.step(
-            dt,
-            &faces,
-            NodeSide {
-                x: &[],
-                v: &[],
-                temperature: None,
-                force: &mut [],
-                heat: &mut [],
-            },
-        )
-        .unwrap();
+        step_held(&mut s, dt, &faces, &[], None, &mut [], &mut []);
     }
     let (ea, eb) = net.exact(0.0, 1.0, tau);
     let (got, want) = (s.t[1] - s.t[0], eb - ea);
@@ -183,24 +183,20 @@ fn a_sphere_on_a_hot_tet4_face_heats_with_one_time_constant() {
     let tau = res * cap;
     let steps = 2000;
     let dt = tau / steps as f64;
-    let still = vec![V3::zeros(); nodes.len()];
     let (mut force, mut heat) = (vec![V3::zeros(); nodes.len()], vec![0.0; nodes.len()]);
     let mut into_nodes = 0.0;
     let mut t_before = 20.0;
     for _ in 0..steps {
         heat.iter_mut().for_each(|q| *q = 0.0);
-        s.step(
+        step_held(
+            &mut s,
             dt,
             &faces,
-            NodeSide {
-                x: &nodes,
-                v: &still,
-                temperature: Some(&t_nodes),
-                force: &mut force,
-                heat: &mut heat,
-            },
-        )
-        .unwrap();
+            &nodes,
+            Some(&t_nodes),
+            &mut force,
+            &mut heat,
+        );
         // What the nodes give is what the sphere takes.
         let q: f64 = heat.iter().sum();
         assert!((q * dt + cap * (s.t[0] - t_before)).abs() < 1e-9 * cap * 80.0);
@@ -235,19 +231,7 @@ fn spheres_among_themselves_conserve_momentum_and_stack_in_order() {
         let dt = s.stable_dt(&Faces::default(), 1e-4);
         let mut touched = 0;
         for _ in 0..5000 {
-            let st = s
-                .step(
-                    dt,
-                    &Faces::default(),
-                    NodeSide {
-                        x: &[],
-                        v: &[],
-                        temperature: None,
-                        force: &mut [],
-                        heat: &mut [],
-                    },
-                )
-                .unwrap();
+            let st = step_held(&mut s, dt, &Faces::default(), &[], None, &mut [], &mut []);
             touched = touched.max(st.pairs);
         }
         (s.x, s.v, s.w, touched)
@@ -396,21 +380,9 @@ fn down_the_slope(theta: f64, friction: f64, time: f64) -> (f64, f64) {
     let dt = s.stable_dt(&faces, 4.0 * delta);
     let steps = (time / dt).round() as usize;
     let dt = time / steps as f64;
-    let still = vec![V3::zeros(); nodes.len()];
     let (mut force, mut heat) = (vec![V3::zeros(); nodes.len()], vec![0.0; nodes.len()]);
     for _ in 0..steps {
-        s.step(
-            dt,
-            &faces,
-            NodeSide {
-                x: &nodes,
-                v: &still,
-                temperature: None,
-                force: &mut force,
-                heat: &mut heat,
-            },
-        )
-        .unwrap();
+        step_held(&mut s, dt, &faces, &nodes, None, &mut force, &mut heat);
     }
     (s.x[0].x - x0.x, s.w[0].y)
 }
@@ -458,25 +430,12 @@ fn an_undamped_sphere_bounces_back_to_its_drop_height() {
     let mut s = FreeSpheres::new(STEEL, contact, vec![x0], vec![]);
     s.gravity = V3::new(0.0, 0.0, -9.81);
     let dt = s.stable_dt(&faces, 1e-5);
-    let still = vec![V3::zeros(); nodes.len()];
     let (mut force, mut heat) = (vec![V3::zeros(); nodes.len()], vec![0.0; nodes.len()]);
     let (mut touched, mut top) = (false, f64::NEG_INFINITY);
     // Fall (14 ms), impact, rise (14 ms): the highest point after impact.
     let steps = (0.04 / dt) as usize;
     for _ in 0..steps {
-        let st = s
-            .step(
-                dt,
-                &faces,
-                NodeSide {
-                    x: &nodes,
-                    v: &still,
-                    temperature: None,
-                    force: &mut force,
-                    heat: &mut heat,
-                },
-            )
-            .unwrap();
+        let st = step_held(&mut s, dt, &faces, &nodes, None, &mut force, &mut heat);
         touched |= st.faces > 0;
         if touched && st.faces == 0 {
             top = top.max(s.x[0].z);

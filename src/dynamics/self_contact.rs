@@ -26,10 +26,11 @@ pub(super) struct SelfContact {
     /// (empty without jointed bodies).
     vertex: Vec<u32>,
     /// The free jointed bodies split over the ranks (ascending), each
-    /// with its first node's global id and each node's vertex of the
-    /// continuous mesh (the model's `SourceJoints::origin`, shared: no
-    /// rank makes an array of the whole body for it).
-    split: Vec<(u32, u32, std::sync::Arc<[u32]>)>,
+    /// with its first node's global id and its joints' numbering, which
+    /// names each node's vertex of the continuous mesh
+    /// ([`crate::model::SourceJoints::origin`], shared: no rank makes an
+    /// array of the whole body for it).
+    split: Vec<(u32, u32, crate::model::SourceJoints)>,
 }
 
 impl SelfContact {
@@ -59,7 +60,7 @@ impl SelfContact {
         if bodies.is_empty() {
             return SelfContact::default();
         }
-        let split: Vec<(u32, u32, std::sync::Arc<[u32]>)> = bodies
+        let split: Vec<(u32, u32, crate::model::SourceJoints)> = bodies
             .iter()
             .filter(|&&b| is_split(b))
             .filter_map(|&b| {
@@ -68,7 +69,7 @@ impl SelfContact {
                     return None;
                 };
                 let j = model.meshes[mesh as usize].joints.as_ref()?;
-                Some((b, body.node_range.0, j.origin.clone()))
+                Some((b, body.node_range.0, j.clone()))
             })
             .collect();
         let ties = part
@@ -83,7 +84,7 @@ impl SelfContact {
             if let Ok(i) = split.binary_search_by_key(&b, |s| s.0) {
                 let (_, n0, origin) = &split[i];
                 for &l in t {
-                    vertex[l as usize] = origin[(part.node_gid[l as usize] - n0) as usize];
+                    vertex[l as usize] = origin.origin(part.node_gid[l as usize] - n0);
                 }
             }
         }
@@ -128,7 +129,7 @@ impl SelfContact {
                 .binary_search_by_key(&og.ghosts.body[g], |s| s.0)
                 .ok()?;
             let (_, n0, origin) = &self.split[i];
-            Some(og.ghosts.tets[g].map(|n| origin[(og.ghosts.node_gid[n as usize] - n0) as usize]))
+            Some(og.ghosts.tets[g].map(|n| origin.origin(og.ghosts.node_gid[n as usize] - n0)))
         };
         find_within(
             tets,

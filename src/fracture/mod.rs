@@ -4,7 +4,7 @@
 //! joint's faces ([`crack`]), a rank's joints advanced
 //! together with their totals ([`set`]), the continuous mesh's vertex of
 //! each node copy ([`vertices`], for self-contact), the copies and joints
-//! of a part numbered as the whole body's ([`numbering`]). Physics kernels only: no MPI, no
+//! of a part numbered as the whole body's ([`numbering`]) and the jointed mesh around a part ([`part_mesh`]). Physics kernels only: no MPI, no
 //! PETSc.
 
 pub mod crack;
@@ -12,6 +12,7 @@ pub mod insert;
 pub mod joint;
 pub mod law;
 pub mod numbering;
+pub mod part_mesh;
 pub mod set;
 pub mod vertices;
 

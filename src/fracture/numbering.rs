@@ -94,7 +94,7 @@ impl Numbering {
     }
 
     /// The tets at node `n`.
-    fn tets_at(&self, n: u32) -> &[u32] {
+    pub fn tets_at(&self, n: u32) -> &[u32] {
         let n = n as usize;
         &self.at_tets[self.at_offsets[n] as usize..self.at_offsets[n + 1] as usize]
     }
@@ -168,6 +168,90 @@ impl Numbering {
         })
     }
 
+    /// The node of the continuous mesh copy `c` is a copy of.
+    pub fn origin(&self, c: u32, tets: &[[u32; 4]], in_set: &[bool]) -> u32 {
+        // The tet that made it: the last whose first copy is at most c (a
+        // tet that made none shares its start with the next).
+        let t = self.start.partition_point(|&s| s <= c) - 1;
+        let k = (c - self.start[t]) as usize;
+        if in_set[t] {
+            return tets[t][k];
+        }
+        tets[t]
+            .iter()
+            .copied()
+            .filter(|&g| self.first_plain[g as usize] == t as u32)
+            .nth(k)
+            .unwrap_or_else(|| unreachable!("copy {c} is made by tet {t}"))
+    }
+
+    /// How many copies node `n` of the continuous mesh has.
+    pub fn copies_of(&self, n: u32, in_set: &[bool]) -> u32 {
+        let set = self
+            .tets_at(n)
+            .iter()
+            .filter(|&&t| in_set[t as usize])
+            .count() as u32;
+        set + u32::from(self.first_plain[n as usize] != u32::MAX)
+    }
+
+    /// Every joint with a corner at one of the nodes `vertices` of the
+    /// continuous mesh (ascending number): (number, faces).
+    pub fn joints_at(
+        &self,
+        nodes: &[[f64; 3]],
+        tets: &[[u32; 4]],
+        in_set: &[bool],
+        vertices: impl IntoIterator<Item = u32>,
+    ) -> Vec<(u32, JointFaces)> {
+        let mut at: Vec<u32> = vertices.into_iter().collect();
+        at.sort_unstable();
+        at.dedup();
+        // A face at a vertex has its lowest corner among the nodes of the
+        // tets at that vertex.
+        let mut lowest: Vec<u32> = Vec::new();
+        for &g in &at {
+            for &t in self.tets_at(g) {
+                for loc in FACES {
+                    let face = loc.map(|l| tets[t as usize][l]);
+                    if face.contains(&g) {
+                        lowest.push(*face.iter().min().unwrap_or(&g));
+                    }
+                }
+            }
+        }
+        lowest.sort_unstable();
+        lowest.dedup();
+        let mut joints = Vec::new();
+        for n in lowest {
+            for (k, (corners, a, tb)) in self.shared_at(n, tets, in_set).into_iter().enumerate() {
+                if corners.iter().any(|c| at.binary_search(c).is_ok()) {
+                    let ca = self.tet_copies(a.0, tets, in_set);
+                    let cb = self.tet_copies(tb, tets, in_set);
+                    let j = joint_faces(nodes, tets, a, tb, ca, cb);
+                    joints.push((self.joints_before[n as usize] + k as u32, j));
+                }
+            }
+        }
+        joints.sort_unstable_by_key(|j| j.0);
+        joints
+    }
+
+    /// Every joint, in number order: (number, sorted corners in the
+    /// continuous mesh), made one lowest corner at a time.
+    pub fn for_each_joint(
+        &self,
+        tets: &[[u32; 4]],
+        in_set: &[bool],
+        mut f: impl FnMut(u32, [u32; 3]),
+    ) {
+        for n in 0..self.first_plain.len() as u32 {
+            for (k, (corners, _, _)) in self.shared_at(n, tets, in_set).into_iter().enumerate() {
+                f(self.joints_before[n as usize] + k as u32, corners);
+            }
+        }
+    }
+
     /// The copies the tets `held` (ascending) need and the joints at
     /// them, numbered as in the whole-body build: the copies of their
     /// corners, and every joint one of whose corners is among those
@@ -189,33 +273,9 @@ impl Numbering {
         copies.sort_unstable();
         copies.dedup();
         let used = |c: u32| copies.binary_search_by_key(&c, |&(n, _)| n).is_ok();
-        // The joints at a used copy have its vertex as a corner: their
-        // faces' lowest corners are nodes of the tets at those vertices.
-        let mut lowest: Vec<u32> = Vec::new();
-        for &(_, g) in &copies {
-            for &t in self.tets_at(g) {
-                for loc in FACES {
-                    let face = loc.map(|l| tets[t as usize][l]);
-                    if face.contains(&g) {
-                        lowest.push(*face.iter().min().unwrap_or(&g));
-                    }
-                }
-            }
-        }
-        lowest.sort_unstable();
-        lowest.dedup();
-        let mut joints = Vec::new();
-        for n in lowest {
-            for (k, (_, a, tb)) in self.shared_at(n, tets, in_set).into_iter().enumerate() {
-                let ca = self.tet_copies(a.0, tets, in_set);
-                let cb = self.tet_copies(tb, tets, in_set);
-                let j = joint_faces(nodes, tets, a, tb, ca, cb);
-                if j.a.iter().chain(&j.b).any(|&c| used(c)) {
-                    joints.push((self.joints_before[n as usize] + k as u32, j));
-                }
-            }
-        }
-        joints.sort_unstable_by_key(|j| j.0);
+        // The joints at a used copy have its vertex as a corner.
+        let mut joints = self.joints_at(nodes, tets, in_set, copies.iter().map(|&(_, g)| g));
+        joints.retain(|(_, j)| j.a.iter().chain(&j.b).any(|&c| used(c)));
         PartJointed { copies, joints }
     }
 }
@@ -279,6 +339,47 @@ mod tests {
                 assert!(p.copies.len() < whole.nodes.len());
             }
             assert!(seen.iter().all(|&s| s), "every joint is in some part");
+        }
+    }
+
+    /// Each copy's node, each node's copy count, the joints at a few
+    /// nodes and the walk over every joint agree with the whole-body build.
+    #[test]
+    fn origins_and_joints_at_nodes_are_the_whole_bodys() {
+        let m = box_mesh([0.0; 3], [1.0, 0.5, 0.25], 0.125).unwrap();
+        let some: Vec<bool> = (0..m.tets.len()).map(|t| t % 4 != 1).collect();
+        let whole = make_discontinuous(&m.nodes, &m.tets, &some);
+        let num = Numbering::new(m.nodes.len(), &m.tets, &some);
+        let mut count = vec![0u32; m.nodes.len()];
+        for (c, &g) in whole.origin.iter().enumerate() {
+            assert_eq!(num.origin(c as u32, &m.tets, &some), g);
+            count[g as usize] += 1;
+        }
+        for (n, &k) in count.iter().enumerate() {
+            assert_eq!(num.copies_of(n as u32, &some), k);
+        }
+        let vertices = [0u32, 7, 20, 33];
+        let got = num.joints_at(&m.nodes, &m.tets, &some, vertices);
+        let want: Vec<(u32, JointFaces)> = whole
+            .joints
+            .iter()
+            .enumerate()
+            .filter(|(_, j)| {
+                j.a.iter()
+                    .any(|&c| vertices.contains(&whole.origin[c as usize]))
+            })
+            .map(|(k, j)| (k as u32, *j))
+            .collect();
+        assert!(!want.is_empty());
+        assert_eq!(got, want);
+        let mut walked = Vec::new();
+        num.for_each_joint(&m.tets, &some, |k, corners| walked.push((k, corners)));
+        assert_eq!(walked.len(), whole.joints.len());
+        for (i, (k, corners)) in walked.iter().enumerate() {
+            assert_eq!(*k, i as u32);
+            let mut g = whole.joints[i].a.map(|c| whole.origin[c as usize]);
+            g.sort_unstable();
+            assert_eq!(*corners, g);
         }
     }
 

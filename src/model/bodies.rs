@@ -27,19 +27,71 @@ pub struct SourceMesh {
     pub particles: Option<super::particles::SourceParticles>,
 }
 
-/// The joints of a source mesh made discontinuous: faces in its node and
-/// element numbering, and the fracture material (index into the model's
-/// materials).
+/// The joints of a source mesh made discontinuous (issue 19), kept as
+/// the numbering of its copies and joints over the continuous mesh
+/// ([`crate::fracture::numbering`]): a rank makes the copies and joints of
+/// the tets it holds ([`BodyMesh::jointed_part`]), nothing of the whole
+/// jointed body.
 #[derive(Debug, Clone)]
 pub struct SourceJoints {
-    pub faces: Vec<crate::fracture::insert::JointFaces>,
+    /// The numbering of the copies and joints.
+    pub numbering: std::sync::Arc<crate::fracture::numbering::Numbering>,
+    /// Per tet of the continuous mesh: made discontinuous.
+    pub in_set: std::sync::Arc<[bool]>,
+    /// The continuous mesh's tets (the numbering's mesh).
+    pub tets: std::sync::Arc<[[u32; 4]]>,
+    /// The fracture material (index into the model's materials).
     pub material: u32,
-    /// Per joint: broken from the start (an initial crack).
-    pub broken: Vec<bool>,
-    /// Per node of the jointed mesh: its node of the continuous mesh (the
-    /// vertex its copies share), so that a rank names the copies of a
-    /// vertex without a union-find over the whole body.
-    pub origin: std::sync::Arc<[u32]>,
+    /// The joints broken from the start (an initial crack), ascending.
+    pub broken: Vec<u32>,
+    /// How many node copies (the body's nodes) and joints.
+    pub copies: u32,
+    pub count: u32,
+}
+
+impl SourceJoints {
+    /// The joints of `mesh` made discontinuous on the tets of `in_set`,
+    /// of fracture material `material`, none broken.
+    pub fn new(mesh: &TetMesh, in_set: &[bool], material: u32) -> SourceJoints {
+        let numbering =
+            crate::fracture::numbering::Numbering::new(mesh.nodes.len(), &mesh.tets, in_set);
+        let (copies, count) = numbering.totals(&mesh.tets, in_set);
+        SourceJoints {
+            numbering: numbering.into(),
+            in_set: in_set.into(),
+            tets: mesh.tets.as_slice().into(),
+            material,
+            broken: Vec::new(),
+            copies,
+            count,
+        }
+    }
+
+    /// Whether joint `k` is broken from the start.
+    pub fn broken_at_start(&self, k: u32) -> bool {
+        self.broken.binary_search(&k).is_ok()
+    }
+
+    /// The node of the continuous mesh copy `c` is a copy of.
+    pub fn origin(&self, c: u32) -> u32 {
+        self.numbering.origin(c, &self.tets, &self.in_set)
+    }
+
+    /// The copies of tet `t`'s corners.
+    pub fn tet_copies(&self, t: u32) -> [u32; 4] {
+        self.numbering.tet_copies(t, &self.tets, &self.in_set)
+    }
+
+    /// Every joint with a corner at a copy of one of the nodes `vertices`
+    /// of the continuous mesh (at `nodes`): (number, faces).
+    pub fn joints_at(
+        &self,
+        nodes: &[[f64; 3]],
+        vertices: impl IntoIterator<Item = u32>,
+    ) -> Vec<(u32, crate::fracture::insert::JointFaces)> {
+        self.numbering
+            .joints_at(nodes, &self.tets, &self.in_set, vertices)
+    }
 }
 
 impl SourceMesh {
@@ -57,39 +109,49 @@ impl SourceMesh {
     }
 
     /// A source mesh made discontinuous on the tets of `in_set`, tied by
-    /// joints of fracture material `fracture`. Its boundary is the
-    /// continuous mesh's: the joints' faces are not boundary faces while
-    /// intact.
+    /// joints of fracture material `fracture`. It keeps the continuous
+    /// mesh and its boundary (the joints' faces are not boundary faces
+    /// while intact), and the numbering of the copies and joints.
     pub fn jointed(
         mesh: TetMesh,
         material: Vec<u32>,
         in_set: &[bool],
         fracture: u32,
     ) -> SourceMesh {
-        let bt = crate::contact::BoundaryTets::new(&mesh);
-        let (split, j) = crate::fracture::insert::jointed_mesh(&mesh, in_set);
-        drop(mesh);
+        let joints = SourceJoints::new(&mesh, in_set, fracture);
         SourceMesh {
-            face_mask: bt.mask,
-            boundary_node: j
-                .origin
-                .iter()
-                .map(|&o| bt.boundary_node[o as usize])
-                .collect(),
-            material,
-            mesh: split,
-            joints: Some(SourceJoints {
-                broken: vec![false; j.joints.len()],
-                faces: j.joints,
-                material: fracture,
-                origin: j.origin.into(),
-            }),
-            particles: None,
+            joints: Some(joints),
+            ..SourceMesh::new(mesh, material)
         }
     }
-}
 
-impl SourceMesh {
+    /// How many nodes the body has: the copies of a jointed mesh.
+    pub fn node_count(&self) -> usize {
+        self.joints
+            .as_ref()
+            .map_or(self.mesh.nodes.len(), |j| j.copies as usize)
+    }
+
+    /// The body nodes of element `e`'s corners (copies of a jointed mesh).
+    pub fn tet_nodes(&self, e: usize) -> [u32; 4] {
+        match &self.joints {
+            None => self.mesh.tets[e],
+            Some(j) => j.tet_copies(e as u32),
+        }
+    }
+
+    /// The area of the largest joint (0 without joints).
+    pub fn largest_joint_area(&self) -> f64 {
+        self.joints.as_ref().map_or(0.0, |j| {
+            crate::fracture::part_mesh::largest_joint_area(
+                &self.mesh.nodes,
+                &self.mesh.tets,
+                &self.face_mask,
+                &j.in_set,
+            )
+        })
+    }
+
     /// Mark broken the joints whose faces lie in the plane through `point`
     /// with normal `normal` (every corner within 1e-6 of the face's size
     /// of it): an initial crack. Returns how many.
@@ -98,18 +160,23 @@ impl SourceMesh {
         let len = normal.iter().map(|c| c * c).sum::<f64>().sqrt();
         let n = normal.map(|c| c / len);
         let nodes = &self.mesh.nodes;
-        let mut count = 0;
-        for (f, broken) in j.faces.iter().zip(&mut j.broken) {
-            let tol = 1e-6 * f.area.sqrt();
-            let off = |v: u32| {
-                let x = nodes[v as usize];
-                (0..3).map(|d| (x[d] - point[d]) * n[d]).sum::<f64>().abs()
-            };
-            if f.a.iter().all(|&v| off(v) <= tol) {
-                *broken = true;
-                count += 1;
-            }
-        }
+        let off = |v: u32| {
+            let x = nodes[v as usize];
+            (0..3).map(|d| (x[d] - point[d]) * n[d]).sum::<f64>().abs()
+        };
+        let mut broken = Vec::new();
+        j.numbering
+            .for_each_joint(&self.mesh.tets, &j.in_set, |k, corners| {
+                let p = corners.map(|v| nodes[v as usize]);
+                let tol = 1e-6 * crate::geometry::polygon_area(&p).sqrt();
+                if corners.iter().all(|&v| off(v) <= tol) {
+                    broken.push(k);
+                }
+            });
+        let count = broken.len();
+        j.broken.extend(broken);
+        j.broken.sort_unstable();
+        j.broken.dedup();
         count
     }
 }
@@ -198,9 +265,74 @@ pub struct BodyMesh<'a> {
     /// Per node: on the boundary.
     pub boundary_node: std::borrow::Cow<'a, [bool]>,
     /// The source mesh, for its named sets (none for a checkpoint body).
-    pub source: Option<&'a TetMesh>,
-    /// Its joints (body-local node and element numbers), if jointed.
+    pub source: Option<std::borrow::Cow<'a, TetMesh>>,
+    /// Its joints, if jointed: then the mesh above is the continuous one,
+    /// and [`BodyMesh::jointed_part`] makes the jointed one around a part.
     pub joints: Option<std::borrow::Cow<'a, SourceJoints>>,
+}
+
+/// How the jointed mesh around a part ([`BodyMesh::jointed_part`]) names
+/// the body's nodes, elements and joints.
+#[derive(Debug, Clone)]
+pub struct JointedIds {
+    /// Per node: its node of the body (a copy).
+    pub copy: Vec<u32>,
+    /// Per element: its element of the body.
+    pub tet: Vec<u32>,
+    /// The joints at the copies of the held tets (ascending number), with
+    /// corners in the part's numbering, and whether broken from the start.
+    pub joints: Vec<(u32, crate::fracture::insert::JointFaces, bool)>,
+}
+
+impl BodyMesh<'_> {
+    /// A jointed body's mesh made discontinuous around its elements
+    /// `held` (ascending; all of them for a body held whole): the copies
+    /// they and their joints need, the ring of elements at those copies
+    /// (so that the named sets reach them as in the whole-body build),
+    /// with their materials, boundary and sets, and how they are named in
+    /// the body. `None` for a body without joints.
+    pub fn jointed_part(&self, held: &[u32]) -> Option<(BodyMesh<'static>, JointedIds)> {
+        use std::borrow::Cow;
+        let j = self.joints.as_ref()?;
+        let p = crate::fracture::part_mesh::JointedPart::new(
+            &j.numbering,
+            (
+                &self.nodes,
+                self.source.as_deref().map_or(&self.nodes, |s| &s.nodes),
+            ),
+            &self.tets,
+            self.source.as_deref(),
+            &j.in_set,
+            held,
+        );
+        let mesh = BodyMesh {
+            nodes: p.mesh.nodes.clone(),
+            tets: Cow::Owned(p.mesh.tets.clone()),
+            material: Cow::Owned(p.tet.iter().map(|&t| self.material[t as usize]).collect()),
+            face_mask: Cow::Owned(p.tet.iter().map(|&t| self.face_mask[t as usize]).collect()),
+            boundary_node: Cow::Owned(
+                p.origin
+                    .iter()
+                    .map(|&g| self.boundary_node[g as usize])
+                    .collect(),
+            ),
+            source: Some(Cow::Owned(p.mesh)),
+            joints: None,
+        };
+        let joints = p
+            .joints
+            .into_iter()
+            .map(|(k, f)| (k, f, j.broken_at_start(k)))
+            .collect();
+        Some((
+            mesh,
+            JointedIds {
+                copy: p.copy,
+                tet: p.tet,
+                joints,
+            },
+        ))
+    }
 }
 
 impl super::Model {
@@ -220,7 +352,7 @@ impl super::Model {
                     material: std::borrow::Cow::Borrowed(&src.material),
                     face_mask: std::borrow::Cow::Borrowed(&src.face_mask),
                     boundary_node: std::borrow::Cow::Borrowed(&src.boundary_node),
-                    source: Some(&src.mesh),
+                    source: Some(std::borrow::Cow::Borrowed(&src.mesh)),
                     joints: src.joints.as_ref().map(std::borrow::Cow::Borrowed),
                 })
             }
@@ -238,7 +370,7 @@ impl super::Model {
                     Some(j) => {
                         let all = vec![true; m.tets.len()];
                         let src = SourceMesh::jointed(m, material, &all, j.material);
-                        let made = src.joints.as_ref().map_or(0, |s| s.faces.len() as u64);
+                        let made = src.joints.as_ref().map_or(0, |s| u64::from(s.count));
                         if made != j.count {
                             return Err(format!(
                                 "{}: body `{}` has {made} joints, {} when the model was made \
@@ -289,7 +421,7 @@ impl super::Model {
         let src = &self.meshes[mesh as usize];
         let e = (elem - body.elem_range.0) as usize;
         (
-            src.mesh.tets[e].map(|n| body.node_range.0 + n),
+            src.tet_nodes(e).map(|n| body.node_range.0 + n),
             src.material[e],
         )
     }
@@ -308,7 +440,7 @@ impl super::Model {
                     BodySource::Mesh { mesh, .. } => self.meshes[mesh as usize]
                         .joints
                         .as_ref()
-                        .map_or(0, |j| j.faces.len() as u64),
+                        .map_or(0, |j| u64::from(j.count)),
                     BodySource::Saved { joints, .. } => joints.map_or(0, |j| j.count),
                 };
                 at
@@ -397,9 +529,17 @@ pub(super) fn saved_mesh(
 }
 
 impl SourceMesh {
-    /// The mean of the node positions.
+    /// The mean of the node positions (of a jointed mesh's copies).
     pub fn mean_node(&self) -> [f64; 3] {
-        mean(&self.mesh.nodes)
+        let Some(j) = &self.joints else {
+            return mean(&self.mesh.nodes);
+        };
+        let mut s = [0.0; 3];
+        for (n, p) in self.mesh.nodes.iter().enumerate() {
+            let k = f64::from(j.numbering.copies_of(n as u32, &j.in_set));
+            (0..3).for_each(|d| s[d] += k * p[d]);
+        }
+        s.map(|x| x / f64::from(j.copies.max(1)))
     }
 }
 

@@ -286,12 +286,7 @@ impl Model {
         };
         // Snap-back is worst at the largest joint (f_t² h / (2 p_f) grows with h).
         let snap_back = |body: &str, fm: u32, src: &SourceMesh| -> Result<()> {
-            let largest = src
-                .joints
-                .iter()
-                .flat_map(|j| &j.faces)
-                .map(|f| f.area)
-                .fold(0.0, f64::max);
+            let largest = src.largest_joint_area();
             if let Some(law) = materials[fm as usize].fracture {
                 if largest > 0.0 {
                     law.law(crate::fracture::insert::joint_size(largest))
@@ -373,7 +368,7 @@ impl Model {
                             let all = vec![true; m.tets.len()];
                             let src = SourceMesh::jointed(m, material, &all, fm);
                             snap_back(&name, fm, &src)?;
-                            let count = src.joints.as_ref().map_or(0, |j| j.faces.len() as u64);
+                            let count = src.joints.as_ref().map_or(0, |j| u64::from(j.count));
                             if count == 0 && ne > 1 {
                                 return Err(model_err(format!(
                                     "body `{}`: fracture: body `{name}` of {} has {ne} elements \
@@ -383,7 +378,7 @@ impl Model {
                                     files[fi].path().display()
                                 )));
                             }
-                            nn = src.mesh.nodes.len();
+                            nn = src.node_count();
                             Some(bodies::SavedJoints {
                                 material: fm,
                                 count,
@@ -563,7 +558,7 @@ impl Model {
                 (None, None) => 1,
             };
             limit(&b.name, copies, m.tets.len(), n_elems)?;
-            let (nn, ne) = (m.nodes.len(), m.tets.len());
+            let (nn, ne) = (source.node_count(), m.tets.len());
             let mi = meshes.len() as u32;
             if let Some(p) = &b.pack {
                 let into = s
@@ -916,7 +911,7 @@ impl Model {
         body_bcs(
             mesh.nodes.len(),
             &mesh.nodes,
-            mesh.source,
+            mesh.source.as_deref(),
             body.initial_temperature,
             held,
             &thermal,
@@ -936,6 +931,11 @@ impl Model {
                 path: self.bodies[b].name.clone(),
                 message,
             })?;
+            let all: Vec<u32> = (0..m.tets.len() as u32).collect();
+            let m = match m.jointed_part(&all) {
+                Some((jointed, _)) => jointed,
+                None => m,
+            };
             let bc = self.body_bcs(b, &m);
             let n0 = w.mesh.nodes.len() as u32;
             let name = &self.bodies[b].name;
@@ -945,7 +945,7 @@ impl Model {
                 body: vec![0; m.tets.len()],
                 ..Default::default()
             };
-            if let Some(src) = m.source {
+            if let Some(src) = &m.source {
                 part.node_sets = prefix_sets(src.node_sets.clone(), name);
                 part.face_sets = prefix_sets(src.face_sets.clone(), name);
                 part.elem_sets = prefix_sets(src.elem_sets.clone(), name);

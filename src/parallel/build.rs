@@ -332,7 +332,6 @@ fn make_bodies(
                 path: body.name.clone(),
                 message,
             })?;
-        let bc = model.body_bcs(b as usize, &mesh);
         let (n0, e0) = (body.node_range.0, body.elem_range.0);
         // Elements, and after them (numbered from the elements' count) spheres.
         let ne = mesh.tets.len() as u32;
@@ -347,18 +346,37 @@ fn make_bodies(
                 (v[..k].to_vec(), v[k..].iter().map(|&s| s - ne).collect())
             }
         };
+        // A jointed body: its jointed mesh around the elements held here
+        // (issue 19), numbered locally; `gid` names its nodes, `slot` its
+        // elements in it.
+        let mut mesh = mesh;
+        let (mut continuous, mut ids) = (None, None);
+        if let Some((part, i)) = mesh.jointed_part(&elems) {
+            continuous = Some(std::mem::replace(&mut mesh, part));
+            ids = Some(i);
+        }
+        let gid = |n: u32| n0 + ids.as_ref().map_or(n, |i| i.copy[n as usize]);
+        let slot = |e: u32| -> usize {
+            ids.as_ref().map_or(e as usize, |i| {
+                i.tet
+                    .binary_search(&e)
+                    .unwrap_or_else(|_| unreachable!("a held element is in its part"))
+            })
+        };
+        let bc = model.body_bcs(b as usize, &mesh);
         let mut used = vec![false; mesh.nodes.len()];
         let mut face_of: HashMap<[u32; 3], ()> = HashMap::new();
         let whole = matches!(h, Held::Whole);
         // The corners of other ranks' tets that joints across the cut need.
         let mut wanted = vec![false; if whole { 0 } else { mesh.nodes.len() }];
         for &e in &elems {
-            let t = mesh.tets[e as usize];
+            let i = slot(e);
+            let t = mesh.tets[i];
             m.elem_gid.push(e0 + e);
             m.elem_body.push(b);
-            m.elem_material.push(mesh.material[e as usize]);
-            m.face_mask.push(mesh.face_mask[e as usize]);
-            m.tets.push(t.map(|n| n0 + n));
+            m.elem_material.push(mesh.material[i]);
+            m.face_mask.push(mesh.face_mask[i]);
+            m.tets.push(t.map(gid));
             for n in t {
                 used[n as usize] = true;
             }
@@ -368,32 +386,29 @@ fn make_bodies(
                 }
             }
         }
-        if let Some(j) = &mesh.joints {
-            // A split body's joint is here when one of its corners is a
-            // node of a tet here: then every joint at a node this rank may
-            // own is here (a body jointed on a set has continuum nodes
-            // that its joints share with tets of other ranks). Its
-            // corners that no tet here has are ghosts.
-            for (k, (f, &broken)) in j.faces.iter().zip(&j.broken).enumerate() {
-                if !whole && !f.a.iter().chain(&f.b).any(|&n| used[n as usize]) {
-                    continue;
-                }
+        if let (Some(ids), Some(j)) = (&ids, continuous.as_ref().and_then(|c| c.joints.as_ref())) {
+            // The joints at the copies here (a split body's: then every
+            // joint at a node this rank may own is here, since a body
+            // jointed on a set has continuum nodes that its joints share
+            // with tets of other ranks). Their corners no tet here has
+            // are ghosts.
+            for &(k, f, broken) in &ids.joints {
                 for &n in f.a.iter().chain(&f.b) {
-                    if !used[n as usize] {
+                    if !whole && !used[n as usize] {
                         wanted[n as usize] = true;
                     }
                 }
                 m.joints.push(super::PartJoint {
                     faces: crate::fracture::insert::JointFaces {
-                        a: f.a.map(|n| n0 + n),
-                        b: f.b.map(|n| n0 + n),
+                        a: f.a.map(gid),
+                        b: f.b.map(gid),
                         tets: f.tets.map(|e| e0 + e),
                         area: f.area,
                     },
                     material: j.material,
                     broken,
                     body: b,
-                    index: k as u32,
+                    index: k,
                 });
                 m.ties_rows.push(whole);
             }
@@ -418,13 +433,15 @@ fn make_bodies(
         }
         // A split body's copies by their class over the joints at their
         // vertices (those intact from the start).
-        let classes = match &mesh.joints {
-            Some(j) if !whole && model.thermal_active => {
-                let here: Vec<u32> = (0..mesh.nodes.len() as u32)
-                    .filter(|&n| used[n as usize] || wanted[n as usize])
+        let classes = match (&continuous, &ids) {
+            (Some(c), Some(ids)) if !whole && model.thermal_active => {
+                let j = c.joints.as_ref().expect("a jointed body");
+                let here: Vec<u32> = (0..mesh.nodes.len())
+                    .filter(|&n| used[n] || wanted[n])
+                    .map(|n| ids.copy[n])
                     .collect();
-                let at = super::tied_rows::joints_at(j, &here);
-                super::tied_rows::local_classes(j, &here, &at, |k| !j.broken[k])
+                let at = super::tied_rows::joints_at(j, &c.nodes, &here);
+                super::tied_rows::local_classes(&here, &at, |k, _| !j.broken_at_start(k))
             }
             _ => HashMap::new(),
         };
@@ -433,10 +450,11 @@ fn make_bodies(
             if !u && !ghost {
                 continue;
             }
-            if let Some(&c) = classes.get(&(n as u32)) {
-                m.class_of.insert(n0 + n as u32, n0 + c);
+            let g = gid(n as u32);
+            if let Some(&c) = classes.get(&(g - n0)) {
+                m.class_of.insert(g, n0 + c);
             }
-            m.node_gid.push(n0 + n as u32);
+            m.node_gid.push(g);
             m.x.push(mesh.nodes[n]);
             m.boundary.push(mesh.boundary_node[n]);
             m.initial_t.push(bc.initial_t[n]);
@@ -460,13 +478,13 @@ fn make_bodies(
             bc.flux
                 .iter()
                 .filter(|(f, _)| here(f))
-                .map(|(f, q)| (f.map(|n| n0 + n), *q)),
+                .map(|(f, q)| (f.map(gid), *q)),
         );
         m.convection.extend(
             bc.convection
                 .iter()
                 .filter(|(f, _, _)| here(f))
-                .map(|(f, h, t)| (f.map(|n| n0 + n), *h, *t)),
+                .map(|(f, h, t)| (f.map(gid), *h, *t)),
         );
     }
     Ok(m)

@@ -17,44 +17,35 @@ use mpi::traits::*;
 
 use super::exchange::all_to_all;
 use super::Part;
+use crate::fracture::insert::JointFaces;
 
-/// The joints of a jointed source mesh `j` at the vertices of the nodes
-/// `nodes` (node numbers of the mesh): every joint with a corner at one
-/// of their vertices, so every tie between two copies of such a vertex.
-/// A scan of the joints, holding only what is asked for.
-pub(super) fn joints_at(j: &crate::model::SourceJoints, nodes: &[u32]) -> Vec<usize> {
-    let vertices: std::collections::HashSet<u32> =
-        nodes.iter().map(|&n| j.origin[n as usize]).collect();
-    j.faces
-        .iter()
-        .enumerate()
-        .filter(|(_, f)| {
-            f.a.iter()
-                .any(|&n| vertices.contains(&j.origin[n as usize]))
-        })
-        .map(|(k, _)| k)
-        .collect()
+/// The joints of a jointed source mesh `j` (over the continuous mesh's
+/// `nodes`) at the vertices of the copies `copies`: every joint
+/// with a corner at one of their vertices, so every tie between two
+/// copies of such a vertex. Made from the numbering, only what is asked.
+pub(super) fn joints_at(
+    j: &crate::model::SourceJoints,
+    nodes: &[[f64; 3]],
+    copies: &[u32],
+) -> Vec<(u32, JointFaces)> {
+    j.joints_at(nodes, copies.iter().map(|&c| j.origin(c)))
 }
 
 /// The class (lowest copy tied to it by the intact joints among `at`,
-/// those for which `intact` holds) of each node of `nodes` (node numbers
-/// of the jointed mesh `j`), when `at` holds every joint at their
-/// vertices ([`joints_at`]): the copies of one vertex are tied only by
-/// joints at it. Local: no union-find over the whole body.
+/// those for which `intact` holds) of each copy of `nodes`, when `at`
+/// holds every joint at their vertices ([`joints_at`]): the copies of
+/// one vertex are tied only by joints at it. Local: no union-find over
+/// the whole body.
 pub(super) fn local_classes(
-    j: &crate::model::SourceJoints,
     nodes: &[u32],
-    at: &[usize],
-    intact: impl Fn(usize) -> bool,
+    at: &[(u32, JointFaces)],
+    intact: impl Fn(u32, &JointFaces) -> bool,
 ) -> HashMap<u32, u32> {
-    let tied =
-        crate::fracture::vertices::id_classes(at.iter().filter(|&&k| intact(k)).flat_map(|&k| {
-            j.faces[k]
-                .a
-                .iter()
-                .copied()
-                .zip(j.faces[k].b.iter().copied())
-        }));
+    let tied = crate::fracture::vertices::id_classes(
+        at.iter()
+            .filter(|(k, f)| intact(*k, f))
+            .flat_map(|(_, f)| f.a.iter().copied().zip(f.b.iter().copied())),
+    );
     nodes
         .iter()
         .map(|&n| (n, tied.get(&n).copied().unwrap_or(n)))
@@ -203,7 +194,8 @@ impl Part {
             let crate::model::BodySource::Mesh { mesh, .. } = body.source else {
                 continue;
             };
-            let Some(j) = &model.meshes[mesh as usize].joints else {
+            let src = &model.meshes[mesh as usize];
+            let Some(j) = &src.joints else {
                 continue;
             };
             let (n0, e0) = (body.node_range.0, body.elem_range.0);
@@ -213,7 +205,7 @@ impl Part {
                 .filter(|&&g| (n0..body.node_range.1).contains(&g))
                 .map(|&g| g - n0)
                 .collect();
-            let at = joints_at(j, &nodes);
+            let at = joints_at(j, &src.mesh.nodes, &nodes);
             let held: std::collections::HashSet<u32> = self
                 .joints
                 .iter()
@@ -222,18 +214,18 @@ impl Part {
                 .collect();
             asked.extend(
                 at.iter()
-                    .filter(|&&k| !held.contains(&(k as u32)) && !j.broken[k])
-                    .map(|&k| j.faces[k].tets.map(|e| e0 + e)),
+                    .filter(|(k, _)| !held.contains(k) && !j.broken_at_start(*k))
+                    .map(|(_, f)| f.tets.map(|e| e0 + e)),
             );
             found.push((j, n0, e0, nodes, at));
         }
         let elsewhere = broken_elsewhere(comm, &asked, broken.iter().copied());
         for (j, n0, e0, nodes, at) in found {
-            let intact = |k: usize| {
-                let t = j.faces[k].tets.map(|e| e0 + e);
-                !j.broken[k] && !broken.contains(&t) && !elsewhere.contains(&t)
+            let intact = |k: u32, f: &JointFaces| {
+                let t = f.tets.map(|e| e0 + e);
+                !j.broken_at_start(k) && !broken.contains(&t) && !elsewhere.contains(&t)
             };
-            for (n, c) in local_classes(j, &nodes, &at, intact) {
+            for (n, c) in local_classes(&nodes, &at, intact) {
                 class_of.insert(n0 + n, n0 + c);
             }
         }
@@ -334,26 +326,26 @@ mod tests {
         for (t, s) in in_set.iter_mut().enumerate() {
             *s = t % 3 != 0;
         }
+        let whole_build = crate::fracture::make_discontinuous(&m.nodes, &m.tets, &in_set);
         let src = crate::model::SourceMesh::jointed(m, vec![0; in_set.len()], &in_set, 0);
         let j = src.joints.as_ref().unwrap();
-        let n = src.mesh.nodes.len();
-        let intact = |k: usize| k % 5 != 2;
+        let n = j.copies as usize;
+        let intact = |k: u32| k % 5 != 2;
         let whole = crate::fracture::vertices::vertex_classes(
             n,
-            (0..j.faces.len()).filter(|&k| intact(k)).flat_map(|k| {
-                j.faces[k]
-                    .a
-                    .iter()
-                    .copied()
-                    .zip(j.faces[k].b.iter().copied())
-            }),
+            (0..whole_build.joints.len() as u32)
+                .filter(|&k| intact(k))
+                .flat_map(|k| {
+                    let f = &whole_build.joints[k as usize];
+                    f.a.iter().copied().zip(f.b.iter().copied())
+                }),
         );
         for stride in [1usize, 3, 7, 11] {
             let nodes: Vec<u32> = (0..n as u32)
                 .filter(|v| (*v as usize).is_multiple_of(stride))
                 .collect();
-            let at = joints_at(j, &nodes);
-            let local = local_classes(j, &nodes, &at, intact);
+            let at = joints_at(j, &src.mesh.nodes, &nodes);
+            let local = local_classes(&nodes, &at, |k, _| intact(k));
             assert_eq!(local.len(), nodes.len());
             for &v in &nodes {
                 assert_eq!(local[&v], whole[v as usize], "node {v}, every {stride}");

@@ -111,14 +111,17 @@ impl ExplicitDomain {
                 mom[d] += m * v[d];
             }
         }
+        // The free spheres' share (issue 21): their contacts' viscous and
+        // frictional losses are not counted in `dissipated`.
+        let sp = self.spheres.as_ref().map(|s| s.report).unwrap_or_default();
         let local = [
-            kin + self.particle_kinetic,
+            kin + self.particle_kinetic + sp.kinetic,
             self.strain_energy,
-            self.contact_energy,
-            self.dissipated,
-            mom[0] + self.particle_momentum.x,
-            mom[1] + self.particle_momentum.y,
-            mom[2] + self.particle_momentum.z,
+            self.contact_energy + sp.contact_energy,
+            self.dissipated + sp.damped,
+            mom[0] + self.particle_momentum.x + sp.momentum.x,
+            mom[1] + self.particle_momentum.y + sp.momentum.y,
+            mom[2] + self.particle_momentum.z + sp.momentum.z,
             self.active_pairs as f64,
             self.candidates.len() as f64,
             self.joints.totals.stored,
@@ -130,7 +133,7 @@ impl ExplicitDomain {
             self.joints.totals.by_mode[2] as f64,
             self.joints.totals.closed as f64,
             self.joints.totals.friction,
-            self.external_work,
+            self.external_work + sp.gravity_work,
             self.friction_work,
         ];
         let mut sum = [0.0; 20];
@@ -309,3 +312,42 @@ impl ExplicitDomain {
         crate::parallel::all_gather_f64(comm, &[self.dissipated])
     }
 }
+
+impl ExplicitDomain {
+    /// This rank's free spheres for the sphere output (issue 21), None
+    /// without spheres.
+    pub fn sphere_rows(&self) -> Option<super::SphereRows> {
+        self.spheres.as_ref().map(|s| s.rows())
+    }
+
+    /// Collective. The touching sphere pairs and sphere–face contacts of
+    /// the last substep over the ranks (a pair across a cut counts on
+    /// both sides).
+    pub fn sphere_contacts(&self, comm: &SimpleCommunicator) -> [u64; 2] {
+        let r = self.spheres.as_ref().map(|s| s.report).unwrap_or_default();
+        let mut all = [0u64; 2];
+        comm.all_reduce_into(
+            &[r.pairs, r.faces][..],
+            &mut all[..],
+            SystemOperation::sum(),
+        );
+        all
+    }
+
+    /// Take the free spheres out (a repartition builds the domain again).
+    pub fn take_spheres(&mut self) -> TakenSpheres {
+        TakenSpheres(self.spheres.take())
+    }
+
+    /// Put spheres taken from a previous domain back, their faces' shares
+    /// now to `part`'s owned nodes.
+    pub fn put_spheres(&mut self, taken: TakenSpheres, part: &crate::parallel::Part) {
+        if let Some(mut s) = taken.0 {
+            s.attach(part);
+            self.spheres = Some(s);
+        }
+    }
+}
+
+/// A domain's free spheres between two domains ([`ExplicitDomain::take_spheres`]).
+pub struct TakenSpheres(Option<super::spheres::DomainSpheres>);

@@ -279,3 +279,64 @@ fn bad_spheres_keys_are_clear_errors() {
         "{err}"
     );
 }
+
+/// Spheres dropped onto the eight blocks of `scenarios/drop8.toml` as
+/// they fall onto the floor, with a repartition check every step on 2
+/// ranks (the blocks move between ranks, the spheres with the domain):
+/// the same bits as on 1 rank, and the spheres land on the blocks. (Light
+/// spheres: the soft blocks' landing speed would press heavy ones in by
+/// more than the 10 % of a radius a run accepts.)
+#[test]
+fn spheres_on_falling_blocks_stay_bitwise_through_repartitions() {
+    let dir = out_dir("spheres-drop8");
+    let mut text = std::fs::read_to_string(root().join("scenarios/drop8.toml")).unwrap();
+    text.push_str(
+        r#"
+[[materials]]
+name = "foam"
+density = 150.0
+young = 5e7
+poisson = 0.3
+
+[[spheres]]
+material = "foam"
+radius = 0.01
+count = 30
+box = { min = [0.0, 0.0, 0.31], max = [0.28, 0.28, 0.37] }
+seed = 1
+
+[mechanics.rebalance]
+every = 1
+threshold = 1.0001
+"#,
+    );
+    let scenario = dir.join("drop8-spheres.toml");
+    std::fs::write(&scenario, text).unwrap();
+    let (o1, o2) = (dir.join("one"), dir.join("two"));
+    let steps = ["--set", "time.steps=100"];
+    run_ok(1, &scenario, &o1, &steps);
+    let summary = run_ok(2, &scenario, &o2, &steps);
+    let (moves, _) = repartitions(&summary);
+    assert!(moves > 0, "the blocks were repartitioned: {summary}");
+    let stem = "drop8-spheres";
+    let (s1, s2) = (spheres(&o1, stem), spheres(&o2, stem));
+    for (a, b) in s1.x.iter().flatten().zip(s2.x.iter().flatten()) {
+        assert!(a.iter().zip(b).all(|(p, q)| p.to_bits() == q.to_bits()));
+    }
+    for (a, b) in s1.v.iter().flatten().zip(s2.v.iter().flatten()) {
+        assert!(a.iter().zip(b).all(|(p, q)| p.to_bits() == q.to_bits()));
+    }
+    let (m1, m2) = (read_mech(&o1, stem), read_mech(&o2, stem));
+    for (a, b) in m1.disp.iter().flatten().zip(m2.disp.iter().flatten()) {
+        assert!(a.iter().zip(b).all(|(p, q)| p.to_bits() == q.to_bits()));
+    }
+    // After 0.2 s a free fall reaches 1.96 m/s: the spheres on the
+    // resting blocks are far slower.
+    let slow =
+        s1.v.last()
+            .unwrap()
+            .iter()
+            .filter(|v| v[2].abs() < 1.0)
+            .count();
+    assert!(slow >= 10, "{slow} spheres stopped by the blocks");
+}

@@ -111,17 +111,14 @@ impl ExplicitDomain {
                 mom[d] += m * v[d];
             }
         }
-        // The free spheres' share (issue 21): their contacts' viscous and
-        // frictional losses are not counted in `dissipated`.
-        let sp = self.spheres.as_ref().map(|s| s.report).unwrap_or_default();
-        let local = [
-            kin + self.particle_kinetic + sp.kinetic,
+        let mut local = [
+            kin + self.particle_kinetic,
             self.strain_energy,
-            self.contact_energy + sp.contact_energy,
-            self.dissipated + sp.damped,
-            mom[0] + self.particle_momentum.x + sp.momentum.x,
-            mom[1] + self.particle_momentum.y + sp.momentum.y,
-            mom[2] + self.particle_momentum.z + sp.momentum.z,
+            self.contact_energy,
+            self.dissipated,
+            mom[0] + self.particle_momentum.x,
+            mom[1] + self.particle_momentum.y,
+            mom[2] + self.particle_momentum.z,
             self.active_pairs as f64,
             self.candidates.len() as f64,
             self.joints.totals.stored,
@@ -133,9 +130,20 @@ impl ExplicitDomain {
             self.joints.totals.by_mode[2] as f64,
             self.joints.totals.closed as f64,
             self.joints.totals.friction,
-            self.external_work + sp.gravity_work,
+            self.external_work,
             self.friction_work,
         ];
+        // The free spheres' share (issue 21): their contacts' viscous and
+        // frictional losses are not counted in `dissipated`.
+        if let Some(sp) = self.spheres.as_ref().map(|s| s.report) {
+            local[0] += sp.kinetic;
+            local[2] += sp.contact_energy;
+            local[3] += sp.damped;
+            for d in 0..3 {
+                local[4 + d] += sp.momentum[d];
+            }
+            local[18] += sp.gravity_work;
+        }
         let mut sum = [0.0; 20];
         comm.all_reduce_into(&local[..], &mut sum[..], SystemOperation::sum());
         MechanicsState {

@@ -546,6 +546,11 @@ impl DomainSpheres {
         }
     }
 
+    /// Number of owned spheres.
+    pub(super) fn num_owned(&self) -> usize {
+        self.n_owned
+    }
+
     /// The owned spheres for the output.
     pub(super) fn rows(&self) -> SphereRows {
         let no = self.n_owned;

@@ -328,14 +328,15 @@ impl ExplicitDomain {
         self.spheres.as_ref().map(|s| s.rows())
     }
 
-    /// Collective. The touching sphere pairs and sphere–face contacts of
-    /// the last substep over the ranks (a pair across a cut counts on
-    /// both sides).
-    pub fn sphere_contacts(&self, comm: &SimpleCommunicator) -> [u64; 2] {
+    /// Collective. The free spheres (all ranks), and the touching sphere
+    /// pairs and sphere–face contacts of the last substep over the ranks;
+    /// zeros without spheres.
+    pub fn sphere_counts(&self, comm: &SimpleCommunicator) -> [u64; 3] {
         let r = self.spheres.as_ref().map(|s| s.report).unwrap_or_default();
-        let mut all = [0u64; 2];
+        let n = self.spheres.as_ref().map_or(0, |s| s.num_owned() as u64);
+        let mut all = [0u64; 3];
         comm.all_reduce_into(
-            &[r.pairs, r.faces][..],
+            &[n, r.pairs, r.faces][..],
             &mut all[..],
             SystemOperation::sum(),
         );

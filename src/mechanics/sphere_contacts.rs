@@ -128,7 +128,7 @@ pub struct ContactForces {
     pub touching: Vec<bool>,
     /// The triangles' shares, in the sphere's order.
     pub shares: Vec<NodeShare>,
-    /// Touching pairs (with an owned end) and face contacts.
+    /// Touching pairs whose lower number is owned, and face contacts.
     pub pairs: usize,
     pub faces: usize,
     /// Hertz energy of the contacts, half of a pair per owned end (J).
@@ -240,7 +240,8 @@ pub fn sphere_contacts(
                 out.energy += 0.5 * f.energy;
             }
         }
-        out.pairs += 1;
+        // Counted by the lower number's owner: once over the ranks.
+        out.pairs += usize::from(a < no);
         out.max_overlap_ratio = out.max_overlap_ratio.max(delta / ca.radius.min(cb.radius));
     }
     history.pair = kept;

@@ -284,6 +284,7 @@ impl DomainSpheres {
                 &mut self.v[r.clone()],
                 &mut self.w[r],
             );
+            // Not in the seeds: energies at the half step, the mass damping's loss α m v² Δt.
             let v_mid = 0.5 * (v_old + self.v[i]);
             report.kinetic +=
                 0.5 * k.mass * v_mid.norm_squared() + 0.5 * k.inertia * self.w[i].norm_squared();

@@ -137,6 +137,8 @@ pub struct ContactForces {
     pub max_overlap_ratio: f64,
 }
 
+/// The Hertz–Mindlin constants of sphere set `a` against set `b`, or
+/// against a body of E and ν `body` (an infinitely heavy plane).
 fn law(a: &SetConstants, b: Option<&SetConstants>, body: (f64, f64)) -> HertzLaw {
     let (e, nu, r, m, damping, friction) = match b {
         Some(b) => (
@@ -149,6 +151,7 @@ fn law(a: &SetConstants, b: Option<&SetConstants>, body: (f64, f64)) -> HertzLaw
         ),
         None => (body.0, body.1, None, a.mass, a.damping, a.friction),
     };
+    // Johnson 1985 secs 4.2, 7.2 (Hertz, Mindlin): E*, G*, R*; m* = m₁ m₂/(m₁ + m₂).
     HertzLaw {
         e_star: effective_modulus(a.young, a.poisson, e, nu),
         g_star: effective_shear_modulus(a.young, a.poisson, e, nu),

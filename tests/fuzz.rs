@@ -1314,7 +1314,7 @@ fn reduced_base(path: &Path, binary: bool) -> String {
 /// Caps that keep a valid mutated run to a few steps and substeps: at most
 /// 2 steps, at most 10 mechanics substeps per step (given explicitly, so
 /// the step count does not follow a mutated time step or stiffness), at
-/// most 50 particles in a pack.
+/// most 50 particles in a pack and 50 free spheres in a set.
 fn cap_run(doc: &mut Value) {
     let num = |v: &Value| match v {
         Value::Integer(n) => Some(*n as f64),
@@ -1346,6 +1346,13 @@ fn cap_run(doc: &mut Value) {
             if let Some(Value::Integer(n)) =
                 get_mut(b, &[Seg::Key("pack".into()), Seg::Key("count".into())])
             {
+                *n = (*n).min(50);
+            }
+        }
+    }
+    if let Some(Value::Array(sets)) = get_mut(doc, &[Seg::Key("spheres".into())]) {
+        for s in sets {
+            if let Some(Value::Integer(n)) = get_mut(s, &[Seg::Key("count".into())]) {
                 *n = (*n).min(50);
             }
         }

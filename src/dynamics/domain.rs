@@ -182,6 +182,8 @@ pub struct ExplicitDomain {
     pub(super) particle_kinetic: f64,
     /// Their momentum (kg m/s), likewise.
     pub(super) particle_momentum: Vector3<f64>,
+    /// Free spheres (issue 21): this rank's slab of them.
+    pub(super) spheres: Option<super::spheres::DomainSpheres>,
     pub(super) contact_energy: f64,
     /// Energy dissipated by contact damping and friction and by the mass
     /// damping, this rank's share (J).
@@ -287,6 +289,15 @@ impl ExplicitDomain {
             super::particles::DomainParticles::new(comm, model, part),
         )?;
         let particle_w2 = particles.frequencies(comm, &mass, n_owned);
+        let owned_body: Vec<u32> = part
+            .owned_gids()
+            .iter()
+            .map(|&n| model.body_of_node(n) as u32)
+            .collect();
+        let spheres = super::spheres::DomainSpheres::new(comm, model, part)?;
+        let sphere_dt = spheres.as_ref().map_or(f64::INFINITY, |s| {
+            s.stable_dt(comm, part, &mass, &owned_body, &body_held)
+        });
         let (dt, substeps, min_len_all) = time_step(
             comm,
             model,
@@ -296,6 +307,7 @@ impl ExplicitDomain {
             pn,
             coupling_dt,
             &particle_w2,
+            sphere_dt,
         )?;
         let margin = mm
             .contact
@@ -419,11 +431,7 @@ impl ExplicitDomain {
             gravity: Vector3::from(mm.gravity),
             damping: mm.damping,
             free_damping: mm.free_damping,
-            owned_body: part
-                .owned_gids()
-                .iter()
-                .map(|&n| model.body_of_node(n) as u32)
-                .collect(),
+            owned_body,
             touching: vec![0; model.bodies.len()],
             strain_energy: 0.0,
             joints,
@@ -431,6 +439,7 @@ impl ExplicitDomain {
             particles,
             particle_kinetic: 0.0,
             particle_momentum: Vector3::zeros(),
+            spheres,
             contact_energy: 0.0,
             dissipated: 0.0,
             external_work: 0.0,

@@ -53,6 +53,10 @@
 //! - `particles`: the bonded particles of bodies with an element set made
 //!   particles (issue 21), their links to the elements, advanced after
 //!   the force sum, and their rows of the particle output.
+//! - `spheres`: the free discrete-element spheres of this rank's slab
+//!   (issue 21, beyond the papers), their ghosts and migrants, their
+//!   contacts with each other and the bodies' boundary triangles, whose
+//!   shares are added to the owned nodes after the force sum.
 
 mod balance;
 mod candidates;
@@ -63,6 +67,7 @@ mod joints;
 mod pair_sum;
 mod particles;
 mod self_contact;
+mod spheres;
 mod springs;
 mod state;
 mod substep;
@@ -75,7 +80,8 @@ pub use balance::BodyLoad;
 pub use domain::ExplicitDomain;
 pub use joints::{merge_body_cracks, JointRows};
 pub use particles::ParticleRows;
-pub use state::{MechanicsCounters, MechanicsState, SavedMotion};
+pub use spheres::SphereRows;
+pub use state::{MechanicsCounters, MechanicsState, SavedMotion, TakenSpheres};
 
 /// Marks an absent local index or slot.
 const NONE: u32 = u32::MAX;

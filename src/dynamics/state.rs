@@ -111,7 +111,7 @@ impl ExplicitDomain {
                 mom[d] += m * v[d];
             }
         }
-        let local = [
+        let mut local = [
             kin + self.particle_kinetic,
             self.strain_energy,
             self.contact_energy,
@@ -133,6 +133,17 @@ impl ExplicitDomain {
             self.external_work,
             self.friction_work,
         ];
+        // The free spheres' share (issue 21): their contacts' viscous and
+        // frictional losses are not counted in `dissipated`.
+        if let Some(sp) = self.spheres.as_ref().map(|s| s.report) {
+            local[0] += sp.kinetic;
+            local[2] += sp.contact_energy;
+            local[3] += sp.damped;
+            for d in 0..3 {
+                local[4 + d] += sp.momentum[d];
+            }
+            local[18] += sp.gravity_work;
+        }
         let mut sum = [0.0; 20];
         comm.all_reduce_into(&local[..], &mut sum[..], SystemOperation::sum());
         MechanicsState {
@@ -309,3 +320,43 @@ impl ExplicitDomain {
         crate::parallel::all_gather_f64(comm, &[self.dissipated])
     }
 }
+
+impl ExplicitDomain {
+    /// This rank's free spheres for the sphere output (issue 21), None
+    /// without spheres.
+    pub fn sphere_rows(&self) -> Option<super::SphereRows> {
+        self.spheres.as_ref().map(|s| s.rows())
+    }
+
+    /// Collective. The free spheres (all ranks), and the touching sphere
+    /// pairs and sphere–face contacts of the last substep over the ranks;
+    /// zeros without spheres.
+    pub fn sphere_counts(&self, comm: &SimpleCommunicator) -> [u64; 3] {
+        let r = self.spheres.as_ref().map(|s| s.report).unwrap_or_default();
+        let n = self.spheres.as_ref().map_or(0, |s| s.num_owned() as u64);
+        let mut all = [0u64; 3];
+        comm.all_reduce_into(
+            &[n, r.pairs, r.faces][..],
+            &mut all[..],
+            SystemOperation::sum(),
+        );
+        all
+    }
+
+    /// Take the free spheres out (a repartition builds the domain again).
+    pub fn take_spheres(&mut self) -> TakenSpheres {
+        TakenSpheres(self.spheres.take())
+    }
+
+    /// Put spheres taken from a previous domain back, their faces' shares
+    /// now to `part`'s owned nodes.
+    pub fn put_spheres(&mut self, taken: TakenSpheres, part: &crate::parallel::Part) {
+        if let Some(mut s) = taken.0 {
+            s.attach(part);
+            self.spheres = Some(s);
+        }
+    }
+}
+
+/// A domain's free spheres between two domains ([`ExplicitDomain::take_spheres`]).
+pub struct TakenSpheres(Option<super::spheres::DomainSpheres>);

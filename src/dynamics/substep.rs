@@ -355,6 +355,24 @@ impl ExplicitDomain {
             }
             self.particles.forward_motion(comm);
         }
+        if let Some(spheres) = self.spheres.as_mut() {
+            // Free spheres (issue 21) after the element sum: their faces'
+            // shares land on the owned nodes in (sphere, contact) order.
+            let touched = self.damping;
+            let step = spheres.substep(
+                comm,
+                &self.part_tets,
+                &self.x,
+                &self.v,
+                self.dt,
+                &self.gravity,
+                |touching| if touching { touched } else { free },
+                &mut self.f,
+            );
+            if let Err(e) = step {
+                error.get_or_insert(e);
+            }
+        }
         let no = self.n_owned;
         let p = NodeUpdate {
             dt: self.dt,

@@ -22,7 +22,7 @@ use crate::parallel::Part;
 /// scenario's, checked against the critical one, or safety × critical, cut
 /// to fill `coupling_dt`. `particle_w2`: per body, the square of the
 /// highest frequency its particles add (issue 21), added to the body's
-/// like the joints'.
+/// like the joints'. `sphere_dt`: the free spheres' stable step (issue 21).
 /// Returns (Δt, substeps per thermal step, the smallest characteristic
 /// element length over the ranks).
 #[allow(clippy::too_many_arguments)]
@@ -35,6 +35,7 @@ pub(super) fn time_step(
     pn: Option<f64>,
     coupling_dt: f64,
     particle_w2: &[(u32, f64)],
+    sphere_dt: f64,
 ) -> Result<(f64, u64, f64)> {
     let mm = model.mechanics.as_ref().expect("mechanics model");
     let mesh = &part.mesh;
@@ -104,6 +105,8 @@ pub(super) fn time_step(
         }
     }
     crate::parallel::agree(comm, local_error.map_or(Ok(()), Err))?;
+    // The free spheres' contacts (issue 21), the same on every rank.
+    dt_local = dt_local.min(sphere_dt);
     let mut crit: f64 = 0.0;
     comm.all_reduce_into(&dt_local, &mut crit, SystemOperation::min());
     let mut min_len_all: f64 = 0.0;
@@ -117,7 +120,7 @@ pub(super) fn time_step(
         (Some(dt), _) if dt > crit * (1.0 + 1e-12) => {
             return Err(Error::Mechanics(format!(
                 "mechanics.dt = {dt:e} s exceeds the critical explicit step {crit:e} s of this \
-                 mesh, materials and contact penalty (safety × critical = {allowed:e} s)"
+                 mesh, materials, contact penalty and free spheres (safety × critical = {allowed:e} s)"
             )))
         }
         (Some(dt), Some(n)) => (dt, n),

@@ -429,13 +429,13 @@ impl FreeSpheres {
 /// The faces binned on a grid of cubes at least a sphere diameter and the
 /// largest triangle's box wide, so a triangle lies in at most 8 cells and
 /// a sphere's box meets at most 8.
-struct FaceGrid {
+pub(crate) struct FaceGrid {
     h: f64,
     cells: HashMap<[i64; 3], Vec<u32>>,
 }
 
 impl FaceGrid {
-    fn new(n: usize, diameter: f64, tri: impl Fn(usize) -> [V3; 3]) -> FaceGrid {
+    pub(crate) fn new(n: usize, diameter: f64, tri: impl Fn(usize) -> [V3; 3]) -> FaceGrid {
         let boxes: Vec<(V3, V3)> = (0..n)
             .map(|f| {
                 let t = tri(f);
@@ -455,7 +455,7 @@ impl FaceGrid {
 
     /// The faces (ascending, once each) in the cells the box of the sphere
     /// at `x` of radius `r` meets.
-    fn near(&self, x: &V3, r: f64, out: &mut Vec<u32>) {
+    pub(crate) fn near(&self, x: &V3, r: f64, out: &mut Vec<u32>) {
         out.clear();
         let e = V3::repeat(r);
         for_cells(&(x - e), &(x + e), self.h, |c| {

@@ -44,6 +44,7 @@ pub mod hex8;
 pub mod hex8_element;
 pub mod interface_link;
 pub mod material;
+pub mod sphere_contacts;
 
 pub use element::{element_response, ElementResponse, Kinematics, Tet4Reference, ThermalState};
 pub use error::MechanicsError;

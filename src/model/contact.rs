@@ -101,3 +101,13 @@ pub fn contact_model(c: &ContactSpec, materials: &[Material]) -> Result<ContactM
         sliding_speed: c.sliding_speed.unwrap_or(SLIDING_SPEED),
     })
 }
+
+impl super::Model {
+    /// Contact resistance between materials `a` and `b` (infinite without
+    /// contact heat transfer).
+    pub fn resistance(&self, a: u32, b: u32) -> f64 {
+        self.contact
+            .as_ref()
+            .map_or(f64::INFINITY, |c| c.resistance[a as usize][b as usize])
+    }
+}

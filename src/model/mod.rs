@@ -10,11 +10,13 @@ mod bcs;
 mod bodies;
 mod contact;
 mod particles;
+mod spheres;
 
 pub use bcs::{body_bcs, BodyBcs, MechanicsKind, SetTarget, ThermalKind};
 pub use bodies::{BodyMesh, BodySource, Motion, SavedJoints, SourceJoints, SourceMesh};
 pub use contact::ContactModel;
 pub use particles::SourceParticles;
+pub use spheres::{place_spheres, SphereSet};
 
 use crate::error::{Error, Result};
 use crate::geometry::transform::{rotate_points, rotation_xyz_degrees, translate_points};
@@ -166,6 +168,8 @@ pub struct Model {
     pub thermal_active: bool,
     /// Mechanics, when the scenario has a `[mechanics]` table.
     pub mechanics: Option<MechanicsModel>,
+    /// Free discrete-element sphere sets (issue 21).
+    pub spheres: Vec<SphereSet>,
     /// Time step (s).
     pub dt: f64,
     /// Number of steps.
@@ -841,15 +845,8 @@ impl Model {
             solver: s.solver.clone(),
             thermal_active: s.has_thermal(),
             mechanics,
+            spheres: spheres::sphere_sets(s),
         })
-    }
-
-    /// Contact resistance between materials `a` and `b` (infinite without
-    /// contact heat transfer).
-    pub fn resistance(&self, a: u32, b: u32) -> f64 {
-        self.contact
-            .as_ref()
-            .map_or(f64::INFINITY, |c| c.resistance[a as usize][b as usize])
     }
 
     /// Prescribed temperature at time `t` of node `n` (global id) whose

@@ -15,6 +15,7 @@ mod halo;
 mod part;
 mod partition;
 pub mod rcb;
+mod sphere_slabs;
 mod spheres;
 mod tied_rows;
 
@@ -26,6 +27,7 @@ pub use partition::{
     dual_graph, dual_graph_with, partition_collective, partition_elements,
     partition_elements_weighted,
 };
+pub use sphere_slabs::SphereSlabs;
 pub use spheres::PartSpheres;
 
 use mpi::collective::SystemOperation;

@@ -20,6 +20,7 @@ mod rebalance;
 mod schedule;
 mod settle;
 mod setup;
+mod sphere_output;
 mod status_output;
 mod summary;
 
@@ -88,6 +89,11 @@ pub fn run(
         model: clock.elapsed().as_secs_f64(),
         ..PhaseTimes::default()
     };
+    if opts.restart.is_some() && !model.spheres.is_empty() {
+        return Err(Error::Mechanics(
+            "--restart: checkpoints do not hold free spheres yet ([[spheres]], issue 21)".into(),
+        ));
+    }
     let restart = match &opts.restart {
         Some(p) => Some(Restart::read(p, &model)?),
         None => None,
@@ -188,6 +194,8 @@ struct Stages<'a, 'p> {
     times: PhaseTimes,
     /// Repartitions as the bodies move.
     balance: Balance,
+    /// The free spheres' series (issue 21), once the output is open.
+    spheres_out: Option<sphere_output::SphereOutput>,
 }
 
 impl<'a, 'p> Stages<'a, 'p> {
@@ -257,6 +265,7 @@ impl<'a, 'p> Stages<'a, 'p> {
             contacts,
             times,
             balance,
+            spheres_out: None,
         })
     }
 }
@@ -269,6 +278,10 @@ impl Stages<'_, '_> {
         let clock = Instant::now();
         let start_step = ck.map_or(0, |c| c.step);
         let mut out = self.open_output(dir, ck)?;
+        if let Some(rows) = self.mech.as_ref().and_then(|m| m.domain.sphere_rows()) {
+            let so = sphere_output::SphereOutput::open(self.comm, &rows, &out.dir, &out.stem)?;
+            self.spheres_out = Some(so);
+        }
         if !out.continues {
             self.write(&mut out, start_step)?;
         }
@@ -347,6 +360,10 @@ impl Stages<'_, '_> {
                 self.comm, self.model, m, &path,
             )?);
         }
+        if let Some(so) = self.spheres_out.take() {
+            particle_files.push(so.xdmf.clone());
+            so.close()?;
+        }
         if let Some(b) = at.bar {
             b.finish_and_clear();
         }
@@ -401,7 +418,12 @@ impl Stages<'_, '_> {
             mech,
             contacts,
             step,
-        )
+        )?;
+        let rows = self.mech.as_ref().and_then(|m| m.domain.sphere_rows());
+        if let (Some(so), Some(rows)) = (self.spheres_out.as_mut(), rows) {
+            so.write(self.comm, step as f64 * self.model.dt, &rows)?;
+        }
+        Ok(())
     }
 
     /// Collective. Write the history row of `step` alone.

@@ -436,7 +436,8 @@ impl Stages<'_, '_> {
         // The joints' damage travels by joint number (issue 19).
         let joints = super::joint_migration::JointSnapshot::take(comm, model, mech);
         // What the old stages counted goes on with the new ones.
-        let old = self.mech.take().expect("mechanics");
+        let mut old = self.mech.take().expect("mechanics");
+        let spheres = old.domain.take_spheres();
         let (counters, substeps_per_step) = (old.domain.counters, old.substeps_per_step);
         let friction_work = old.domain.friction_work_share();
         drop(old);
@@ -471,6 +472,8 @@ impl Stages<'_, '_> {
             domain,
             substeps_per_step: n,
         };
+        // The free spheres keep their slabs (issue 21).
+        mech.domain.put_spheres(spheres, &self.part);
         checkpoint::restore_mechanics(comm, &self.part, Saved::Memory(&snapshot), &mut mech)?;
         if let Some(p) = &snapshot.particles {
             p.restore_motion(comm, &mut mech);

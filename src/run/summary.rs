@@ -76,6 +76,9 @@ pub struct MechanicsSummary {
     /// Cohesive joints (issue 19): how many, broken, crack area (m²) and
     /// energy dissipated by their damage (J); zero joints without fracture.
     pub joints: (u64, u64, f64, f64),
+    /// Free spheres (issue 21): how many, and the touching pairs and
+    /// sphere–face contacts of the last substep; zeros without spheres.
+    pub spheres: [u64; 3],
 }
 
 /// The repartitions of a run on several ranks with moving bodies.
@@ -235,6 +238,19 @@ impl std::fmt::Display for RunSummary {
                 "  traffic     {:.0} B sent per substep per rank (max over ranks), {:.0} B mean (halo, ghost refresh, pair balancing)",
                 m.bytes_per_substep.0, m.bytes_per_substep.1
             )?;
+            let [n, pairs, faces] = m.spheres;
+            if n > 0 {
+                let rate = if t.mechanics > 0.0 {
+                    (n * m.substeps) as f64 / t.mechanics / self.ranks as f64
+                } else {
+                    0.0
+                };
+                writeln!(
+                    f,
+                    "  spheres     {n} free spheres, {:.2} M sphere updates/s/rank; at the end {pairs} touching pairs, {faces} sphere-face contacts",
+                    rate / 1e6
+                )?;
+            }
             let (n, broken, area, energy) = m.joints;
             if n > 0 {
                 writeln!(
@@ -508,6 +524,7 @@ impl MechanicsSummary {
             } else {
                 (0, 0, 0.0, 0.0)
             },
+            spheres: m.sphere_counts(comm),
         }
     }
 }

@@ -6,12 +6,14 @@
 
 mod overrides;
 mod schema;
+mod spheres;
 mod validate;
 
 use std::path::{Path, PathBuf};
 
 pub use overrides::apply_override;
 pub use schema::*;
+pub use spheres::{SphereBox, SphereSpec};
 
 /// A scenario problem: which file, which key, what is wrong.
 #[derive(Debug, thiserror::Error)]

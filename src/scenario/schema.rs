@@ -18,6 +18,9 @@ pub struct Scenario {
     pub materials: Vec<MaterialSpec>,
     /// Bodies: each a Tet4 mesh with a material and an initial state.
     pub bodies: Vec<BodySpec>,
+    /// Free discrete-element spheres placed in boxes (issue 21).
+    #[serde(default)]
+    pub spheres: Vec<super::SphereSpec>,
     /// Thermal problem: integrator and boundary conditions. Absent: the
     /// default thermal problem, unless `[mechanics]` is given (then the run
     /// is purely mechanical and temperatures stay at their initial values).

@@ -366,6 +366,7 @@ impl Scenario {
         }
         self.validate_fracture()?;
         self.validate_particles()?;
+        self.validate_spheres()?;
         if let Some(r) = self.solver.rtol {
             if !(r > 0.0 && r < 1.0) {
                 return bad("solver.rtol", format!("must be in (0, 1), got {r}"));

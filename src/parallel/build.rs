@@ -156,6 +156,9 @@ impl Part {
                 }
             }
         }
+        if let Some(m) = &model.mechanics {
+            super::rcb::level(&mut objects, m.gravity);
+        }
         let dest = match placement {
             Placement::Saved(f) if f.head.partition_ranks == Some(size as u64) => {
                 let is_sphere = |&[b, e]: &[u32; 2]| {

@@ -102,6 +102,30 @@ impl Drop for Zoltan {
     }
 }
 
+/// How much of its height along gravity an object's point keeps for the
+/// cuts ([`level`]).
+const HEIGHT_SHARE: f64 = 0.1;
+
+/// Under gravity `g`, shrink the objects' heights along it to
+/// [`HEIGHT_SHARE`] of themselves, so that the bisection cuts across the
+/// floor (by planes along gravity) unless the objects are ten times taller
+/// than wide: a settling packing's contacts, which gather at the bottom,
+/// then fall to every rank alike, and bodies falling straight down stay
+/// on their rank. The cut is any partition (results do not depend on it).
+pub fn level(objects: &mut [Object], g: [f64; 3]) {
+    let len = g.iter().map(|c| c * c).sum::<f64>().sqrt();
+    if !(len > 0.0 && len.is_finite()) {
+        return;
+    }
+    let n = g.map(|c| c / len);
+    for o in objects {
+        let h = (0..3).map(|d| o.point[d] * n[d]).sum::<f64>();
+        for d in 0..3 {
+            o.point[d] -= (1.0 - HEIGHT_SHARE) * h * n[d];
+        }
+    }
+}
+
 /// Collective. The rank each of this rank's `objects` goes to: recursive
 /// coordinate bisection of all ranks' objects into as many parts as ranks,
 /// of equal weight to within `imbalance` (max/mean, e.g. 1.05).

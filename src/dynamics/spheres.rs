@@ -128,7 +128,8 @@ impl DomainSpheres {
         }
         let centres: Vec<[f64; 3]> = placed.iter().map(|p| p.1).collect();
         let (rank, size) = (comm.rank() as usize, comm.size() as usize);
-        let slabs = SphereSlabs::new(&centres, lo, hi, size);
+        let gravity = model.mechanics.as_ref().map_or([0.0; 3], |m| m.gravity);
+        let slabs = SphereSlabs::new(&centres, lo, hi, size, gravity);
         let mine: Vec<usize> = (0..placed.len())
             .filter(|&i| slabs.owner(&placed[i].1) == rank)
             .collect();

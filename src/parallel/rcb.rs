@@ -104,7 +104,7 @@ impl Drop for Zoltan {
 
 /// How much of its height along gravity an object's point keeps for the
 /// cuts ([`level`]).
-const HEIGHT_SHARE: f64 = 0.1;
+pub(crate) const HEIGHT_SHARE: f64 = 0.1;
 
 /// Under gravity `g`, shrink the objects' heights along it to
 /// [`HEIGHT_SHARE`] of themselves, so that the bisection cuts across the

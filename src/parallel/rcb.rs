@@ -120,8 +120,8 @@ pub fn level(objects: &mut [Object], g: [f64; 3]) {
     let n = g.map(|c| c / len);
     for o in objects {
         let h = (0..3).map(|d| o.point[d] * n[d]).sum::<f64>();
-        for d in 0..3 {
-            o.point[d] -= (1.0 - HEIGHT_SHARE) * h * n[d];
+        for (p, nd) in o.point.iter_mut().zip(n) {
+            *p -= (1.0 - HEIGHT_SHARE) * h * nd;
         }
     }
 }

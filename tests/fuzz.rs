@@ -41,7 +41,7 @@ use toml::Value;
 const SEED: u64 = 0x1616_f022_d0e5_0001;
 /// Mutated cases per shipped scenario (in-process), unless listed in
 /// [`SCENARIO_CASES`].
-const CASES_PER_SCENARIO: usize = 560;
+const CASES_PER_SCENARIO: usize = 360;
 /// Scenarios whose valid mutations take long to build get fewer cases.
 /// `fede-expansion-bar`'s case 101 widens the bar 10,000 times: a valid
 /// model of 15 M tets and 640,000 spheres, 26 s to build alone and over

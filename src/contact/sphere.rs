@@ -239,6 +239,19 @@ pub fn sphere_triangle(x: &V3, r: f64, t: &[V3; 3]) -> Option<TriangleTouch> {
     })
 }
 
+/// The tangential spring a sphere kept last step for its contact with
+/// `body` whose normal was nearest `normal` (within
+/// [`DISTINCT_NORMAL_DEG`]), whichever triangle had it, or zero: rolling
+/// over a body's tessellation keeps the spring. `old`: (body, normal,
+/// spring) per contact of the step before.
+pub fn kept_spring(old: &[(u32, V3, V3)], body: u32, normal: &V3) -> V3 {
+    let cos = DISTINCT_NORMAL_DEG.to_radians().cos();
+    old.iter()
+        .filter(|h| h.0 == body && h.1.dot(normal) >= cos)
+        .max_by(|a, b| a.1.dot(normal).total_cmp(&b.1.dot(normal)))
+        .map_or_else(V3::zeros, |h| h.2)
+}
+
 /// The touches of one sphere on one body that count (module header):
 /// `touches` (triangle index, touch) sorted deepest first (ties by the
 /// lower index), each kept only if its normal is more than

@@ -294,9 +294,6 @@ impl FreeSpheres {
         let mut kept: HashMap<u32, Vec<(u32, V3, V3)>> = HashMap::with_capacity(history.len());
         let tri_of = |f: usize| faces.nodes[f].map(|n| nodes.x[n as usize]);
         let grid = FaceGrid::new(faces.nodes.len(), 2.0 * r, tri_of);
-        let cos = crate::contact::sphere::DISTINCT_NORMAL_DEG
-            .to_radians()
-            .cos();
         let mut near = Vec::new();
         for s in 0..self.x.len() {
             grid.near(&self.x[s], r, &mut near);
@@ -324,15 +321,7 @@ impl FreeSpheres {
                     let arm = touch.point - self.x[s];
                     let vs = self.v[s] + self.w[s].cross(&arm);
                     let vf: V3 = (0..3).map(|c| nodes.v[tri[c] as usize] * wts[c]).sum();
-                    // The history of this body's contact with the nearest
-                    // normal last step (within the distinct-normal angle),
-                    // whichever triangle had it: rolling over the
-                    // tessellation keeps its spring.
-                    let mut xi = old
-                        .iter()
-                        .filter(|h| h.0 == body && h.1.dot(&touch.normal) >= cos)
-                        .max_by(|a, b| a.1.dot(&touch.normal).total_cmp(&b.1.dot(&touch.normal)))
-                        .map_or_else(V3::zeros, |h| h.2);
+                    let mut xi = crate::contact::sphere::kept_spring(&old, body, &touch.normal);
                     let out = law.force(touch.depth, &touch.normal, &(vs - vf), dt, &mut xi);
                     kept.entry(s as u32)
                         .or_default()

@@ -26,7 +26,7 @@ use nalgebra::Vector3;
 use super::free_spheres::FaceGrid;
 use crate::contact::sphere::{
     distinct_features, effective_modulus, effective_radius, effective_shear_modulus,
-    sphere_triangle, HertzLaw, DISTINCT_NORMAL_DEG,
+    sphere_triangle, HertzLaw,
 };
 
 type V3 = Vector3<f64>;
@@ -251,7 +251,6 @@ pub fn sphere_contacts(
     let r_max = sets.iter().map(|c| c.radius).fold(0.0, f64::max);
     let tri_of = |f: usize| faces.nodes[f].map(|n| faces.x[n as usize]);
     let grid = FaceGrid::new(faces.nodes.len(), 2.0 * r_max, tri_of);
-    let cos = DISTINCT_NORMAL_DEG.to_radians().cos();
     let mut near = Vec::new();
     let mut kept: HashMap<u64, Vec<(u32, V3, V3)>> = HashMap::new();
     for i in 0..no {
@@ -276,13 +275,7 @@ pub fn sphere_contacts(
                 let arm = touch.point - s.x[i];
                 let vs = s.v[i] + s.w[i].cross(&arm);
                 let vf: V3 = (0..3).map(|k| faces.v[tri[k] as usize] * wts[k]).sum();
-                // The spring of this body's contact with the nearest normal
-                // last step (rolling over the tessellation keeps it).
-                let mut xi = old
-                    .iter()
-                    .filter(|h| h.0 == body && h.1.dot(&touch.normal) >= cos)
-                    .max_by(|a, b| a.1.dot(&touch.normal).total_cmp(&b.1.dot(&touch.normal)))
-                    .map_or_else(V3::zeros, |h| h.2);
+                let mut xi = crate::contact::sphere::kept_spring(&old, body, &touch.normal);
                 let f = law.force(touch.depth, &touch.normal, &(vs - vf), dt, &mut xi);
                 kept.entry(s.gid[i])
                     .or_default()

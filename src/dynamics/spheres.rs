@@ -37,6 +37,8 @@ use crate::model::{place_spheres, Model};
 use crate::parallel::exchange::{all_gather, all_to_all};
 use crate::parallel::{Part, SphereSlabs};
 
+mod restart;
+
 type V3 = Vector3<f64>;
 
 /// Values of a face record: key, body, material, 3 node ids, 3 owners,

@@ -147,14 +147,6 @@ impl Scenario {
                         .into(),
                 ));
             }
-            if self.output.checkpoint || self.output.checkpoint_every > 0 {
-                return Err((
-                    "output.checkpoint".into(),
-                    "checkpoints do not hold free spheres yet: a run with [[spheres]] \
-                     writes none"
-                        .into(),
-                ));
-            }
         }
         Ok(())
     }

@@ -46,6 +46,7 @@ use rebalance::Balance;
 use schedule::Schedule;
 use settle::Settling;
 use setup::Contacts;
+pub use sphere_output::SphereHeatAccount;
 pub use status_output::face_status;
 pub use summary::{
     allocator_settings, peak_rss, release_fragmented_memory, release_free_memory, trace_memory,
@@ -504,6 +505,10 @@ impl Stages<'_, '_> {
                         .is_some_and(|c| c.friction_heating.is_some())
                     {
                         s.add_heat(&m.take_friction_heat())?;
+                    }
+                    // Issue 21: the free spheres' heat from the faces, released likewise.
+                    if let Some((q, gdt)) = m.take_sphere_node_heat() {
+                        s.add_sphere_heat(comm, part, &q, &gdt)?;
                     }
                 }
                 self.times.mechanics += clock.elapsed().as_secs_f64();

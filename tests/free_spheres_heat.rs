@@ -210,7 +210,11 @@ fn sphere_bed_on_a_heated_block_balances_within_bounds_on_one_and_two_ranks() {
     // step; the spheres took from the faces what the block gave.
     let (h, rows) = history(&o1, stem);
     let c = |n: &str| col(&h, n);
-    let (fe, sp, bin) = (c("stored_heat"), c("spheres_stored_heat"), c("boundary_heat_in"));
+    let (fe, sp, bin) = (
+        c("stored_heat"),
+        c("spheres_stored_heat"),
+        c("boundary_heat_in"),
+    );
     let (taken, given, pending) = (
         c("spheres_heat_from_faces"),
         c("fe_heat_from_spheres"),
@@ -248,6 +252,11 @@ fn bad_sphere_heat_input_is_a_clear_error() {
             "resistance = 2e-6",
             "resistance = 2e-6\ncmy = { hardness = 1e9, roughness = 1e-6, slope = 0.1 }",
             "contact",
+        ),
+        (
+            "[contact]",
+            "[thermal.ambient]\ntemperature = 20.0\nh = 10.0\n[contact]",
+            "thermal.ambient",
         ),
     ];
     for (i, (from, to, key)) in cases.iter().enumerate() {

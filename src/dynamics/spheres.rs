@@ -47,10 +47,10 @@ use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
 use nalgebra::Vector3;
 
+use crate::contact::sphere_heat::{explicit_fourier, sphere_capacity};
 use crate::contact::ContactTets;
 use crate::error::{Error, Result};
 use crate::mechanics::bond::update_particles;
-use crate::contact::sphere_heat::{explicit_fourier, sphere_capacity};
 use crate::mechanics::sphere_contacts::{
     sphere_contacts, stable_dt, FaceView, HeatView, Histories, SetConstants, MAX_OVERLAP,
 };
@@ -61,8 +61,8 @@ use crate::parallel::{Part, SphereSlabs};
 type V3 = Vector3<f64>;
 
 /// Values of a face record: key, body, material, 3 node ids, 3 owners,
-/// 3 × x, 3 × v, 3 temperatures.
-const FACE: usize = 30;
+/// 3 × x, 3 × v; with heat 3 temperatures more.
+const FACE: usize = 27;
 
 /// Values of a sphere record before its springs: migrant flag, number,
 /// set, x0, x, v, w, temperature.
@@ -383,7 +383,16 @@ impl DomainSpheres {
         let mut shares: Vec<(u64, u32, u32, V3, f64, f64)> = got
             .iter()
             .flat_map(|l| l.chunks_exact(8))
-            .map(|r| (r[1] as u64, r[2] as u32, r[0] as u32, v3(&r[3..6]), r[6], r[7]))
+            .map(|r| {
+                (
+                    r[1] as u64,
+                    r[2] as u32,
+                    r[0] as u32,
+                    v3(&r[3..6]),
+                    r[6],
+                    r[7],
+                )
+            })
             .collect();
         shares.sort_unstable_by_key(|s| (s.0, s.1, s.2));
         let mut error = None;
@@ -418,7 +427,9 @@ impl DomainSpheres {
                 let cap = h.capacity[self.set[i] as usize];
                 // Seed 000 eq 36 with θ = 0: Tⁿ⁺¹ = Tⁿ + Δt Q/C.
                 self.t[i] += dt * c.heat[i] / cap;
-                report.fourier = report.fourier.max(explicit_fourier(dt, c.conductance[i], cap));
+                report.fourier = report
+                    .fourier
+                    .max(explicit_fourier(dt, c.conductance[i], cap));
                 if !self.t[i].is_finite() {
                     error.get_or_insert(Error::Mechanics(format!(
                         "free sphere {}: its temperature became non-finite",
@@ -502,6 +513,8 @@ impl DomainSpheres {
         v: &[V3],
         node_t: &[f64],
     ) -> (FaceView, Vec<u32>, Vec<u32>, Vec<f64>) {
+        let heat = self.heat.is_some();
+        let width = if heat { FACE + 3 } else { FACE };
         let mut mine = [
             f64::INFINITY,
             f64::INFINITY,
@@ -554,12 +567,14 @@ impl DomainSpheres {
                     for &n in &tri {
                         to.extend_from_slice(v[n].as_slice());
                     }
-                    to.extend(tri.iter().map(|&n| node_t.get(n).copied().unwrap_or(0.0)));
+                    if heat {
+                        to.extend(tri.iter().map(|&n| node_t[n]));
+                    }
                 }
             }
         }
         let got = all_to_all(comm, send);
-        let mut records: Vec<&[f64]> = got.iter().flat_map(|l| l.chunks_exact(FACE)).collect();
+        let mut records: Vec<&[f64]> = got.iter().flat_map(|l| l.chunks_exact(width)).collect();
         records.sort_unstable_by_key(|r| r[0] as u64);
         let mut faces = FaceView::default();
         let (mut node_gid, mut node_owner, mut face_t) = (Vec::new(), Vec::new(), Vec::new());
@@ -578,7 +593,9 @@ impl DomainSpheres {
                     node_owner.push(r[6 + k] as u32);
                     faces.x.push(v3(&r[9 + 3 * k..]));
                     faces.v.push(v3(&r[18 + 3 * k..]));
-                    face_t.push(r[27 + k]);
+                    if heat {
+                        face_t.push(r[FACE + k]);
+                    }
                     (node_gid.len() - 1) as u32
                 });
             }

@@ -30,11 +30,11 @@ use std::collections::{BTreeMap, HashMap};
 use nalgebra::Vector3;
 
 use super::free_spheres::FaceGrid;
-use crate::contact::sphere_heat::{contact_radius, pipe_conductance};
 use crate::contact::sphere::{
     distinct_features, effective_modulus, effective_radius, effective_shear_modulus,
     sphere_triangle, HertzLaw,
 };
+use crate::contact::sphere_heat::{contact_radius, pipe_conductance};
 
 type V3 = Vector3<f64>;
 
@@ -521,7 +521,15 @@ mod tests {
         };
         let mut h = Histories::default();
         let g0 = V3::zeros();
-        let all = sphere_contacts(&sets, &view, &FaceView::default(), &g0, 1e-6, &mut h, Some(&heat));
+        let all = sphere_contacts(
+            &sets,
+            &view,
+            &FaceView::default(),
+            &g0,
+            1e-6,
+            &mut h,
+            Some(&heat),
+        );
         let a = (0.5 * 0.005 * 1e-4f64).sqrt();
         let q = (t[1] - t[0]) / pipe_resistance(1.2, Some(1.2), a, 1e-5);
         assert!((all.heat[0] - q).abs() < 1e-12 * q.abs());
@@ -537,7 +545,15 @@ mod tests {
         };
         let heat2 = HeatView { t: &t2, ..heat };
         let mut h2 = Histories::default();
-        let part = sphere_contacts(&sets, &one, &FaceView::default(), &g0, 1e-6, &mut h2, Some(&heat2));
+        let part = sphere_contacts(
+            &sets,
+            &one,
+            &FaceView::default(),
+            &g0,
+            1e-6,
+            &mut h2,
+            Some(&heat2),
+        );
         assert_eq!(part.heat[0], all.heat[1]);
         assert_eq!(part.conductance[0], all.conductance[1]);
         // A sphere at 300 on a face whose nodes are at 400, 500, 600.

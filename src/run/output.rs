@@ -485,7 +485,8 @@ impl Output {
                 row.extend_from_slice(&f);
             }
         }
-        row.extend(super::sphere_output::history_values(comm, sys.as_ref(), mech));
+        let spheres = super::sphere_output::history_values(comm, sys.as_ref(), mech);
+        row.extend(spheres);
         self.history.append(&row)?;
         Ok(())
     }

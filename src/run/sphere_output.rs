@@ -131,7 +131,7 @@ impl SphereHeatAccount {
 
 /// The history's sphere heat columns (a thermal run with spheres).
 pub(super) fn history_header(model: &crate::model::Model, heat: bool) -> Vec<String> {
-    if !(heat && !model.spheres.is_empty()) {
+    if !heat || model.spheres.is_empty() {
         return Vec::new();
     }
     [

@@ -163,7 +163,28 @@ impl Scenario {
                     );
                 }
             }
-            // The spheres' pipes take a constant R_c only (issue 21).
+            // What the spheres' heat does not have (issue 21): say so at once.
+            if self.thermal.as_ref().is_some_and(|t| t.ambient.is_some()) {
+                return Err((
+                    "thermal.ambient".into(),
+                    "free spheres exchange heat through their contacts only: a run with \
+                     [[spheres]] takes no [thermal.ambient] (convection, radiation)"
+                        .into(),
+                ));
+            }
+            if self
+                .contact
+                .as_ref()
+                .is_some_and(|c| c.friction_heating.is_some())
+            {
+                return Err((
+                    "contact.friction_heating".into(),
+                    "the free spheres' contacts make no frictional heat: a run with \
+                     [[spheres]] takes no contact.friction_heating"
+                        .into(),
+                ));
+            }
+            // The spheres' pipes take a constant R_c only.
             if let Some(c) = &self.contact {
                 let own = c.pair.iter().any(|p| {
                     p.materials.contains(&s.material) && (p.cmy.is_some() || p.table.is_some())

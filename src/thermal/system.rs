@@ -209,8 +209,7 @@ pub struct ThermalSystem<'p> {
     /// Frictional heat handed over by the mechanics for the next step (J
     /// per row), when frictional heating is on (issue 20).
     friction: Option<Vector<'p>>,
-    /// The free spheres' heat (issue 21) in `friction`, not yet released
-    /// (J, all ranks), and released into the FE since the start (J).
+    /// The free spheres' heat in `friction`, pending and released (issue 21).
     spheres: sphere_source::SphereSource,
     /// Total Newton iterations so far (radiating runs).
     pub newton_iterations: u64,
@@ -556,9 +555,9 @@ impl<'p> ThermalSystem<'p> {
         let t_next = t.duplicate()?;
         let work = t.duplicate()?;
         // Heat handed over: friction's (issue 20), the free spheres' (issue 21).
-        let handed = model.contact.as_ref().is_some_and(|c| c.friction_heating.is_some());
+        let handed = model.contact.as_ref().and_then(|c| c.friction_heating);
         let mut friction = None;
-        if handed || !model.spheres.is_empty() {
+        if handed.is_some() || !model.spheres.is_empty() {
             friction.insert(t.duplicate()?).set(0.0)?;
         }
         Ok(ThermalSystem {

@@ -142,7 +142,8 @@ pub struct SphereRows {
     pub displacement: Vec<f64>,
     pub velocity: Vec<f64>,
     pub radius: Vec<f64>,
-    /// Temperatures (a thermal run), else empty.
+    /// Whether the spheres carry heat, and their temperatures (else empty).
+    pub heat: bool,
     pub temperature: Vec<f64>,
     /// All spheres of the model.
     pub total: u64,
@@ -765,6 +766,7 @@ impl DomainSpheres {
                 .iter()
                 .map(|&s| self.sets[s as usize].radius)
                 .collect(),
+            heat: self.heat.is_some(),
             temperature: match self.heat {
                 Some(_) => self.t[..no].to_vec(),
                 None => Vec::new(),

@@ -74,15 +74,17 @@ impl SphereOutput {
     pub fn write(&mut self, comm: &SimpleCommunicator, time: f64, rows: &SphereRows) -> Result<()> {
         let id = ids(rows);
         let block = |v: &[f64], w: usize| to_blocks(comm, &id, v, w, self.total).1;
-        let fields = [
+        let mut fields = vec![
             ("displacement", 3, block(&rows.displacement, 3)),
             ("velocity", 3, block(&rows.velocity, 3)),
             ("radius", 1, block(&rows.radius, 1)),
-            ("temperature", 1, block(&rows.temperature, 1)),
         ];
+        // A thermal run's (issue 21); every rank agrees: the model decides.
+        if rows.heat {
+            fields.push(("temperature", 1, block(&rows.temperature, 1)));
+        }
         let f: Vec<(&str, usize, &[f64])> = fields
             .iter()
-            .filter(|(n, _, _)| *n != "temperature" || !rows.temperature.is_empty())
             .map(|(n, c, v)| (*n, *c, v.as_slice()))
             .collect();
         self.writer.write_step(time, &f, &[])?;

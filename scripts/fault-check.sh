@@ -10,11 +10,13 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 source scripts/env.sh
 target="${CARGO_TARGET_DIR:-target}"
-if [ ! -x "$target/release/fdem" ]; then
-  cargo build --release --bin fdem
+profile="${FDEM_PROFILE:-release}"
+fdem="$target/$profile/fdem"
+if [ ! -x "$fdem" ]; then
+  cargo build --profile "$profile" --bin fdem
 fi
 for tool in python3 h5dump mpirun pgrep; do
   command -v "$tool" >/dev/null || { echo "fault-check: $tool not found (bash scripts/setup.sh)" >&2; exit 1; }
 done
 out="${FDEM_FAULT_OUT:-$target/fault-check}"
-python3 scripts/fault_check.py --fdem "$target/release/fdem" --out "$out" "$@"
+python3 scripts/fault_check.py --fdem "$fdem" --out "$out" "$@"

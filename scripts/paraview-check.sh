@@ -28,10 +28,11 @@ done
 
 source scripts/env.sh
 target="${CARGO_TARGET_DIR:-target}"
-fdem="$target/release/fdem"
+profile="${FDEM_PROFILE:-release}"
+fdem="$target/$profile/fdem"
 if [ ! -x "$fdem" ]; then
-  echo "== cargo build --release"
-  cargo build --release
+  echo "== cargo build --profile $profile"
+  cargo build --profile "$profile"
 fi
 out="${FDEM_PARAVIEW_OUT:-target/paraview-check}"
 rm -rf "$out"

@@ -8,16 +8,18 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 source scripts/env.sh
 bash scripts/setup.sh
+# The `ci` profile (Cargo.toml): release code without LTO or debug info.
+export FDEM_PROFILE=ci
 
 echo "== cargo fmt --check"
 cargo fmt --all -- --check
 echo "== cargo clippy -D warnings"
-cargo clippy --release --all-targets -- -D warnings
+cargo clippy --profile ci --all-targets -- -D warnings
 echo "== cargo test (unit, validation, 1 to 4 ranks and 8, oversubscribed)"
-cargo test --release --workspace
+cargo test --profile ci --workspace
 echo "== mpirun -n 2: two-rank run of the Gmsh block with PETSc options"
 out="$(mktemp -d)"
-mpirun -n 2 --oversubscribe target/release/fdem run scenarios/gmsh-block.toml \
+mpirun -n 2 --oversubscribe target/ci/fdem run scenarios/gmsh-block.toml \
   --quiet --output "$out" -ksp_type cg -pc_type gamg -ksp_rtol 1e-12
 h5dump -H "$out/gmsh-block.h5" "$out/gmsh-block_steps/000000.h5" >/dev/null
 rm -rf "$out"

@@ -232,11 +232,6 @@ fn bad_spheres_keys_are_clear_errors() {
             "material = \"glass\"",
             "spheres[0].material",
         ),
-        (
-            "[output]",
-            "[output]\ncheckpoint = true",
-            "output.checkpoint",
-        ),
     ];
     for (i, (from, to, key)) in cases.iter().enumerate() {
         assert!(base.contains(from), "{from}");

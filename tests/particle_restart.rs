@@ -2,7 +2,8 @@
 //! checkpoint and continued with `--restart` on one and on two ranks
 //! ends as the run that never stopped. The checkpoint holds the spheres'
 //! motion, each bond's and link's incremental state and, with heat, the
-//! spheres' thermal rows, by global number.
+//! spheres' thermal rows, by global number. Free spheres (`[[spheres]]`)
+//! restart the same way: their motion, springs and energy account.
 
 mod common;
 
@@ -260,6 +261,77 @@ fn a_heat_run_with_particles_restarts_with_the_spheres_temperatures() {
             assert!(got.1 == want.1 && got.2 == want.2, "not bitwise: {worst:e}");
         } else {
             assert!(worst < 1e-10, "{ranks} ranks: {worst:e}");
+        }
+    }
+}
+
+/// The free spheres' last output (displacements and velocities by sphere
+/// number), the block's last node displacements and the history's last
+/// row, of a run of `scenarios/spheres-on-block.toml` in `dir`.
+fn spheres_last(dir: &Path) -> (Vec<f64>, Vec<f64>, Vec<[f64; 3]>, Vec<f64>) {
+    let h5 = dir.join("spheres_spheres.h5");
+    let k = fdem::io::read_times(&h5).unwrap().len() - 1;
+    let field = |name: &str| fdem::io::read_node_field_step(&h5, name, k).unwrap();
+    let m = read_mech(dir, "spheres");
+    let (_, rows) = history(dir, "spheres");
+    (
+        field("displacement"),
+        field("velocity"),
+        m.disp[m.times.len() - 1].clone(),
+        rows.last().unwrap().clone(),
+    )
+}
+
+/// The bed of 40 free spheres settling on a block
+/// (`scenarios/spheres-on-block.toml`) stopped at 0.12 s on two ranks,
+/// while the spheres still fall, bounce and roll on each other (Mindlin
+/// springs on pairs and on the block's faces), and continued to 0.3 s on
+/// one and on two ranks: the spheres' displacements and velocities, the
+/// block's nodes and the energies of the history's last row are bitwise
+/// those of the run that never stopped.
+#[test]
+fn free_spheres_restart_bitwise_on_one_and_two_ranks() {
+    let src = root().join("scenarios/spheres-on-block.toml");
+    let dir = out_dir("sphere-restart");
+    let path = dir.join("spheres.toml");
+    std::fs::copy(&src, &path).unwrap();
+    let full = out_dir("sphere-restart-full");
+    run_ok(2, &path, &full, &[]);
+    let want = spheres_last(&full);
+    let first = out_dir("sphere-restart-first");
+    let stdout = run_ok(
+        2,
+        &path,
+        &first,
+        &["--set", "output.checkpoint=true", "--set", "time.steps=12"],
+    );
+    let ck = first.join("spheres_checkpoint.h5");
+    // Moving and touching at the checkpoint: springs to carry.
+    let (_, v, _, _) = spheres_last(&first);
+    assert!(v.iter().any(|c| c.abs() > 1e-2), "the spheres were at rest");
+    let line = summary_line(&stdout, "spheres").expect("a spheres line");
+    let pairs = number_before(line, "touching pairs");
+    let faces = number_before(line, "sphere-face contacts");
+    eprintln!("at the checkpoint: {pairs} touching pairs, {faces} sphere-face contacts");
+    assert!(pairs > 0.0 && faces > 0.0, "{line}");
+    for ranks in [1, 2] {
+        let out = out_dir(&format!("sphere-restart-{ranks}"));
+        run_ok(ranks, &path, &out, &["--restart", ck.to_str().unwrap()]);
+        let got = spheres_last(&out);
+        assert!(
+            got.0 == want.0,
+            "{ranks} ranks: sphere displacements differ"
+        );
+        assert!(got.1 == want.1, "{ranks} ranks: sphere velocities differ");
+        assert!(got.2 == want.2, "{ranks} ranks: node displacements differ");
+        // The energies summed over the ranks: bitwise on as many ranks,
+        // to the sum's round-off on one.
+        let tol = if ranks == 2 { 0.0 } else { 1e-12 };
+        for (k, (a, b)) in got.3.iter().zip(&want.3).enumerate() {
+            assert!(
+                (a - b).abs() <= tol * b.abs().max(1e-30),
+                "{ranks} ranks: history column {k}: {a:e} against {b:e}"
+            );
         }
     }
 }

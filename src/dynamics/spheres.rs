@@ -58,6 +58,8 @@ use crate::model::{place_spheres, Model};
 use crate::parallel::exchange::{all_gather, all_to_all};
 use crate::parallel::{Part, SphereSlabs};
 
+mod restart;
+
 type V3 = Vector3<f64>;
 
 /// Values of a face record: key, body, material, 3 node ids, 3 owners,
@@ -287,6 +289,11 @@ impl DomainSpheres {
                 .map(|k| h.capacity[k] * h.initial[k] * f64::from(h.count[k]))
                 .sum()
         })
+    }
+
+    /// The initial temperature of set `k` (0 without heat).
+    pub(super) fn initial_temperature(&self, k: u32) -> f64 {
+        self.heat.as_ref().map_or(0.0, |h| h.initial[k as usize])
     }
 
     /// The owned spheres' lowest and highest temperature (±∞ with none).

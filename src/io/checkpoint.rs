@@ -421,6 +421,8 @@ pub struct CheckpointRows<'a> {
     pub particles: Option<&'a super::checkpoint_particles::ParticleCheckpoint>,
     /// Tangential springs: `checkpoint_springs::sorted_rows`.
     pub springs: Option<(&'a [u32], &'a [f64], u64)>,
+    /// Free spheres (issue 21).
+    pub spheres: Option<&'a super::checkpoint_spheres::SphereCheckpoint>,
 }
 
 /// Collective. Write a checkpoint: every rank its rows (moved to
@@ -660,6 +662,9 @@ fn write_parallel_to(
     }
     if let Some(r) = rows.springs {
         super::checkpoint_springs::write(comm, &file, path, &xfer, r)?;
+    }
+    if let Some(s) = rows.spheres {
+        super::checkpoint_spheres::write(comm, &file, path, &xfer, s)?;
     }
     let mut sc = [0.0; SCALARS];
     sc[0] = head.step as f64;
@@ -1068,6 +1073,7 @@ mod tests {
             joints: None,
             particles: None,
             springs: None,
+            spheres: None,
         };
         crate::testutil::on_one_rank(|comm| write_parallel(comm, p, &head, &rows))
     }

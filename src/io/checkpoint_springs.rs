@@ -27,26 +27,38 @@ pub type SavedSpring = ((u32, u32), crate::contact::penalty::Spring);
 /// Collective. This rank's springs `mine` (any order) as rows of the
 /// globally sorted list: their row numbers, the rows (flat) and the total.
 pub fn sorted_rows(comm: &SimpleCommunicator, mine: &[SavedSpring]) -> (Vec<u32>, Vec<f64>, u64) {
-    let size = comm.size() as usize;
-    // Ranges of a by rank: the sort's buckets.
-    let local_max = mine
+    let flat: Vec<f64> = mine
         .iter()
-        .map(|e| u64::from(e.0 .0) + 1)
+        .flat_map(|&((a, b), x)| [f64::from(a), f64::from(b), x[0], x[1], x[2], x[3]])
+        .collect();
+    sorted_by_key(comm, &flat, SPRING_COLUMNS)
+}
+
+/// Collective. Rows of `width` values (flat, any order on any rank),
+/// keyed by their first two columns (whole numbers), as rows of the list
+/// sorted by key over the ranks: this rank's row numbers, its rows of the
+/// sorted list (flat) and the total. Each rank takes a range of first keys.
+pub fn sorted_by_key(
+    comm: &SimpleCommunicator,
+    flat: &[f64],
+    width: usize,
+) -> (Vec<u32>, Vec<f64>, u64) {
+    let size = comm.size() as usize;
+    // Ranges of the first key by rank: the sort's buckets.
+    let local_max = flat
+        .chunks_exact(width)
+        .map(|r| r[0] as u64 + 1)
         .max()
         .unwrap_or(0);
     let mut end = 0u64;
     comm.all_reduce_into(&local_max, &mut end, SystemOperation::max());
-    let bucket = |a: u32| ((u64::from(a) * size as u64) / end.max(1)) as usize;
+    let bucket = |a: f64| ((a as u64 * size as u64) / end.max(1)) as usize;
     let mut send: Vec<Vec<f64>> = vec![Vec::new(); size];
-    for &((a, b), x) in mine {
-        send[bucket(a)].extend_from_slice(&[f64::from(a), f64::from(b), x[0], x[1], x[2], x[3]]);
+    for r in flat.chunks_exact(width) {
+        send[bucket(r[0])].extend_from_slice(r);
     }
     let got = crate::parallel::exchange::all_to_all(comm, send);
-    let mut rows: Vec<[f64; SPRING_COLUMNS]> = got
-        .iter()
-        .flat_map(|m| m.chunks_exact(SPRING_COLUMNS))
-        .map(|r| [r[0], r[1], r[2], r[3], r[4], r[5]])
-        .collect();
+    let mut rows: Vec<&[f64]> = got.iter().flat_map(|m| m.chunks_exact(width)).collect();
     rows.sort_unstable_by(|p, q| {
         (p[0], p[1])
             .partial_cmp(&(q[0], q[1]))

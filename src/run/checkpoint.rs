@@ -112,10 +112,14 @@ pub(super) fn missing(restart: &Path, message: &str) -> Error {
 
 /// The error for a checkpoint that cannot be read.
 pub(super) fn unreadable(restart: &Path, e: crate::io::IoError) -> Error {
-    Error::Model {
-        path: restart.display().to_string(),
-        message: e.to_string(),
-    }
+    let path = restart.display().to_string();
+    // The I/O error names the file already: once is enough.
+    let message = e.to_string();
+    let message = match message.strip_prefix(&format!("{path}: ")) {
+        Some(rest) => rest.to_string(),
+        None => message,
+    };
+    Error::Model { path, message }
 }
 
 /// A run's state held in memory by global node id while the ranks
@@ -292,6 +296,29 @@ pub(super) fn restore_mechanics(
     Ok(())
 }
 
+/// Collective. Put the checkpoint's free spheres (motion, springs and
+/// energy account) into the domain (a model with `[[spheres]]`).
+pub(super) fn restore_spheres(
+    comm: &SimpleCommunicator,
+    r: &Restart,
+    mech: &mut Mechanics,
+) -> Result<()> {
+    let Some((total, sets)) = mech.domain.sphere_totals() else {
+        return Ok(());
+    };
+    if !r.file.has_spheres() {
+        return Err(missing(
+            r.file.path(),
+            "the checkpoint has no free spheres, the scenario has [[spheres]]",
+        ));
+    }
+    let rows = r
+        .file
+        .sphere_rows(comm.rank() as usize, comm.size() as usize, total, sets);
+    let rows = agree(comm, rows.map_err(|e| unreadable(r.file.path(), e)))?;
+    mech.domain.restore_spheres(comm, &rows)
+}
+
 /// Collective. Put the saved histories of the joints into the domain (a
 /// checkpoint of a run with joints; the model must have the same joints).
 pub(super) fn restore_joints(
@@ -451,6 +478,8 @@ pub(super) fn save_checkpoint(
         ),
         _ => None,
     };
+    // Free spheres: their motion and springs (issue 21).
+    let spheres = mech.as_deref().and_then(|m| m.domain.saved_spheres(comm));
     let mut c = capture(comm, model, part, sys, mech, step, contacts)?;
     c.head.peak_kinetic = peak_kinetic;
     c.head.settled = settled;
@@ -483,6 +512,7 @@ pub(super) fn save_checkpoint(
             .map(|(ids, v)| (&ids[..], &v[..], total_joints)),
         particles: particles.as_ref(),
         springs: springs.as_ref().map(|(i, v, t)| (&i[..], &v[..], *t)),
+        spheres: spheres.as_ref(),
     };
     crate::io::checkpoint::write_parallel(comm, path, &c.head, &rows).map_err(Error::from)
 }

@@ -90,9 +90,11 @@ pub fn run(
         model: clock.elapsed().as_secs_f64(),
         ..PhaseTimes::default()
     };
-    if opts.restart.is_some() && !model.spheres.is_empty() {
+    if opts.restart.is_some() && !model.spheres.is_empty() && model.thermal_active {
         return Err(Error::Mechanics(
-            "--restart: checkpoints do not hold free spheres yet ([[spheres]], issue 21)".into(),
+            "--restart: checkpoints do not hold the free spheres' temperatures yet \
+             ([[spheres]] with [thermal], issue 21)"
+                .into(),
         ));
     }
     let restart = match &opts.restart {
@@ -223,6 +225,7 @@ impl<'a, 'p> Stages<'a, 'p> {
             // The joints' histories; the thermal rows of the broken ones split.
             checkpoint::restore_joints(comm, model, r, m)?;
             particle_checkpoint::restore_motion(comm, model, r, m)?;
+            checkpoint::restore_spheres(comm, r, m)?;
             if model.has_joints() {
                 let broken = m.domain.take_broken_joints();
                 part.renumber_rows(comm, model, &broken);

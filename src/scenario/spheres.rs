@@ -201,11 +201,14 @@ impl Scenario {
                     ));
                 }
             }
-            if self.output.checkpoint || self.output.checkpoint_every > 0 {
+            // Checkpoints hold the spheres' motion, not their temperatures.
+            if self.thermal.is_some()
+                && (self.output.checkpoint || self.output.checkpoint_every > 0)
+            {
                 return Err((
                     "output.checkpoint".into(),
-                    "checkpoints do not hold free spheres yet: a run with [[spheres]] \
-                     writes none"
+                    "checkpoints do not hold the free spheres' temperatures yet: a run with \
+                     [[spheres]] and [thermal] writes none"
                         .into(),
                 ));
             }

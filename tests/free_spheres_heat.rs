@@ -10,7 +10,9 @@
 //!   spheres closes, every temperature stays in [T₀, T₁], and 1 and 2
 //!   ranks agree (motion bitwise, temperatures to the direct solver's
 //!   round-off);
-//! - bad heat input for spheres is one clear error naming its key.
+//! - bad heat input for spheres is one clear error naming its key, and
+//!   explicit steps too long for a sphere's or a node's capacity stop the
+//!   run with a clear error.
 
 mod common;
 
@@ -272,5 +274,24 @@ fn bad_sphere_heat_input_is_a_clear_error() {
         let err = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(1), "{to}: {err}");
         assert!(err.contains(key), "{to}: the error names {key}: {err}");
+    }
+    // Explicit steps too long for the capacities: the spheres' (Δt Σg/C
+    // > 1) and the block nodes' (Σ N g Δt / C > 1) stop the run at once.
+    let scenario = root().join("scenarios/spheres-heat.toml");
+    for (set, says) in [
+        (
+            "materials.1.specific_heat=1e-6",
+            "explicit heat step is unstable",
+        ),
+        ("materials.0.specific_heat=1e-6", "times its heat capacity"),
+    ] {
+        let args = ["run", scenario.to_str().unwrap(), "--quiet", "--output"];
+        let out = dir.join(set);
+        let mut args = args.to_vec();
+        args.extend_from_slice(&[out.to_str().unwrap(), "--set", set]);
+        let o = fdem(1, &args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{set}: {err}");
+        assert!(err.contains(says), "{set}: {err}");
     }
 }

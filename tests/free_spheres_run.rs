@@ -4,8 +4,7 @@
 //!   (`scenarios/spheres-on-block.toml`): the same bits on 1 and 2 ranks
 //!   (spheres and block nodes); every sphere on the block, none below its
 //!   top by more than the Hertz overlap under the whole bed's weight; the
-//!   energy accounted for never exceeds the loads' work (the spheres'
-//!   contact damping and friction are the unaccounted rest);
+//!   energies add up to the work of gravity within 3 %;
 //! - one sphere resting on a fixed block: Hertz's static overlap
 //!   δ = (3 m g / (4 E* √R))^{2/3} within 0.5 %;
 //! - a bad `[[spheres]]` key is one clear error naming it, and so are
@@ -131,9 +130,12 @@ fn sphere_bed_settles_on_the_block_bitwise_on_one_and_two_ranks() {
         .iter()
         .map(|w| w.iter().map(|c| c * c).sum::<f64>().sqrt());
     assert!(speed.fold(0.0, f64::max) < 0.2, "the bed is settling");
-    // Energy: what is accounted for (kinetic, strain, contact, mass
-    // damping) never exceeds the work of gravity; the spheres' contact
-    // damping and friction take the rest.
+    // Energy: kinetic, strain, contact (Hertz and the tangential springs)
+    // and dissipated (mass damping, the contacts' dashpots and slips) add
+    // up to the work of gravity within 3 % at every output (2.1 % at
+    // 0.3 s; 1.5 % and 1.1 % at a half and a quarter of the step: the
+    // residue is the time discretisation's and the Mindlin spring's, whose
+    // stiffness 8 G* a grows with the overlap at a given elongation).
     let (h, rows) = history(&o, stem);
     let (ke, w) = (col(&h, "kinetic_energy"), col(&h, "external_work"));
     let (se, ce, de) = (
@@ -144,13 +146,13 @@ fn sphere_bed_settles_on_the_block_bitwise_on_one_and_two_ranks() {
     let peak = rows.iter().map(|row| row[ke]).fold(0.0, f64::max);
     for row in &rows[1..] {
         let held = row[ke] + row[se] + row[ce] + row[de];
+        assert!(row[w] > 0.0);
         assert!(
-            held <= row[w] * (1.0 + 1e-9),
-            "energy made at t = {}: {held} > {}",
+            (held - row[w]).abs() <= 0.03 * row[w],
+            "energy balance at t = {}: {held} against the work {}",
             row[1],
             row[w]
         );
-        assert!(row[w] > 0.0);
     }
     let end = rows.last().unwrap();
     assert!(
@@ -280,11 +282,30 @@ fn bad_spheres_keys_are_clear_errors() {
 /// ranks (the blocks move between ranks, the spheres with the domain):
 /// the same bits as on 1 rank, and the spheres land on the blocks. (Light
 /// spheres: the soft blocks' landing speed would press heavy ones in by
-/// more than the 10 % of a radius a run accepts.)
+/// more than the 10 % of a radius a run accepts.) With heat (issue 21):
+/// floor at 100, blocks at 60, spheres at 0; the spheres' heat account
+/// (carried through the repartitions) is the same on 1 and 2 ranks to
+/// the printed digits, and every sphere stays in [0, 100].
 #[test]
 fn spheres_on_falling_blocks_stay_bitwise_through_repartitions() {
     let dir = out_dir("spheres-drop8");
-    let mut text = std::fs::read_to_string(root().join("scenarios/drop8.toml")).unwrap();
+    let text = std::fs::read_to_string(root().join("scenarios/drop8.toml")).unwrap();
+    let mut text = text
+        .replacen(
+            "name = \"soft\"\n",
+            "name = \"soft\"\nspecific_heat = 800.0\nconductivity = 2.0\n",
+            1,
+        )
+        .replacen(
+            "fixed = true\n",
+            "fixed = true\ninitial_temperature = 100.0\n",
+            1,
+        )
+        .replacen(
+            "name = \"block\"\nmaterial = \"soft\"\n",
+            "name = \"block\"\nmaterial = \"soft\"\ninitial_temperature = 60.0\n",
+            1,
+        );
     text.push_str(
         r#"
 [[materials]]
@@ -292,6 +313,8 @@ name = "foam"
 density = 150.0
 young = 5e7
 poisson = 0.3
+specific_heat = 50.0
+conductivity = 5.0
 
 [[spheres]]
 material = "foam"
@@ -299,6 +322,14 @@ radius = 0.01
 count = 30
 box = { min = [0.0, 0.0, 0.31], max = [0.28, 0.28, 0.37] }
 seed = 1
+temperature = 0.0
+
+[thermal]
+bc = [{ kind = "temperature", set = "floor.zmin", value = 100.0 }]
+
+[contact]
+resistance = 1e-4
+every = 5
 
 [mechanics.rebalance]
 every = 1
@@ -309,10 +340,22 @@ threshold = 1.0001
     std::fs::write(&scenario, text).unwrap();
     let (o1, o2) = (dir.join("one"), dir.join("two"));
     let steps = ["--set", "time.steps=100"];
-    run_ok(1, &scenario, &o1, &steps);
+    let one = run_ok(1, &scenario, &o1, &steps);
     let summary = run_ok(2, &scenario, &o2, &steps);
     let (moves, _) = repartitions(&summary);
     assert!(moves > 0, "the blocks were repartitioned: {summary}");
+    // The spheres' heat: stored change, from the faces, the FE's share
+    // and the pending heat print the same; they took heat.
+    let heat = |s: &str| {
+        let line = summary_line(s, "spheres     stored change").expect("a spheres heat line");
+        line.split(';').next().unwrap().to_string()
+    };
+    assert_eq!(heat(&one), heat(&summary));
+    assert!(
+        number_before(&heat(&one), ", from the faces") > 0.0,
+        "{}",
+        heat(&one)
+    );
     let stem = "drop8-spheres";
     let (s1, s2) = (spheres(&o1, stem), spheres(&o2, stem));
     for (a, b) in s1.x.iter().flatten().zip(s2.x.iter().flatten()) {
@@ -334,4 +377,13 @@ threshold = 1.0001
             .filter(|v| v[2].abs() < 1.0)
             .count();
     assert!(slow >= 10, "{slow} spheres stopped by the blocks");
+    for k in 0..s1.x.len() {
+        let t = fdem::io::read_node_field_step(
+            &o1.join(format!("{stem}_spheres.h5")),
+            "temperature",
+            k,
+        )
+        .unwrap();
+        assert!(t.iter().all(|t| (0.0..=100.0).contains(t)), "{t:?}");
+    }
 }

@@ -41,6 +41,32 @@ pub fn pipe_flow(t_a: f64, t_b: f64, r_ab: f64) -> f64 {
     (t_b - t_a) / r_ab
 }
 
+/// Hertz's contact radius (m) a = √(R* δ) of an overlap `delta` between
+/// partners of effective radius `r_star` (Johnson 1985 sec 4.2).
+pub fn contact_radius(r_star: f64, delta: f64) -> f64 {
+    // Johnson 1985 sec 4.2 (Hertz): a² = R* δ.
+    (r_star * delta.max(0.0)).sqrt()
+}
+
+/// The conductance (W/K) of a pipe, 1/R_AB of [`pipe_resistance`], zero
+/// when the pipe does not conduct (no overlap, or an infinite `rc`).
+pub fn pipe_conductance(k_a: f64, k_b: Option<f64>, a: f64, rc: f64) -> f64 {
+    if a <= 0.0 || !rc.is_finite() {
+        return 0.0;
+    }
+    // Seed 000 eq 35: Q_AB = (T_B − T_A)/R_AB, so the conductance is 1/R_AB.
+    1.0 / pipe_resistance(k_a, k_b, a, rc)
+}
+
+/// The forward-Euler (seed 000 eq 36 with θ = 0) Fourier number of a
+/// body of capacity `c` (J/K) joined by conductances summing to `g` (W/K)
+/// over a step `dt`: its new temperature is a convex combination of its
+/// own and its partners' (the maximum principle) while this is ≤ 1.
+pub fn explicit_fourier(dt: f64, g: f64, c: f64) -> f64 {
+    // Seed 000 eq 36, θ = 0: Tⁿ⁺¹ = (1 − Δt Σg/C) Tⁿ + Δt Σ g T_j / C.
+    dt * g / c
+}
+
 /// 3D counterpart of seed 000 eq 37: the heat capacity (J/K) of a sphere,
 /// C = ρ c (4/3) π r³.
 pub fn sphere_capacity(density: f64, specific_heat: f64, radius: f64) -> f64 {
@@ -64,6 +90,19 @@ mod tests {
         let r = pipe_resistance(k, None, a, 1e-4);
         assert!((r - (125.0 + 1e-4 / (PI * 1e-6))).abs() < 1e-9);
         assert!((pipe_flow(1.0, 3.0, 4.0) - 0.5).abs() < 1e-15);
+    }
+
+    #[test]
+    fn conductance_and_fourier_number() {
+        // a² = R* δ: R* = 2.5 mm (two 5 mm spheres), δ = 10 µm → a = 158 µm.
+        let a = contact_radius(2.5e-3, 1e-5);
+        assert!((a * a - 2.5e-8).abs() < 1e-20);
+        assert_eq!(contact_radius(1.0, -1.0), 0.0);
+        let g = pipe_conductance(50.0, Some(50.0), a, 1e-5);
+        assert!((g * pipe_resistance(50.0, Some(50.0), a, 1e-5) - 1.0).abs() < 1e-14);
+        assert_eq!(pipe_conductance(50.0, None, a, f64::INFINITY), 0.0);
+        assert_eq!(pipe_conductance(50.0, None, 0.0, 0.0), 0.0);
+        assert!((explicit_fourier(2.0, 3.0, 12.0) - 0.5).abs() < 1e-15);
     }
 
     #[test]

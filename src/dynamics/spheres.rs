@@ -18,6 +18,26 @@
 //!    springs, and every sphere within reach of another slab goes there
 //!    as a ghost.
 //!
+//! Heat (a thermal run): each sphere has one uniform temperature and
+//! capacity ρ c (4/3) π r³. Its contacts conduct through the pipe network
+//! ([`crate::contact::sphere_heat`]) in the same pass as the forces, from
+//! the face nodes' temperatures of the last thermal step (sent with the
+//! triangles). Coupling (design (b) of issue 21): the owned spheres'
+//! temperatures advance by forward Euler each substep (seed 000 eq 36,
+//! θ = 0), checked against the maximum-principle bound Δt Σg/C ≤ 1; the
+//! faces' shares of heat (J) go to the nodes' owners with the forces'
+//! and are summed per owned node over the thermal step, then handed to
+//! the thermal system as a source released over its next step
+//! ([`Self::take_node_heat`]). Why not rows of the one PETSc system (as
+//! the bonded particles): the spheres migrate between ranks every
+//! substep and touch anew each substep, so rows would be re-laid out and
+//! the operator rebuilt far more often than the FE contacts are found;
+//! the substep is orders of magnitude below the spheres' thermal time
+//! (R C), so the explicit update is both stable and accurate, and the
+//! energy moved is the same number on both sides (heat leaving the nodes
+//! is heat entering the spheres). Migrants and ghosts carry their
+//! temperature.
+//!
 //! Set-up places every sphere on every rank ([`place_spheres`], seeded)
 //! and keeps its slab's: the only moment all spheres are on every rank.
 
@@ -27,11 +47,12 @@ use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
 use nalgebra::Vector3;
 
+use crate::contact::sphere_heat::{explicit_fourier, sphere_capacity};
 use crate::contact::ContactTets;
 use crate::error::{Error, Result};
 use crate::mechanics::bond::update_particles;
 use crate::mechanics::sphere_contacts::{
-    sphere_contacts, stable_dt, FaceView, Histories, SetConstants, MAX_OVERLAP,
+    sphere_contacts, stable_dt, FaceView, HeatView, Histories, SetConstants, MAX_OVERLAP,
 };
 use crate::model::{place_spheres, Model};
 use crate::parallel::exchange::{all_gather, all_to_all};
@@ -42,8 +63,25 @@ mod restart;
 type V3 = Vector3<f64>;
 
 /// Values of a face record: key, body, material, 3 node ids, 3 owners,
-/// 3 × x, 3 × v.
+/// 3 × x, 3 × v; with heat 3 temperatures more.
 const FACE: usize = 27;
+
+/// Values of a sphere record before its springs: migrant flag, number,
+/// set, x0, x, v, w, temperature.
+const SPHERE: usize = 16;
+
+/// The heat constants of a thermal run's spheres: per set its capacity
+/// (J/K), conductivity and material; R_c per material pair.
+#[derive(Debug, Clone)]
+struct HeatConstants {
+    /// Per set also its initial temperature and sphere count.
+    initial: Vec<f64>,
+    count: Vec<u32>,
+    capacity: Vec<f64>,
+    conductivity: Vec<f64>,
+    material: Vec<u32>,
+    rc: Vec<Vec<f64>>,
+}
 
 /// The spheres of one rank.
 #[derive(Debug, Clone)]
@@ -66,6 +104,14 @@ pub(super) struct DomainSpheres {
     w: Vec<V3>,
     n_owned: usize,
     history: Histories,
+    /// Temperature of each held sphere (as `gid`).
+    t: Vec<f64>,
+    /// A thermal run's constants.
+    heat: Option<HeatConstants>,
+    /// Per owned node of the part: heat (J) from the spheres' faces, and
+    /// Σ N_I g Δt (J/K), since the last [`Self::take_node_heat`].
+    node_heat: Vec<f64>,
+    node_gdt: Vec<f64>,
     /// Owned node of each global node id, for the faces' shares.
     owned_node: HashMap<u32, u32>,
     /// This rank's share of the energies (J) and momentum, and counts.
@@ -82,6 +128,12 @@ pub(super) struct SphereReport {
     pub damped: f64,
     pub pairs: u64,
     pub faces: u64,
+    /// Heat (J) the owned spheres took from faces since the start, on
+    /// the rank where it happened (the sum over the ranks is the total),
+    /// and the largest explicit Fourier number Δt Σg/C of an owned
+    /// sphere so far.
+    pub face_heat_in: f64,
+    pub fourier: f64,
 }
 
 /// The owned spheres for the output: numbers, reference centres,
@@ -92,6 +144,9 @@ pub struct SphereRows {
     pub displacement: Vec<f64>,
     pub velocity: Vec<f64>,
     pub radius: Vec<f64>,
+    /// Whether the spheres carry heat, and their temperatures (else empty).
+    pub heat: bool,
+    pub temperature: Vec<f64>,
     /// All spheres of the model.
     pub total: u64,
 }
@@ -137,6 +192,25 @@ impl DomainSpheres {
             .collect();
         let x: Vec<V3> = mine.iter().map(|&i| V3::from(placed[i].1)).collect();
         let n = mine.len();
+        let heat = model.thermal_active.then(|| HeatConstants {
+            initial: model.spheres.iter().map(|s| s.temperature).collect(),
+            count: model.spheres.iter().map(|s| s.count).collect(),
+            capacity: model
+                .spheres
+                .iter()
+                .map(|s| sphere_capacity(s.density, s.specific_heat, s.radius))
+                .collect(),
+            conductivity: model.spheres.iter().map(|s| s.conductivity).collect(),
+            material: model.spheres.iter().map(|s| s.material).collect(),
+            rc: model.contact.as_ref().map_or_else(
+                || vec![vec![f64::INFINITY; model.materials.len()]; model.materials.len()],
+                |c| c.resistance.clone(),
+            ),
+        });
+        let t: Vec<f64> = mine
+            .iter()
+            .map(|&i| model.spheres[placed[i].0 as usize].temperature)
+            .collect();
         let mut out = DomainSpheres {
             r_max: sets.iter().map(|c| c.radius).fold(0.0, f64::max),
             sets,
@@ -160,6 +234,10 @@ impl DomainSpheres {
             w: vec![V3::zeros(); n],
             n_owned: n,
             history: Histories::default(),
+            t,
+            heat,
+            node_heat: Vec::new(),
+            node_gdt: Vec::new(),
             owned_node: HashMap::new(),
             report: SphereReport::default(),
         };
@@ -177,6 +255,54 @@ impl DomainSpheres {
             .enumerate()
             .map(|(l, &g)| (g, l as u32))
             .collect();
+        self.node_heat = vec![0.0; self.owned_node.len()];
+        self.node_gdt = vec![0.0; self.owned_node.len()];
+    }
+
+    /// Whether the spheres carry heat (a thermal run).
+    pub(super) fn has_heat(&self) -> bool {
+        self.heat.is_some()
+    }
+
+    /// The heat (J) the spheres' faces gave each owned node of the part
+    /// since the last call, and Σ N_I g Δt (J/K) per node; both reset.
+    pub(super) fn take_node_heat(&mut self) -> (Vec<f64>, Vec<f64>) {
+        let n = self.node_heat.len();
+        (
+            std::mem::replace(&mut self.node_heat, vec![0.0; n]),
+            std::mem::replace(&mut self.node_gdt, vec![0.0; n]),
+        )
+    }
+
+    /// The heat stored in the owned spheres, Σ C T (J), this rank's share.
+    pub(super) fn stored_heat(&self) -> f64 {
+        let Some(h) = &self.heat else { return 0.0 };
+        (0..self.n_owned)
+            .map(|i| h.capacity[self.set[i] as usize] * self.t[i])
+            .sum()
+    }
+
+    /// The heat all spheres stored at the start, Σ C T₀ (J), from the sets.
+    pub(super) fn initial_heat(&self) -> f64 {
+        self.heat.as_ref().map_or(0.0, |h| {
+            (0..self.sets.len())
+                .map(|k| h.capacity[k] * h.initial[k] * f64::from(h.count[k]))
+                .sum()
+        })
+    }
+
+    /// The initial temperature of set `k` (0 without heat).
+    pub(super) fn initial_temperature(&self, k: u32) -> f64 {
+        self.heat.as_ref().map_or(0.0, |h| h.initial[k as usize])
+    }
+
+    /// The owned spheres' lowest and highest temperature (±∞ with none).
+    pub(super) fn temperature_range(&self) -> (f64, f64) {
+        self.t[..self.n_owned]
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &t| {
+                (lo.min(t), hi.max(t))
+            })
     }
 
     /// Collective. The spheres' stable step ([`stable_dt`]) against the
@@ -210,8 +336,10 @@ impl DomainSpheres {
     /// Collective. One substep of `dt` (module header): forces from the
     /// spheres and the boundary triangles of `tets` at the local nodes'
     /// `x` and `v`; the triangles' shares added to the owned nodes' `f`.
-    /// `damping(touching)` is the mass damping of a sphere. Errors (after
-    /// every message) if a sphere became non-finite or overlaps too much.
+    /// `damping(touching)` is the mass damping of a sphere. With heat, the
+    /// local nodes' temperatures `node_t` feed the faces (module header).
+    /// Errors (after every message) if a sphere became non-finite,
+    /// overlaps too much, or its explicit heat step is unstable.
     #[allow(clippy::too_many_arguments)]
     pub(super) fn substep(
         &mut self,
@@ -222,9 +350,17 @@ impl DomainSpheres {
         dt: f64,
         gravity: &V3,
         damping: impl Fn(bool) -> f64,
+        node_t: &[f64],
         f: &mut [V3],
     ) -> Result<()> {
-        let (faces, face_gid, face_owner) = self.gather_faces(comm, tets, x, v);
+        let (faces, face_gid, face_owner, face_t) = self.gather_faces(comm, tets, x, v, node_t);
+        let heat = self.heat.as_ref().map(|h| HeatView {
+            t: &self.t,
+            node_t: &face_t,
+            conductivity: &h.conductivity,
+            material: &h.material,
+            rc: &h.rc,
+        });
         let view = crate::mechanics::sphere_contacts::SphereView {
             gid: &self.gid,
             set: &self.set,
@@ -233,7 +369,15 @@ impl DomainSpheres {
             w: &self.w,
             n_owned: self.n_owned,
         };
-        let c = sphere_contacts(&self.sets, &view, &faces, gravity, dt, &mut self.history);
+        let c = sphere_contacts(
+            &self.sets,
+            &view,
+            &faces,
+            gravity,
+            dt,
+            &mut self.history,
+            heat.as_ref(),
+        );
         // The triangles' shares to their nodes' owners, keyed.
         let mut send = vec![Vec::new(); self.size];
         for s in &c.shares {
@@ -241,18 +385,32 @@ impl DomainSpheres {
             let to = &mut send[face_owner[n] as usize];
             to.extend_from_slice(&[f64::from(face_gid[n]), s.sphere as f64, f64::from(s.order)]);
             to.extend_from_slice(s.force.as_slice());
+            to.extend_from_slice(&[s.heat * dt, s.conductance * dt]);
         }
         let got = all_to_all(comm, send);
-        let mut shares: Vec<(u64, u32, u32, V3)> = got
+        let mut shares: Vec<(u64, u32, u32, V3, f64, f64)> = got
             .iter()
-            .flat_map(|l| l.chunks_exact(6))
-            .map(|r| (r[1] as u64, r[2] as u32, r[0] as u32, v3(&r[3..6])))
+            .flat_map(|l| l.chunks_exact(8))
+            .map(|r| {
+                (
+                    r[1] as u64,
+                    r[2] as u32,
+                    r[0] as u32,
+                    v3(&r[3..6]),
+                    r[6],
+                    r[7],
+                )
+            })
             .collect();
         shares.sort_unstable_by_key(|s| (s.0, s.1, s.2));
         let mut error = None;
-        for (sphere, _, node, force) in shares {
+        for (sphere, _, node, force, q, gdt) in shares {
             match self.owned_node.get(&node) {
-                Some(&l) => f[l as usize] += force,
+                Some(&l) => {
+                    f[l as usize] += force;
+                    self.node_heat[l as usize] += q;
+                    self.node_gdt[l as usize] += gdt;
+                }
                 None => {
                     error.get_or_insert(Error::Mechanics(format!(
                         "free sphere {sphere}: a contact's share went to node {node}, not owned here"
@@ -272,6 +430,32 @@ impl DomainSpheres {
         report.momentum = V3::zeros();
         // The contacts' dashpot and slip losses join the mass damping's.
         report.damped += c.lost;
+        if let Some(h) = &self.heat {
+            // Heat leaving the faces' nodes is heat entering the spheres (J).
+            report.face_heat_in -= c.shares.iter().map(|s| s.heat * dt).sum::<f64>();
+            for i in 0..no {
+                let cap = h.capacity[self.set[i] as usize];
+                // Seed 000 eq 36 with θ = 0: Tⁿ⁺¹ = Tⁿ + Δt Q/C.
+                self.t[i] += dt * c.heat[i] / cap;
+                report.fourier = report
+                    .fourier
+                    .max(explicit_fourier(dt, c.conductance[i], cap));
+                if !self.t[i].is_finite() {
+                    error.get_or_insert(Error::Mechanics(format!(
+                        "free sphere {}: its temperature became non-finite",
+                        self.gid[i]
+                    )));
+                }
+            }
+            if report.fourier > 1.0 {
+                error.get_or_insert(Error::Mechanics(format!(
+                    "free spheres: the explicit heat step is unstable (Δt Σg/C = {:.3} > 1 at \
+                     the substep {dt:e} s): a sphere's contacts conduct too well for its \
+                     capacity; reduce mechanics.dt or raise the contact resistance",
+                    report.fourier
+                )));
+            }
+        }
         for i in 0..no {
             let k = &self.sets[self.set[i] as usize];
             let alpha = damping(c.touching[i]);
@@ -338,7 +522,10 @@ impl DomainSpheres {
         tets: &ContactTets,
         x: &[V3],
         v: &[V3],
-    ) -> (FaceView, Vec<u32>, Vec<u32>) {
+        node_t: &[f64],
+    ) -> (FaceView, Vec<u32>, Vec<u32>, Vec<f64>) {
+        let heat = self.heat.is_some();
+        let width = if heat { FACE + 3 } else { FACE };
         let mut mine = [
             f64::INFINITY,
             f64::INFINITY,
@@ -391,20 +578,24 @@ impl DomainSpheres {
                     for &n in &tri {
                         to.extend_from_slice(v[n].as_slice());
                     }
+                    if heat {
+                        to.extend(tri.iter().map(|&n| node_t[n]));
+                    }
                 }
             }
         }
         let got = all_to_all(comm, send);
-        let mut records: Vec<&[f64]> = got.iter().flat_map(|l| l.chunks_exact(FACE)).collect();
+        let mut records: Vec<&[f64]> = got.iter().flat_map(|l| l.chunks_exact(width)).collect();
         records.sort_unstable_by_key(|r| r[0] as u64);
         let mut faces = FaceView::default();
-        let (mut node_gid, mut node_owner) = (Vec::new(), Vec::new());
+        let (mut node_gid, mut node_owner, mut face_t) = (Vec::new(), Vec::new(), Vec::new());
         let mut local: HashMap<u32, u32> = HashMap::new();
         for r in records {
             let key = r[0] as u64;
             faces.key.push(key);
             faces.body.push(r[1] as u32);
             faces.elastic.push(self.elastic[r[2] as usize]);
+            faces.material.push(r[2] as u32);
             let mut tri = [0u32; 3];
             for k in 0..3 {
                 let g = r[3 + k] as u32;
@@ -413,12 +604,15 @@ impl DomainSpheres {
                     node_owner.push(r[6 + k] as u32);
                     faces.x.push(v3(&r[9 + 3 * k..]));
                     faces.v.push(v3(&r[18 + 3 * k..]));
+                    if heat {
+                        face_t.push(r[FACE + k]);
+                    }
                     (node_gid.len() - 1) as u32
                 });
             }
             faces.nodes.push(tri);
         }
-        (faces, node_gid, node_owner)
+        (faces, node_gid, node_owner, face_t)
     }
 
     /// Collective. Send the owned spheres `leaving` (ascending) to their
@@ -457,6 +651,7 @@ impl DomainSpheres {
                 for a in [&self.x0[i], &self.x[i], &self.v[i], &self.w[i]] {
                     r.extend_from_slice(a.as_slice());
                 }
+                r.push(self.t[i]);
                 r
             };
             for k in self.slabs.within(&xa, reach, owner) {
@@ -484,13 +679,14 @@ impl DomainSpheres {
         }
         let got = all_to_all(comm, send);
         // Kept owned spheres, then the arrivals.
-        let mut owned: Vec<(u64, u32, [V3; 4])> = (0..no)
+        let mut owned: Vec<(u64, u32, [V3; 4], f64)> = (0..no)
             .filter(|&i| !going[i])
             .map(|i| {
                 (
                     self.gid[i],
                     self.set[i],
                     [self.x0[i], self.x[i], self.v[i], self.w[i]],
+                    self.t[i],
                 )
             })
             .collect();
@@ -503,8 +699,9 @@ impl DomainSpheres {
                     r[1] as u64,
                     r[2] as u32,
                     [v3(&r[3..]), v3(&r[6..]), v3(&r[9..]), v3(&r[12..])],
+                    r[15],
                 );
-                at += 15;
+                at += SPHERE;
                 let np = list[at] as usize;
                 at += 1;
                 for _ in 0..np {
@@ -543,7 +740,9 @@ impl DomainSpheres {
         for a in [&mut self.x0, &mut self.x, &mut self.v, &mut self.w] {
             a.clear();
         }
-        for (g, s, m) in owned.into_iter().chain(ghosts) {
+        self.t.clear();
+        for (g, s, m, t) in owned.into_iter().chain(ghosts) {
+            self.t.push(t);
             self.gid.push(g);
             self.set.push(s);
             self.x0.push(m[0]);
@@ -577,6 +776,11 @@ impl DomainSpheres {
                 .iter()
                 .map(|&s| self.sets[s as usize].radius)
                 .collect(),
+            heat: self.heat.is_some(),
+            temperature: match self.heat {
+                Some(_) => self.t[..no].to_vec(),
+                None => Vec::new(),
+            },
             total: self.total,
         }
     }

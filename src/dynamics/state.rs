@@ -343,6 +343,37 @@ impl ExplicitDomain {
         all
     }
 
+    /// The heat (J) the free spheres' faces gave this rank's owned nodes
+    /// (part order) since the last call, and Σ N_I g Δt (J/K) per node;
+    /// None without sphere heat (issue 21).
+    pub fn take_sphere_node_heat(&mut self) -> Option<(Vec<f64>, Vec<f64>)> {
+        let s = self.spheres.as_mut().filter(|s| s.has_heat())?;
+        Some(s.take_node_heat())
+    }
+
+    /// Collective. The free spheres' heat over the ranks: stored Σ C T,
+    /// heat taken from the faces since the start (J), lowest and highest
+    /// temperature, and the largest explicit Fourier number so far; None
+    /// without sphere heat.
+    pub fn sphere_heat(&self, comm: &SimpleCommunicator) -> Option<SphereHeat> {
+        let s = self.spheres.as_ref().filter(|s| s.has_heat())?;
+        let (lo, hi) = s.temperature_range();
+        let local = [s.stored_heat(), s.report.face_heat_in];
+        let mut sum = [0.0; 2];
+        comm.all_reduce_into(&local[..], &mut sum[..], SystemOperation::sum());
+        let mine = [-lo, hi, s.report.fourier];
+        let mut max = [0.0; 3];
+        comm.all_reduce_into(&mine[..], &mut max[..], SystemOperation::max());
+        Some(SphereHeat {
+            initial: s.initial_heat(),
+            stored: sum[0],
+            from_faces: sum[1],
+            min: -max[0],
+            max: max[1],
+            fourier: max[2],
+        })
+    }
+
     /// Take the free spheres out (a repartition builds the domain again).
     pub fn take_spheres(&mut self) -> TakenSpheres {
         TakenSpheres(self.spheres.take())
@@ -356,6 +387,22 @@ impl ExplicitDomain {
             self.spheres = Some(s);
         }
     }
+}
+
+/// The free spheres' heat over the ranks ([`ExplicitDomain::sphere_heat`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct SphereHeat {
+    /// Heat stored at the start, Σ C T₀ (J).
+    pub initial: f64,
+    /// Heat stored, Σ C T (J).
+    pub stored: f64,
+    /// Heat taken from the Tet4 faces since the start (J).
+    pub from_faces: f64,
+    /// Lowest and highest sphere temperature.
+    pub min: f64,
+    pub max: f64,
+    /// Largest explicit Fourier number Δt Σg/C of a sphere so far.
+    pub fourier: f64,
 }
 
 /// A domain's free spheres between two domains ([`ExplicitDomain::take_spheres`]).

@@ -367,6 +367,7 @@ impl ExplicitDomain {
                 self.dt,
                 &self.gravity,
                 |touching| if touching { touched } else { free },
+                &self.node_t,
                 &mut self.f,
             );
             if let Err(e) = step {

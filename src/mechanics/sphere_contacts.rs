@@ -14,7 +14,13 @@
 //! - per owned sphere and body, the touching triangles in ascending global
 //!   face key order through [`distinct_features`];
 //!
-//! so every owned sphere sums its forces in an order that does not depend
+//! With a [`HeatView`] (a thermal run) each contact also conducts
+//! through the pipe network of [`crate::contact::sphere_heat`] (seed 000
+//! eqs 33–35 carried to spheres, contact radius a = √(R* δ)): a pair's
+//! flow goes to its owned ends, a face's to the sphere and, with the
+//! contact point's weights N_I, to the face's nodes (the shares).
+//!
+//! So every owned sphere sums its forces (and heat) in an order that does not depend
 //! on the rank count, and a triangle's share of a contact is keyed by
 //! (sphere number, contact order, corner) for the node's owner to add in
 //! that order.
@@ -28,6 +34,7 @@ use crate::contact::sphere::{
     distinct_features, effective_modulus, effective_radius, effective_shear_modulus,
     sphere_triangle, HertzLaw,
 };
+use crate::contact::sphere_heat::{contact_radius, pipe_conductance};
 
 type V3 = Vector3<f64>;
 
@@ -98,6 +105,21 @@ pub struct FaceView {
     pub nodes: Vec<[u32; 3]>,
     pub x: Vec<V3>,
     pub v: Vec<V3>,
+    /// Per face: its body's material (for the contact resistance).
+    pub material: Vec<u32>,
+}
+
+/// What a thermal run's contacts conduct with: the held spheres'
+/// temperatures (owned then ghosts, as [`SphereView`]), the face nodes'
+/// (as [`FaceView::x`]), per set its conductivity (W/(m K)) and material,
+/// and the contact resistance per unit area R_c (K m²/W) per material
+/// pair (infinite: the pair does not conduct).
+pub struct HeatView<'a> {
+    pub t: &'a [f64],
+    pub node_t: &'a [f64],
+    pub conductivity: &'a [f64],
+    pub material: &'a [u32],
+    pub rc: &'a [Vec<f64>],
 }
 
 /// The tangential springs: per sphere pair (lower, higher number), and
@@ -117,6 +139,10 @@ pub struct NodeShare {
     pub sphere: u64,
     pub order: u32,
     pub force: V3,
+    /// Heat flow into the node (W) and its share N_I g of the conductance
+    /// (W/K); zero without heat.
+    pub heat: f64,
+    pub conductance: f64,
 }
 
 /// What [`sphere_contacts`] gives.
@@ -126,6 +152,10 @@ pub struct ContactForces {
     pub force: Vec<V3>,
     pub moment: Vec<V3>,
     pub touching: Vec<bool>,
+    /// Per owned sphere with heat: the heat flow into it (W) and the sum
+    /// of its contacts' conductances (W/K); empty without heat.
+    pub heat: Vec<f64>,
+    pub conductance: Vec<f64>,
     /// The triangles' shares, in the sphere's order.
     pub shares: Vec<NodeShare>,
     /// Touching pairs whose lower number is owned, and face contacts.
@@ -215,14 +245,18 @@ pub fn sphere_contacts(
     gravity: &V3,
     dt: f64,
     history: &mut Histories,
+    heat: Option<&HeatView>,
 ) -> ContactForces {
     let no = s.n_owned;
+    let n_heat = if heat.is_some() { no } else { 0 };
     let mut out = ContactForces {
         force: (0..no)
             .map(|i| gravity * sets[s.set[i] as usize].mass)
             .collect(),
         moment: vec![V3::zeros(); no],
         touching: vec![false; no],
+        heat: vec![0.0; n_heat],
+        conductance: vec![0.0; n_heat],
         ..ContactForces::default()
     };
     let mut kept = HashMap::with_capacity(history.pair.len());
@@ -239,6 +273,16 @@ pub fn sphere_contacts(
         let mut xi = history.pair.remove(&key).unwrap_or_else(V3::zeros);
         let f = law(ca, Some(cb), (0.0, 0.0)).force(delta, &n, &(va - vb), dt, &mut xi);
         kept.insert(key, xi);
+        // The pipe's conductance and its flow into a, from the same values on both ends' ranks.
+        let (g, q) = heat.map_or((0.0, 0.0), |h| {
+            let (sa, sb) = (s.set[a] as usize, s.set[b] as usize);
+            let rc = h.rc[h.material[sa] as usize][h.material[sb] as usize];
+            let r_star = effective_radius(ca.radius, Some(cb.radius));
+            let contact = contact_radius(r_star, delta);
+            let g = pipe_conductance(h.conductivity[sa], Some(h.conductivity[sb]), contact, rc);
+            // Seed 000 eq 35: Q_AB = (T_B − T_A)/R_AB into A.
+            (g, g * (h.t[b] - h.t[a]))
+        });
         for (i, sign, r) in [(a, 1.0, ca.radius), (b, -1.0, cb.radius)] {
             if i < no {
                 out.force[i] += f.force * sign;
@@ -246,6 +290,10 @@ pub fn sphere_contacts(
                 out.touching[i] = true;
                 out.energy += 0.5 * (f.energy + f.spring_energy);
                 out.lost += 0.5 * f.lost;
+                if heat.is_some() {
+                    out.heat[i] += sign * q;
+                    out.conductance[i] += g;
+                }
             }
         }
         // Counted by the lower number's owner: once over the ranks.
@@ -274,6 +322,7 @@ pub fn sphere_contacts(
         let mut order = 0u32;
         for (body, touches) in by_body {
             for (f, touch) in distinct_features(touches) {
+                let f_id = f as usize;
                 let law = law(c, None, faces.elastic[f as usize]);
                 let tri = faces.nodes[f as usize];
                 let wts = touch.weights;
@@ -288,12 +337,28 @@ pub fn sphere_contacts(
                 out.force[i] += f.force;
                 out.moment[i] += arm.cross(&f.force);
                 out.touching[i] = true;
+                // The face side has no particle resistance: its conduction is its FE's.
+                let (g, q) = heat.map_or((0.0, 0.0), |h| {
+                    let set = s.set[i] as usize;
+                    let rc = h.rc[h.material[set] as usize][faces.material[f_id] as usize];
+                    let contact = contact_radius(c.radius, touch.depth);
+                    let g = pipe_conductance(h.conductivity[set], None, contact, rc);
+                    let t_face: f64 = (0..3).map(|k| h.node_t[tri[k] as usize] * wts[k]).sum();
+                    // Seed 000 eq 35: Q = (T_face − T_sphere)/R, T_face = Σ N_I T_I.
+                    (g, g * (t_face - h.t[i]))
+                });
+                if heat.is_some() {
+                    out.heat[i] += q;
+                    out.conductance[i] += g;
+                }
                 for (k, &node) in tri.iter().enumerate() {
                     out.shares.push(NodeShare {
                         node,
                         sphere: s.gid[i],
                         order: 3 * order + k as u32,
                         force: -f.force * wts[k],
+                        heat: -q * wts[k],
+                        conductance: g * wts[k],
                     });
                 }
                 order += 1;
@@ -361,7 +426,7 @@ mod tests {
             n_owned: 2,
         };
         let mut h = Histories::default();
-        let all = sphere_contacts(&sets, &both, &FaceView::default(), &g, 1e-6, &mut h);
+        let all = sphere_contacts(&sets, &both, &FaceView::default(), &g, 1e-6, &mut h, None);
         assert_eq!(all.pairs, 1);
         let m = sets[0].mass;
         assert!((all.force[0] + all.force[1] - 2.0 * m * g).norm() < 1e-15);
@@ -377,7 +442,7 @@ mod tests {
             n_owned: 1,
         };
         let mut h2 = Histories::default();
-        let part = sphere_contacts(&sets, &one, &FaceView::default(), &g, 1e-6, &mut h2);
+        let part = sphere_contacts(&sets, &one, &FaceView::default(), &g, 1e-6, &mut h2, None);
         assert_eq!(part.force[0], all.force[1]);
         assert_eq!(h.pair, h2.pair);
     }
@@ -398,6 +463,7 @@ mod tests {
                 V3::new(0.0, 1.0, 0.0),
             ],
             v: vec![V3::zeros(); 3],
+            material: vec![0],
         };
         let x = [V3::new(0.0, 0.0, 0.0049)];
         let z = [V3::zeros()];
@@ -410,7 +476,7 @@ mod tests {
             n_owned: 1,
         };
         let mut h = Histories::default();
-        let out = sphere_contacts(&sets, &s, &faces, &V3::zeros(), 1e-6, &mut h);
+        let out = sphere_contacts(&sets, &s, &faces, &V3::zeros(), 1e-6, &mut h, None);
         assert_eq!((out.faces, out.shares.len()), (1, 3));
         let back: V3 = out.shares.iter().map(|s| s.force).sum();
         assert!((back + out.force[0]).norm() < 1e-12 * out.force[0].norm());
@@ -430,5 +496,111 @@ mod tests {
         let soft = stable_dt(&sets, &[(1e8, 0.25)], f64::INFINITY);
         let hard = stable_dt(&sets, &[(1e11, 0.25)], f64::INFINITY);
         assert!(hard < soft && soft.is_finite());
+    }
+
+    /// Heat: a pair split over two ranks gives each owned end the same
+    /// bits, equal and opposite; a face's node shares take minus the
+    /// sphere's flow, weighted by N_I; the flows follow seed 000 eq 35.
+    #[test]
+    fn heat_flows_balance_and_split_over_ranks() {
+        use crate::contact::sphere_heat::pipe_resistance;
+        let sets = [glass()];
+        let rc = [vec![1e-5]];
+        let (k, mat) = ([1.2], [0u32]);
+        let x = [V3::new(0.0, 0.0, 0.0), V3::new(0.0099, 0.0, 0.0)];
+        let z = [V3::zeros(); 2];
+        let t = [300.0, 400.0];
+        let view = SphereView {
+            gid: &[3, 7],
+            set: &[0, 0],
+            x: &x,
+            v: &z,
+            w: &z,
+            n_owned: 2,
+        };
+        let heat = HeatView {
+            t: &t,
+            node_t: &[],
+            conductivity: &k,
+            material: &mat,
+            rc: &rc,
+        };
+        let mut h = Histories::default();
+        let g0 = V3::zeros();
+        let all = sphere_contacts(
+            &sets,
+            &view,
+            &FaceView::default(),
+            &g0,
+            1e-6,
+            &mut h,
+            Some(&heat),
+        );
+        let a = (0.5 * 0.005 * 1e-4f64).sqrt();
+        let q = (t[1] - t[0]) / pipe_resistance(1.2, Some(1.2), a, 1e-5);
+        assert!((all.heat[0] - q).abs() < 1e-12 * q.abs());
+        assert_eq!(all.heat[0], -all.heat[1]);
+        let (x2, t2) = ([x[1], x[0]], [t[1], t[0]]);
+        let one = SphereView {
+            gid: &[7, 3],
+            set: &[0, 0],
+            x: &x2,
+            v: &z,
+            w: &z,
+            n_owned: 1,
+        };
+        let heat2 = HeatView { t: &t2, ..heat };
+        let mut h2 = Histories::default();
+        let part = sphere_contacts(
+            &sets,
+            &one,
+            &FaceView::default(),
+            &g0,
+            1e-6,
+            &mut h2,
+            Some(&heat2),
+        );
+        assert_eq!(part.heat[0], all.heat[1]);
+        assert_eq!(part.conductance[0], all.conductance[1]);
+        // A sphere at 300 on a face whose nodes are at 400, 500, 600.
+        let faces = FaceView {
+            key: vec![40],
+            body: vec![0],
+            elastic: vec![(1e9, 0.3)],
+            nodes: vec![[0, 1, 2]],
+            x: vec![
+                V3::new(-1.0, -1.0, 0.0),
+                V3::new(1.0, -1.0, 0.0),
+                V3::new(0.0, 1.0, 0.0),
+            ],
+            v: vec![V3::zeros(); 3],
+            material: vec![0],
+        };
+        let xs = [V3::new(0.1, 0.2, 0.0049)];
+        let s = SphereView {
+            gid: &[0],
+            set: &[0],
+            x: &xs,
+            v: &z[..1],
+            w: &z[..1],
+            n_owned: 1,
+        };
+        let heat = HeatView {
+            t: &[300.0],
+            node_t: &[400.0, 500.0, 600.0],
+            ..heat
+        };
+        let mut h = Histories::default();
+        let out = sphere_contacts(&sets, &s, &faces, &g0, 1e-6, &mut h, Some(&heat));
+        let back: f64 = out.shares.iter().map(|s| s.heat).sum();
+        assert!((back + out.heat[0]).abs() < 1e-14 * out.heat[0]);
+        let gsum: f64 = out.shares.iter().map(|s| s.conductance).sum();
+        assert!((gsum - out.conductance[0]).abs() < 1e-14 * gsum);
+        let a = (0.005 * 1e-4f64).sqrt();
+        // Barycentric weights of (0.1, 0.2) in the triangle: T_face = 400 N₀ + 500 N₁ + 600 N₂.
+        let (n2, n1) = (0.6, 0.25);
+        let t_face = 400.0 * (1.0 - n1 - n2) + 500.0 * n1 + 600.0 * n2;
+        let q = (t_face - 300.0) / pipe_resistance(1.2, None, a, 1e-5);
+        assert!((out.heat[0] - q).abs() < 1e-9 * q, "{} {q}", out.heat[0]);
     }
 }

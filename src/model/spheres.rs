@@ -27,6 +27,11 @@ pub struct SphereSet {
     /// Damping ratio ζ and friction coefficient μ of its contacts.
     pub damping: f64,
     pub friction: f64,
+    /// Conductivity (W/(m K)), specific heat (J/(kg K)) and initial
+    /// temperature (used by a thermal run).
+    pub conductivity: f64,
+    pub specific_heat: f64,
+    pub temperature: f64,
 }
 
 /// The sphere sets of a validated scenario (materials resolved by name).
@@ -53,6 +58,9 @@ pub(super) fn sphere_sets(s: &Scenario) -> Vec<SphereSet> {
                 gap: sp.gap,
                 damping: sp.damping,
                 friction: sp.friction,
+                conductivity: mat.conductivity.unwrap_or(0.0),
+                specific_heat: mat.specific_heat.unwrap_or(0.0),
+                temperature: sp.temperature.unwrap_or(0.0),
             }
         })
         .collect()

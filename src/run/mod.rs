@@ -46,6 +46,7 @@ use rebalance::Balance;
 use schedule::Schedule;
 use settle::Settling;
 use setup::Contacts;
+pub use sphere_output::SphereHeatAccount;
 pub use status_output::face_status;
 pub use summary::{
     allocator_settings, peak_rss, release_fragmented_memory, release_free_memory, trace_memory,
@@ -89,6 +90,13 @@ pub fn run(
         model: clock.elapsed().as_secs_f64(),
         ..PhaseTimes::default()
     };
+    if opts.restart.is_some() && !model.spheres.is_empty() && model.thermal_active {
+        return Err(Error::Mechanics(
+            "--restart: checkpoints do not hold the free spheres' temperatures yet \
+             ([[spheres]] with [thermal], issue 21)"
+                .into(),
+        ));
+    }
     let restart = match &opts.restart {
         Some(p) => Some(Restart::read(p, &model)?),
         None => None,
@@ -500,6 +508,10 @@ impl Stages<'_, '_> {
                         .is_some_and(|c| c.friction_heating.is_some())
                     {
                         s.add_heat(&m.take_friction_heat())?;
+                    }
+                    // Issue 21: the free spheres' heat from the faces, released likewise.
+                    if let Some((q, gdt)) = m.take_sphere_node_heat() {
+                        s.add_sphere_heat(comm, part, &q, &gdt)?;
                     }
                 }
                 self.times.mechanics += clock.elapsed().as_secs_f64();

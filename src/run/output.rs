@@ -199,6 +199,7 @@ impl Output {
                 }
             }
         }
+        header.extend(super::sphere_output::history_header(model, heat));
         let header_ref: Vec<&str> = header.iter().map(String::as_str).collect();
         let history = if continues {
             HistoryWriter::reopen(&history_path, &header_ref, 1, keep_until)
@@ -484,6 +485,8 @@ impl Output {
                 row.extend_from_slice(&f);
             }
         }
+        let spheres = super::sphere_output::history_values(comm, sys.as_ref(), mech);
+        row.extend(spheres);
         self.history.append(&row)?;
         Ok(())
     }

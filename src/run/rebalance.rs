@@ -455,6 +455,7 @@ impl Stages<'_, '_> {
         let (iterations, assemblies) = old_sys
             .as_ref()
             .map_or((0, 0), |s| (s.iterations, s.assemblies));
+        let sphere_source = old_sys.as_ref().map(|s| s.sphere_source());
         drop(old_sys);
 
         let all_moved = bodies_moved(comm, &self.part.whole_bodies, &part);
@@ -513,6 +514,10 @@ impl Stages<'_, '_> {
                     .map(|(&r, q)| (r, q))
                     .collect();
                 s.add_heat(&heat)?;
+            }
+            // The free spheres' share of it stays theirs (issue 21).
+            if let Some(src) = sphere_source {
+                s.set_sphere_source(src);
             }
         }
         self.times.assembly += clock.elapsed().as_secs_f64();

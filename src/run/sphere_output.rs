@@ -3,7 +3,7 @@
 //! bodies' grid as the bonded particles' (one XDMF Polyvertex cell per
 //! sphere at its placed centre, [`super::particle_output`]), so ParaView
 //! shows both: per output each sphere's `displacement` (warp by it),
-//! `velocity` and `radius`. Rows are the global sphere numbers (set by
+//! `velocity`, `radius` and, in a thermal run, `temperature`. Rows are the global sphere numbers (set by
 //! set, each in its placement order), so the files do not depend on the
 //! number of ranks.
 
@@ -11,10 +11,13 @@ use std::path::{Path, PathBuf};
 
 use mpi::topology::SimpleCommunicator;
 
-use crate::dynamics::SphereRows;
+use crate::dynamics::{SphereHeat, SphereRows};
 use crate::error::{Error, Result};
 use crate::io::{MeshPart, TimeSeriesWriter};
 use crate::parallel::exchange::to_blocks;
+use crate::thermal::ThermalSystem;
+
+use super::Mechanics;
 
 /// The open sphere series.
 pub(super) struct SphereOutput {
@@ -71,11 +74,15 @@ impl SphereOutput {
     pub fn write(&mut self, comm: &SimpleCommunicator, time: f64, rows: &SphereRows) -> Result<()> {
         let id = ids(rows);
         let block = |v: &[f64], w: usize| to_blocks(comm, &id, v, w, self.total).1;
-        let fields = [
+        let mut fields = vec![
             ("displacement", 3, block(&rows.displacement, 3)),
             ("velocity", 3, block(&rows.velocity, 3)),
             ("radius", 1, block(&rows.radius, 1)),
         ];
+        // A thermal run's (issue 21); every rank agrees: the model decides.
+        if rows.heat {
+            fields.push(("temperature", 1, block(&rows.temperature, 1)));
+        }
         let f: Vec<(&str, usize, &[f64])> = fields
             .iter()
             .map(|(n, c, v)| (*n, *c, v.as_slice()))
@@ -89,4 +96,75 @@ impl SphereOutput {
         self.writer.close()?;
         Ok(())
     }
+}
+
+/// The free spheres' heat account (issue 21) at the end or a history row:
+/// the spheres' ([`SphereHeat`]) and the FE's side of it, the heat the
+/// spheres gave the FE rows (released) and handed over for the next step
+/// (pending). Closes as ΔE_FE + ΔE_spheres + pending = boundary heat in.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct SphereHeatAccount {
+    pub spheres: SphereHeat,
+    pub released: f64,
+    pub pending: f64,
+}
+
+impl SphereHeatAccount {
+    /// Collective. The account now; None without sphere heat.
+    pub(super) fn now(
+        comm: &SimpleCommunicator,
+        sys: Option<&ThermalSystem>,
+        mech: Option<&Mechanics>,
+    ) -> Option<SphereHeatAccount> {
+        let spheres = mech?.domain.sphere_heat(comm)?;
+        let src = sys?.sphere_source();
+        Some(SphereHeatAccount {
+            spheres,
+            released: src.released,
+            pending: src.pending,
+        })
+    }
+
+    /// The spheres' stored change since the start (J).
+    pub fn stored_change(&self) -> f64 {
+        self.spheres.stored - self.spheres.initial
+    }
+}
+
+/// The history's sphere heat columns (a thermal run with spheres).
+pub(super) fn history_header(model: &crate::model::Model, heat: bool) -> Vec<String> {
+    if !heat || model.spheres.is_empty() {
+        return Vec::new();
+    }
+    [
+        "spheres_stored_heat",
+        "spheres_heat_from_faces",
+        "fe_heat_from_spheres",
+        "spheres_heat_pending",
+        "spheres_min_T",
+        "spheres_max_T",
+        "spheres_fourier",
+    ]
+    .map(String::from)
+    .to_vec()
+}
+
+/// Collective. The history's sphere heat values ([`history_header`]).
+pub(super) fn history_values(
+    comm: &SimpleCommunicator,
+    sys: Option<&ThermalSystem>,
+    mech: Option<&Mechanics>,
+) -> Vec<f64> {
+    SphereHeatAccount::now(comm, sys, mech).map_or_else(Vec::new, |a| {
+        let s = a.spheres;
+        vec![
+            s.stored,
+            s.from_faces,
+            a.released,
+            a.pending,
+            s.min,
+            s.max,
+            s.fourier,
+        ]
+    })
 }

@@ -157,6 +157,8 @@ pub struct RunSummary {
     pub particle_files: Vec<PathBuf>,
     /// Whether heat conduction was solved (else the heat line is left out).
     pub heat: bool,
+    /// The free spheres' heat account (issue 21), in a thermal run with spheres.
+    pub sphere_heat: Option<super::SphereHeatAccount>,
 }
 
 impl std::fmt::Display for RunSummary {
@@ -278,8 +280,28 @@ impl std::fmt::Display for RunSummary {
                 "  heat        stored change {:.6e}, boundary in {:.6e} (balance {:.2e})",
                 self.energy.stored_change,
                 self.energy.boundary_in(),
-                self.energy.stored_change - self.energy.boundary_in()
+                // The free spheres' released heat is the FE's too (issue 21).
+                self.energy.stored_change
+                    - self.energy.boundary_in()
+                    - self.sphere_heat.map_or(0.0, |a| a.released)
             )?;
+            if let Some(a) = &self.sphere_heat {
+                let s = &a.spheres;
+                let all = self.energy.stored_change + a.stored_change() + a.pending;
+                writeln!(
+                    f,
+                    "  spheres     stored change {:.6e}, from the faces {:.6e}, FE's from them {:.6e} (+ pending {:.3e}); T in [{:.6}, {:.6}], explicit Fourier <= {:.2e}; all stored change {:.6e} (balance {:.2e})",
+                    a.stored_change(),
+                    s.from_faces,
+                    a.released,
+                    a.pending,
+                    s.min,
+                    s.max,
+                    s.fourier,
+                    all,
+                    all - self.energy.boundary_in()
+                )?;
+            }
             if self.energy.radiation_in != 0.0 || self.energy.convection_in != 0.0 {
                 writeln!(
                     f,
@@ -576,6 +598,7 @@ impl Stages<'_, '_> {
             .as_ref()
             .map(|m| MechanicsSummary::gather(comm, m));
         let sys = self.sys.as_ref();
+        let sphere_heat = super::SphereHeatAccount::now(comm, sys, self.mech.as_ref());
         let b = &self.balance;
         let balance = (b.checks > 0).then(|| {
             let mut time = 0.0;
@@ -623,6 +646,7 @@ impl Stages<'_, '_> {
             assemblies: sys.map_or(0, |s| s.assemblies),
             mechanics,
             balance,
+            sphere_heat,
         })
     }
 }

@@ -10,7 +10,8 @@ use super::Scenario;
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SphereSpec {
-    /// Material (by name): `density`, `young` and `poisson` are used.
+    /// Material (by name): `density`, `young` and `poisson` are used, and
+    /// with `[thermal]` its `conductivity` and `specific_heat`.
     pub material: String,
     /// Radius (m).
     pub radius: f64,
@@ -31,6 +32,10 @@ pub struct SphereSpec {
     /// Coulomb friction coefficient μ of the spheres' contacts.
     #[serde(default = "default_sphere_friction")]
     pub friction: f64,
+    /// Initial temperature of every sphere of the set (a run with
+    /// `[thermal]`; default 0, as a body's `initial_temperature`).
+    #[serde(default)]
+    pub temperature: Option<f64>,
 }
 
 /// An axis-aligned box, low and high corner (m).
@@ -139,11 +144,71 @@ impl Scenario {
             if self.mechanics.is_none() {
                 return bad("material", "free spheres need a [mechanics] table".into());
             }
-            if self.thermal.is_some() || self.contact.is_some() {
+            if let Some(t) = s.temperature {
+                if !t.is_finite() {
+                    return bad("temperature", format!("must be finite, got {t}"));
+                }
+            }
+            if self.thermal.is_some() {
+                let k = mat.conductivity.unwrap_or(0.0);
+                let c = mat.specific_heat.unwrap_or(0.0);
+                if !(k.is_finite() && k > 0.0 && c.is_finite() && c > 0.0) {
+                    return bad(
+                        "material",
+                        format!(
+                            "material `{}` needs a positive `conductivity` and \
+                             `specific_heat` for the spheres' heat ([thermal])",
+                            s.material
+                        ),
+                    );
+                }
+            }
+            // What the spheres' heat does not have (issue 21): say so at once.
+            if self.thermal.as_ref().is_some_and(|t| t.ambient.is_some()) {
                 return Err((
-                    "spheres".into(),
-                    "free spheres carry no temperature yet: a run with spheres takes no \
-                     [thermal] or [contact] table"
+                    "thermal.ambient".into(),
+                    "free spheres exchange heat through their contacts only: a run with \
+                     [[spheres]] takes no [thermal.ambient] (convection, radiation)"
+                        .into(),
+                ));
+            }
+            if self
+                .contact
+                .as_ref()
+                .is_some_and(|c| c.friction_heating.is_some())
+            {
+                return Err((
+                    "contact.friction_heating".into(),
+                    "the free spheres' contacts make no frictional heat: a run with \
+                     [[spheres]] takes no contact.friction_heating"
+                        .into(),
+                ));
+            }
+            // The spheres' pipes take a constant R_c only.
+            if let Some(c) = &self.contact {
+                let own = c.pair.iter().any(|p| {
+                    p.materials.contains(&s.material) && (p.cmy.is_some() || p.table.is_some())
+                });
+                if c.cmy.is_some() || c.table.is_some() || own {
+                    return Err((
+                        "contact".into(),
+                        format!(
+                            "free spheres (spheres[{i}], material `{}`) conduct through a \
+                             constant contact resistance only: give their material pairs \
+                             `resistance` or `conductance`, not `cmy` or `table`",
+                            s.material
+                        ),
+                    ));
+                }
+            }
+            // Checkpoints hold the spheres' motion, not their temperatures.
+            if self.thermal.is_some()
+                && (self.output.checkpoint || self.output.checkpoint_every > 0)
+            {
+                return Err((
+                    "output.checkpoint".into(),
+                    "checkpoints do not hold the free spheres' temperatures yet: a run with \
+                     [[spheres]] and [thermal] writes none"
                         .into(),
                 ));
             }

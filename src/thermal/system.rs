@@ -36,6 +36,8 @@ use mpi::topology::SimpleCommunicator;
 use super::assembly::{assemble, Operators};
 use super::exchange::Exchange;
 use super::nonlinear::{radiated, GapRadiation, RadiatingStep};
+#[path = "sphere_source.rs"]
+mod sphere_source;
 
 /// Krylov iterations per Newton iteration above which a radiating step's
 /// preconditioner is rebuilt at the next Jacobian (it is kept otherwise;
@@ -207,6 +209,8 @@ pub struct ThermalSystem<'p> {
     /// Frictional heat handed over by the mechanics for the next step (J
     /// per row), when frictional heating is on (issue 20).
     friction: Option<Vector<'p>>,
+    /// The free spheres' heat in `friction`, pending and released (issue 21).
+    spheres: sphere_source::SphereSource,
     /// Total Newton iterations so far (radiating runs).
     pub newton_iterations: u64,
     /// Newton's absolute tolerance as a fraction of ‖rhs‖ (the linear rtol).
@@ -550,14 +554,12 @@ impl<'p> ThermalSystem<'p> {
         t_sum.set(0.0)?;
         let t_next = t.duplicate()?;
         let work = t.duplicate()?;
-        let friction = match model.contact.as_ref().and_then(|c| c.friction_heating) {
-            Some(_) => {
-                let mut v = t.duplicate()?;
-                v.set(0.0)?;
-                Some(v)
-            }
-            None => None,
-        };
+        // Heat handed over: friction's (issue 20), the free spheres' (issue 21).
+        let handed = model.contact.as_ref().and_then(|c| c.friction_heating);
+        let mut friction = None;
+        if handed.is_some() || !model.spheres.is_empty() {
+            friction.insert(t.duplicate()?).set(0.0)?;
+        }
         Ok(ThermalSystem {
             ops,
             scheme,
@@ -580,6 +582,7 @@ impl<'p> ThermalSystem<'p> {
             ramp,
             rad,
             friction,
+            spheres: Default::default(),
             newton_iterations: 0,
             newton_rtol: solver.rtol.unwrap_or(1e-10),
             flow_gather: None,
@@ -628,7 +631,8 @@ impl<'p> ThermalSystem<'p> {
         let mut friction = None;
         if let Some(f) = self.friction.as_mut() {
             let (total, on_d) = (f.sum()?, f.dot(&self.dmask)?);
-            self.base.friction_in += total;
+            // The spheres' part is theirs, not friction's.
+            self.base.friction_in += total - self.spheres.release();
             self.base.dirichlet_in -= on_d;
             if total != 0.0 {
                 f.scale(1.0 / self.dt)?;
@@ -893,6 +897,7 @@ impl<'p> ThermalSystem<'p> {
         }
         next.t0.copy_from(&next.t)?;
         next.base = account;
+        next.spheres = self.spheres;
         next.iterations = self.iterations;
         next.newton_iterations = self.newton_iterations;
         next.assemblies = self.assemblies + 1;

@@ -127,6 +127,13 @@ impl DomainSpheres {
         self.set = s.state.iter().map(|r| r[0] as u32).collect();
         let col = |c: usize| -> Vec<V3> { s.state.iter().map(|r| v3(&r[c..])).collect() };
         (self.x0, self.x, self.v, self.w) = (col(1), col(4), col(7), col(10));
+        // Temperatures are not in checkpoints: the sets' initial ones
+        // (a thermal run with spheres takes no checkpoint or restart).
+        self.t = self
+            .set
+            .iter()
+            .map(|&k| self.initial_temperature(k))
+            .collect();
         // The energies so far: each rank its own on as many ranks. On
         // another number, rank 0 takes the gravity work's sum; the damped
         // energy is then in the checkpoint's total of the dissipated

@@ -4,8 +4,7 @@
 //!   (`scenarios/spheres-on-block.toml`): the same bits on 1 and 2 ranks
 //!   (spheres and block nodes); every sphere on the block, none below its
 //!   top by more than the Hertz overlap under the whole bed's weight; the
-//!   energy accounted for never exceeds the loads' work (the spheres'
-//!   contact damping and friction are the unaccounted rest);
+//!   energies add up to the work of gravity within 3 %;
 //! - one sphere resting on a fixed block: Hertz's static overlap
 //!   δ = (3 m g / (4 E* √R))^{2/3} within 0.5 %;
 //! - a bad `[[spheres]]` key is one clear error naming it, and so are
@@ -131,9 +130,12 @@ fn sphere_bed_settles_on_the_block_bitwise_on_one_and_two_ranks() {
         .iter()
         .map(|w| w.iter().map(|c| c * c).sum::<f64>().sqrt());
     assert!(speed.fold(0.0, f64::max) < 0.2, "the bed is settling");
-    // Energy: what is accounted for (kinetic, strain, contact, mass
-    // damping) never exceeds the work of gravity; the spheres' contact
-    // damping and friction take the rest.
+    // Energy: kinetic, strain, contact (Hertz and the tangential springs)
+    // and dissipated (mass damping, the contacts' dashpots and slips) add
+    // up to the work of gravity within 3 % at every output (2.1 % at
+    // 0.3 s; 1.5 % and 1.1 % at a half and a quarter of the step: the
+    // residue is the time discretisation's and the Mindlin spring's, whose
+    // stiffness 8 G* a grows with the overlap at a given elongation).
     let (h, rows) = history(&o, stem);
     let (ke, w) = (col(&h, "kinetic_energy"), col(&h, "external_work"));
     let (se, ce, de) = (
@@ -144,13 +146,13 @@ fn sphere_bed_settles_on_the_block_bitwise_on_one_and_two_ranks() {
     let peak = rows.iter().map(|row| row[ke]).fold(0.0, f64::max);
     for row in &rows[1..] {
         let held = row[ke] + row[se] + row[ce] + row[de];
+        assert!(row[w] > 0.0);
         assert!(
-            held <= row[w] * (1.0 + 1e-9),
-            "energy made at t = {}: {held} > {}",
+            (held - row[w]).abs() <= 0.03 * row[w],
+            "energy balance at t = {}: {held} against the work {}",
             row[1],
             row[w]
         );
-        assert!(row[w] > 0.0);
     }
     let end = rows.last().unwrap();
     assert!(

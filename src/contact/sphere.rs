@@ -111,6 +111,12 @@ pub struct SphereContactForce {
     pub energy: f64,
     /// Contact radius a = √(R* δ) (m).
     pub radius: f64,
+    /// Energy the tangential spring holds after the step, ½ |F_t|²/k_t (J).
+    pub spring_energy: f64,
+    /// Energy the contact dissipated over the step (J): the normal
+    /// dashpot's (F_n − F_e) v_n Δt and, when sliding, what the cut took
+    /// from the spring, ½ (|F_t,trial|² − (μ F_n)²)/k_t.
+    pub lost: f64,
 }
 
 impl HertzLaw {
@@ -145,17 +151,30 @@ impl HertzLaw {
         let mut ft = -*xi * kt;
         let cap = self.friction * fn_;
         let size = ft.norm();
+        // Not in the seeds: the dashpot's loss, its force times the approach over Δt.
+        let mut lost = (fn_ - elastic) * vn * dt;
         if size > cap {
             // Sliding: Coulomb, |F_t| = μ F_n, the spring cut back to it.
             let scale = if size > 0.0 { cap / size } else { 0.0 };
             ft *= scale;
             *xi *= scale;
+            // Not in the seeds: the slip's loss, the spring energy the cut removed.
+            if kt > 0.0 {
+                lost += 0.5 * (size * size - cap * cap) / kt;
+            }
         }
+        let spring_energy = if kt > 0.0 {
+            0.5 * ft.norm_squared() / kt
+        } else {
+            0.0
+        };
         SphereContactForce {
             force: -*n * fn_ + ft,
             normal: fn_,
             energy: hertz_energy(self.e_star, self.r_star, delta),
             radius: a,
+            spring_energy,
+            lost,
         }
     }
 }

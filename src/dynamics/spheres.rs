@@ -428,6 +428,8 @@ impl DomainSpheres {
         };
         report.kinetic = 0.0;
         report.momentum = V3::zeros();
+        // The contacts' dashpot and slip losses join the mass damping's.
+        report.damped += c.lost;
         if let Some(h) = &self.heat {
             // Heat leaving the faces' nodes is heat entering the spheres (J).
             report.face_heat_in -= c.shares.iter().map(|s| s.heat * dt).sum::<f64>();
@@ -457,7 +459,7 @@ impl DomainSpheres {
         for i in 0..no {
             let k = &self.sets[self.set[i] as usize];
             let alpha = damping(c.touching[i]);
-            let (x_old, v_old) = (self.x[i], self.v[i]);
+            let (x_old, v_old, w_old) = (self.x[i], self.v[i], self.w[i]);
             let r = i..i + 1;
             update_particles(
                 k.mass,
@@ -471,13 +473,14 @@ impl DomainSpheres {
                 &mut self.v[r.clone()],
                 &mut self.w[r],
             );
-            // Not in the seeds: energies at the half step, the mass damping's loss α m v² Δt.
-            let v_mid = 0.5 * (v_old + self.v[i]);
-            report.kinetic +=
-                0.5 * k.mass * v_mid.norm_squared() + 0.5 * k.inertia * self.w[i].norm_squared();
+            // Not in the seeds: energies at the half step, the mass damping's
+            // loss α (m v² + I ω²) Δt.
+            let (v_mid, w_mid) = (0.5 * (v_old + self.v[i]), 0.5 * (w_old + self.w[i]));
+            let twice = k.mass * v_mid.norm_squared() + k.inertia * w_mid.norm_squared();
+            report.kinetic += 0.5 * twice;
             report.momentum += k.mass * v_mid;
             report.gravity_work += k.mass * gravity.dot(&(self.x[i] - x_old));
-            report.damped += alpha * k.mass * v_mid.norm_squared() * dt;
+            report.damped += alpha * twice * dt;
             let finite = self.x[i]
                 .iter()
                 .chain(self.v[i].iter())

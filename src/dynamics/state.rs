@@ -133,8 +133,8 @@ impl ExplicitDomain {
             self.external_work,
             self.friction_work,
         ];
-        // The free spheres' share (issue 21): their contacts' viscous and
-        // frictional losses are not counted in `dissipated`.
+        // The free spheres' share (issue 21): `damped` holds their mass
+        // damping's and their contacts' dashpot and slip losses.
         if let Some(sp) = self.spheres.as_ref().map(|s| s.report) {
             local[0] += sp.kinetic;
             local[2] += sp.contact_energy;

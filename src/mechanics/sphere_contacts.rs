@@ -161,8 +161,12 @@ pub struct ContactForces {
     /// Touching pairs whose lower number is owned, and face contacts.
     pub pairs: usize,
     pub faces: usize,
-    /// Hertz energy of the contacts, half of a pair per owned end (J).
+    /// Hertz and tangential-spring energy of the contacts, half of a pair
+    /// per owned end (J).
     pub energy: f64,
+    /// Energy the contacts' dashpots and slips dissipated over the step,
+    /// half of a pair per owned end (J).
+    pub lost: f64,
     /// Largest overlap over the radius of the smaller partner.
     pub max_overlap_ratio: f64,
 }
@@ -284,7 +288,8 @@ pub fn sphere_contacts(
                 out.force[i] += f.force * sign;
                 out.moment[i] += (n * (sign * r)).cross(&(f.force * sign));
                 out.touching[i] = true;
-                out.energy += 0.5 * f.energy;
+                out.energy += 0.5 * (f.energy + f.spring_energy);
+                out.lost += 0.5 * f.lost;
                 if heat.is_some() {
                     out.heat[i] += sign * q;
                     out.conductance[i] += g;
@@ -358,7 +363,8 @@ pub fn sphere_contacts(
                 }
                 order += 1;
                 out.faces += 1;
-                out.energy += f.energy;
+                out.energy += f.energy + f.spring_energy;
+                out.lost += f.lost;
                 out.max_overlap_ratio = out.max_overlap_ratio.max(touch.depth / c.radius);
             }
         }

@@ -72,7 +72,19 @@ pub(super) fn write(
     if let Some(h) = &p.heat {
         sets.push((HEAT, SAVED_PARTICLE_HEAT, h));
     }
-    for (name, cols, r) in sets {
+    write_sets(comm, file, path, xfer, &sets)
+}
+
+/// Collective. Write each `(name, columns, rows)` of `sets` as a dataset
+/// of its rows by global number (every rank its rows, moved into blocks).
+pub(super) fn write_sets(
+    comm: &SimpleCommunicator,
+    file: &File,
+    path: &Path,
+    xfer: &super::ffi::CollectiveXfer,
+    sets: &[(&str, usize, &GlobalRows)],
+) -> Result<(), IoError> {
+    for &(name, cols, r) in sets {
         let (lo, block) =
             crate::parallel::exchange::to_blocks(comm, &r.gid, &r.values, cols, r.total);
         super::checkpoint::dataset_f64(

@@ -81,21 +81,7 @@ pub(super) fn write(
         (FACES, SAVED_SPHERE_FACE, &s.faces),
         (ACCOUNTS, SAVED_SPHERE_ACCOUNT, &account),
     ];
-    for (name, cols, r) in sets {
-        let (lo, block) =
-            crate::parallel::exchange::to_blocks(comm, &r.gid, &r.values, cols, r.total);
-        super::checkpoint::dataset_f64(
-            file,
-            path,
-            name,
-            r.total as usize,
-            cols,
-            xfer,
-            lo,
-            Some(&block),
-        )?;
-    }
-    Ok(())
+    super::checkpoint_particles::write_sets(comm, file, path, xfer, &sets)
 }
 
 impl CheckpointFile {

@@ -40,12 +40,14 @@ impl Settling {
             .sum();
         let mut free_mass = 0.0;
         comm.all_reduce_into(&mine, &mut free_mass, SystemOperation::sum());
+        let spec = model.mechanics.as_ref().and_then(|m| m.settle);
         Settling {
-            spec: model.mechanics.as_ref().and_then(|m| m.settle),
+            spec,
             free_mass,
             peak_kinetic: restart.map_or(0.0, |c| c.peak_kinetic),
-            // A restart from a settled run's checkpoint is already done.
-            settled: restart.and_then(|c| {
+            // A restart from a settled run's checkpoint is already done,
+            // unless the scenario dropped the criterion: then it goes on.
+            settled: restart.filter(|_| spec.is_some()).and_then(|c| {
                 c.settled.map(|kinetic| Settled {
                     step: c.step,
                     time: c.time,

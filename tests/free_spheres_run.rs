@@ -219,6 +219,14 @@ every = 10
     assert!(speed < 1e-6, "at rest: {speed} m/s");
     // Straight down: no sideways drift on the flat top.
     assert!((p[0] - x.first().unwrap()[0][0]).abs() < 1e-9);
+    // The block's contact force (history `block_force_*`) is the sphere's
+    // weight, pressing down: the faces' shares reach the body's nodes.
+    let (h, rows) = history(&dir, "hertz");
+    let end = rows.last().unwrap();
+    let fz = end[col(&h, "block_force_z")];
+    eprintln!("block_force_z {fz:.6e} N against the weight {weight:.6e} N");
+    assert!((fz + weight).abs() < 5e-3 * weight, "{fz} against {weight}");
+    assert!(end[col(&h, "block_force_x")].abs() < 1e-9 * weight);
 }
 
 #[test]

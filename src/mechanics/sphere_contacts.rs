@@ -447,12 +447,10 @@ mod tests {
         assert_eq!(h.pair, h2.pair);
     }
 
-    /// A sphere on a triangle: the reaction's shares sum to minus the
-    /// contact force, keyed in corner order.
-    #[test]
-    fn face_shares_balance_the_sphere() {
-        let sets = [glass()];
-        let faces = FaceView {
+    /// One still triangle of body 0 (E = 1 GPa, ν = 0.3) in the plane
+    /// z = 0 around the origin.
+    fn one_triangle() -> FaceView {
+        FaceView {
             key: vec![40],
             body: vec![0],
             elastic: vec![(1e9, 0.3)],
@@ -464,7 +462,15 @@ mod tests {
             ],
             v: vec![V3::zeros(); 3],
             material: vec![0],
-        };
+        }
+    }
+
+    /// A sphere on a triangle: the reaction's shares sum to minus the
+    /// contact force, keyed in corner order.
+    #[test]
+    fn face_shares_balance_the_sphere() {
+        let sets = [glass()];
+        let faces = one_triangle();
         let x = [V3::new(0.0, 0.0, 0.0049)];
         let z = [V3::zeros()];
         let s = SphereView {
@@ -563,19 +569,7 @@ mod tests {
         assert_eq!(part.heat[0], all.heat[1]);
         assert_eq!(part.conductance[0], all.conductance[1]);
         // A sphere at 300 on a face whose nodes are at 400, 500, 600.
-        let faces = FaceView {
-            key: vec![40],
-            body: vec![0],
-            elastic: vec![(1e9, 0.3)],
-            nodes: vec![[0, 1, 2]],
-            x: vec![
-                V3::new(-1.0, -1.0, 0.0),
-                V3::new(1.0, -1.0, 0.0),
-                V3::new(0.0, 1.0, 0.0),
-            ],
-            v: vec![V3::zeros(); 3],
-            material: vec![0],
-        };
+        let faces = one_triangle();
         let xs = [V3::new(0.1, 0.2, 0.0049)];
         let s = SphereView {
             gid: &[0],

@@ -6,6 +6,7 @@
 mod clip;
 pub mod overlap;
 pub mod placement;
+pub mod point_grid;
 pub mod sphere_sites;
 mod tet4;
 pub mod transform;

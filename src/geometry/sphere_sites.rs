@@ -3,7 +3,7 @@
 //! so the same seed gives the same spheres on every machine and rank
 //! count. Pure.
 
-use std::collections::HashMap;
+use super::point_grid::PointGrid;
 
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
@@ -40,8 +40,7 @@ pub fn box_sites(
         }
     }
     let clear = 2.0 * radius + gap;
-    let cell = |p: &[f64; 3]| p.map(|v| (v / clear).floor() as i64);
-    let mut grid: HashMap<[i64; 3], Vec<u32>> = HashMap::new();
+    let mut grid = PointGrid::new(clear);
     let mut out: Vec<[f64; 3]> = Vec::with_capacity(count);
     let mut rng = Pcg64::seed_from_u64(seed);
     let mut tries = 0usize;
@@ -55,27 +54,15 @@ pub fn box_sites(
         }
         tries += 1;
         let p: [f64; 3] = std::array::from_fn(|d| rng.gen_range(min[d] + radius..=max[d] - radius));
-        let c = cell(&p);
         let mut free = true;
-        'near: for dx in -1..=1 {
-            for dy in -1..=1 {
-                for dz in -1..=1 {
-                    let Some(list) = grid.get(&[c[0] + dx, c[1] + dy, c[2] + dz]) else {
-                        continue;
-                    };
-                    for &k in list {
-                        let q = out[k as usize];
-                        let d2: f64 = (0..3).map(|d| (p[d] - q[d]).powi(2)).sum();
-                        if d2 < clear * clear {
-                            free = false;
-                            break 'near;
-                        }
-                    }
-                }
-            }
-        }
+        grid.near(p, |k| {
+            let q = out[k as usize];
+            let d2: f64 = (0..3).map(|d| (p[d] - q[d]).powi(2)).sum();
+            free = d2 >= clear * clear;
+            free
+        });
         if free {
-            grid.entry(c).or_default().push(out.len() as u32);
+            grid.insert(p, out.len() as u32);
             out.push(p);
         }
     }

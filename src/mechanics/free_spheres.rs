@@ -36,6 +36,7 @@ use crate::contact::sphere::{
     sphere_triangle, HertzLaw,
 };
 use crate::contact::sphere_heat::{pipe_flow, pipe_resistance, sphere_capacity};
+use crate::geometry::point_grid::PointGrid;
 
 type V3 = Vector3<f64>;
 
@@ -189,34 +190,15 @@ impl FreeSpheres {
     /// cells one diameter wide.
     fn touching_pairs(&self) -> Vec<(u32, u32)> {
         let d = 2.0 * self.kind.radius;
-        let cell = |x: &V3| {
-            [
-                (x.x / d).floor() as i64,
-                (x.y / d).floor() as i64,
-                (x.z / d).floor() as i64,
-            ]
-        };
-        let mut grid: HashMap<[i64; 3], Vec<u32>> = HashMap::new();
-        for (i, x) in self.x.iter().enumerate() {
-            grid.entry(cell(x)).or_default().push(i as u32);
-        }
+        let grid = PointGrid::of(d, self.x.iter().map(|x| [x.x, x.y, x.z]));
         let mut out = Vec::new();
         for (i, x) in self.x.iter().enumerate() {
-            let c = cell(x);
-            for dx in -1..=1 {
-                for dy in -1..=1 {
-                    for dz in -1..=1 {
-                        let Some(list) = grid.get(&[c[0] + dx, c[1] + dy, c[2] + dz]) else {
-                            continue;
-                        };
-                        for &j in list {
-                            if j as usize > i && (self.x[j as usize] - x).norm_squared() < d * d {
-                                out.push((i as u32, j));
-                            }
-                        }
-                    }
+            grid.near([x.x, x.y, x.z], |j| {
+                if j as usize > i && (self.x[j as usize] - x).norm_squared() < d * d {
+                    out.push((i as u32, j));
                 }
-            }
+                true
+            });
         }
         out.sort_unstable();
         out

@@ -35,6 +35,7 @@ use crate::contact::sphere::{
     sphere_triangle, HertzLaw,
 };
 use crate::contact::sphere_heat::{contact_radius, pipe_conductance};
+use crate::geometry::point_grid::PointGrid;
 
 type V3 = Vector3<f64>;
 
@@ -201,35 +202,22 @@ fn law(a: &SetConstants, b: Option<&SetConstants>, body: (f64, f64)) -> HertzLaw
 /// the largest diameter wide.
 fn touching_pairs(s: &SphereView, sets: &[SetConstants]) -> Vec<(usize, usize)> {
     let d = 2.0 * sets.iter().map(|c| c.radius).fold(0.0, f64::max);
-    let cell = |x: &V3| [x.x, x.y, x.z].map(|c| (c / d).floor() as i64);
-    let mut grid: HashMap<[i64; 3], Vec<u32>> = HashMap::new();
-    for (i, x) in s.x.iter().enumerate() {
-        grid.entry(cell(x)).or_default().push(i as u32);
-    }
+    let grid = PointGrid::of(d, s.x.iter().map(|x| [x.x, x.y, x.z]));
     let mut out = Vec::new();
     for i in 0..s.n_owned {
-        let c = cell(&s.x[i]);
         let ri = sets[s.set[i] as usize].radius;
-        for dx in -1..=1 {
-            for dy in -1..=1 {
-                for dz in -1..=1 {
-                    let Some(list) = grid.get(&[c[0] + dx, c[1] + dy, c[2] + dz]) else {
-                        continue;
-                    };
-                    for &j in list {
-                        let j = j as usize;
-                        // Two owned ends: found once, from the lower number.
-                        if j == i || (j < s.n_owned && s.gid[j] < s.gid[i]) {
-                            continue;
-                        }
-                        let reach = ri + sets[s.set[j] as usize].radius;
-                        if (s.x[j] - s.x[i]).norm_squared() < reach * reach {
-                            out.push(if s.gid[i] < s.gid[j] { (i, j) } else { (j, i) });
-                        }
-                    }
-                }
+        grid.near([s.x[i].x, s.x[i].y, s.x[i].z], |j| {
+            let j = j as usize;
+            // Two owned ends: found once, from the lower number.
+            if j == i || (j < s.n_owned && s.gid[j] < s.gid[i]) {
+                return true;
             }
-        }
+            let reach = ri + sets[s.set[j] as usize].radius;
+            if (s.x[j] - s.x[i]).norm_squared() < reach * reach {
+                out.push(if s.gid[i] < s.gid[j] { (i, j) } else { (j, i) });
+            }
+            true
+        });
     }
     out.sort_unstable_by_key(|&(a, b)| (s.gid[a], s.gid[b]));
     out

@@ -925,8 +925,14 @@ mod tests {
                 "linearised overlap at {:.0} % of the depth: volume {worst_v:.2e}, forces {worst_f:.2e}",
                 50.0 * tolerance
             );
-            assert!(worst_v < v_bound, "tolerance {tolerance}: volume error {worst_v}");
-            assert!(worst_f < f_bound, "tolerance {tolerance}: force error {worst_f}");
+            assert!(
+                worst_v < v_bound,
+                "tolerance {tolerance}: volume error {worst_v}"
+            );
+            assert!(
+                worst_f < f_bound,
+                "tolerance {tolerance}: force error {worst_f}"
+            );
         }
     }
 

@@ -67,13 +67,8 @@ mod tests {
     /// for points on either side of the origin (negative cells).
     #[test]
     fn finds_every_pair_within_the_cell_size() {
-        let mut s = 12345u64;
-        let mut next = || {
-            s = s
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (s >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-        };
+        let mut rng = crate::geometry::overlap::tests::Rng(12345);
+        let mut next = || 2.0 * rng.next() - 1.0;
         let pts: Vec<[f64; 3]> = (0..400).map(|_| [next(), next(), next()]).collect();
         let h = 0.2;
         let grid = PointGrid::of(h, pts.iter().copied());

@@ -1047,9 +1047,9 @@ mod tests {
             let (first, mut last, mut count) = (point_t(&va), point_t(&va), 0);
             for _ in 0..20 {
                 let r = penalty_forces(&s, s.volume, &va, &rest, &p);
-                for i in 0..4 {
+                for ((v, f), f0) in va.iter_mut().zip(&r.forces_a).zip(&f0.forces_a) {
                     for d in 0..3 {
-                        va[i][d] += dt / (m / 4.0) * k * (r.forces_a[i][d] - f0.forces_a[i][d]);
+                        v[d] += dt / (m / 4.0) * k * (f[d] - f0[d]);
                     }
                 }
                 let now = point_t(&va);

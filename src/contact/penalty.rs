@@ -42,6 +42,11 @@ pub struct PenaltyParams {
     /// cannot reverse the sliding within one step (the explicit stability
     /// limit of the friction "damper" c = μ F_n / v_r is c Δt / m* ≤ 1).
     pub time_step: f64,
+    /// Factor M ≥ 1 on that limit: v_r ≥ M μ F_n Δt / m*. The limit holds
+    /// one pair's damper alone; a surface node carries the dampers of many
+    /// pairs, whose sum can pass the node's explicit bound and make it
+    /// chatter (its velocity reversing every step) at M = 1.
+    pub stick_limit: f64,
     /// Tangential spring k_t as a fraction of the normal stiffness
     /// k_n = κ |g|² (0: regularised friction, no spring). With a spring
     /// (and a positive `time_step`), friction sticks: [`penalty_forces_with`].
@@ -307,11 +312,11 @@ pub fn penalty_forces_with(
         v_rel[2] - v_n * n[2],
     ];
     let vt_len = dot(v_t, v_t).sqrt();
-    // Not in the seeds: explicit stick limit, v_r ≥ μ F_n Δt / m* (the friction damper stays stable).
+    // Not in the seeds: explicit stick limit, v_r ≥ M μ F_n Δt / m* (the friction damper stays stable).
     let v_reg = if params.time_step > 0.0 && params.reduced_mass > 0.0 {
-        params
-            .slip_velocity
-            .max(params.friction * f_n * params.time_step / params.reduced_mass)
+        params.slip_velocity.max(
+            params.stick_limit * params.friction * f_n * params.time_step / params.reduced_mass,
+        )
     } else {
         params.slip_velocity
     };
@@ -531,6 +536,7 @@ mod tests {
             slip_velocity: 1e-6,
             time_step: 0.0,
             tangential_ratio: 0.0,
+            stick_limit: 1.0,
         }
     }
 
@@ -543,6 +549,7 @@ mod tests {
             slip_velocity: 1e-3,
             time_step: 0.0,
             tangential_ratio: 0.0,
+            stick_limit: 1.0,
         }
     }
 
@@ -585,6 +592,7 @@ mod tests {
             slip_velocity: 1e-3,
             time_step: 1e-3,
             tangential_ratio: kt_ratio,
+            stick_limit: 1.0,
         }
     }
 
@@ -986,6 +994,77 @@ mod tests {
             assert!(lin.volume_at(&ab, &b).is_none());
         }
         (worst_v, worst_f)
+    }
+
+    /// Friction chatter: k identical pairs' regularised friction acting on
+    /// the lone tet a (nodes of lumped mass m/4, b held), stepped
+    /// explicitly with the overlap fixed. Each pair alone is within its
+    /// stick limit (c Δt / m* ≤ 1), yet the contact point's tangential
+    /// velocity changes by −(k / M) 4 Σ N² times itself per step: past
+    /// 1 it reverses every step (chatter), past 2 it grows until the
+    /// Coulomb cap holds it. `stick_limit` M = 2 k 4 Σ N² makes it decay
+    /// without reversing.
+    #[test]
+    fn stick_limit_ends_the_chatter_of_shared_friction_dampers() {
+        let (a, b) = overlapping_pair(&mut Rng(5));
+        let s = overlap_state((&a, &planes(&a)), (&b, &planes(&b))).unwrap();
+        let n = s.normal;
+        let m = 1e-3; // kg, tet a
+        let dt = 1e-4;
+        let k = 4.0; // pairs on the same nodes
+        let sum_n2: f64 = s.weights_a.iter().map(|w| w * w).sum();
+        let reversals = |stick_limit: f64| -> (usize, f64, f64) {
+            let p = PenaltyParams {
+                stiffness: 1e9,
+                damping_ratio: 0.0,
+                reduced_mass: m,
+                friction: 0.5,
+                slip_velocity: 1e-9,
+                time_step: dt,
+                tangential_ratio: 0.0,
+                stick_limit,
+            };
+            let rest = [[0.0; 3]; 4];
+            let f0 = penalty_forces(&s, s.volume, &rest, &rest, &p);
+            // A tangential velocity of the whole tet, small against v_r.
+            let t = {
+                let e = if n[0].abs() < 0.9 {
+                    [1.0, 0.0, 0.0]
+                } else {
+                    [0.0, 1.0, 0.0]
+                };
+                let d = dot(e, n);
+                let u = [e[0] - d * n[0], e[1] - d * n[1], e[2] - d * n[2]];
+                let l = norm(u);
+                u.map(|x| x / l)
+            };
+            let f_n = f0.normal_force;
+            let v_r = stick_limit * p.friction * f_n * dt / m;
+            let mut va = [t.map(|x| 1e-3 * v_r * x); 4];
+            let point_t = |va: &[[f64; 3]; 4]| -> f64 {
+                (0..4).map(|i| s.weights_a[i] * dot(va[i], t)).sum()
+            };
+            let (first, mut last, mut count) = (point_t(&va), point_t(&va), 0);
+            for _ in 0..20 {
+                let r = penalty_forces(&s, s.volume, &va, &rest, &p);
+                for ((v, f), f0) in va.iter_mut().zip(&r.forces_a).zip(&f0.forces_a) {
+                    for d in 0..3 {
+                        v[d] += dt / (m / 4.0) * k * (f[d] - f0[d]);
+                    }
+                }
+                let now = point_t(&va);
+                if now * last < 0.0 {
+                    count += 1;
+                }
+                last = now;
+            }
+            (count, first, last)
+        };
+        let (chatter, _, _) = reversals(1.0);
+        assert!(chatter >= 15, "M = 1: {chatter} reversals in 20 steps");
+        let (calm, first, last) = reversals(2.0 * k * 4.0 * sum_n2);
+        assert_eq!(calm, 0, "M = 2 k 4 Σ N²: reversals");
+        assert!(last.abs() < 1e-3 * first.abs(), "{first} -> {last}");
     }
 
     /// Throughput on random pairs (run with `--ignored --nocapture`).

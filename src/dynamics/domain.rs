@@ -278,6 +278,7 @@ impl ExplicitDomain {
                     slip_velocity: c.slip_velocity,
                     time_step: 0.0,
                     tangential_ratio: c.tangential_stiffness,
+                    stick_limit: c.stick_limit,
                 },
                 c.penalty,
             )

@@ -972,8 +972,19 @@ pub struct PenaltySpec {
     /// speeds up to `slip_velocity`).
     #[serde(default)]
     pub tangential_stiffness: f64,
+    /// Factor M ≥ 1 on the regularised friction's explicit stick limit
+    /// (`contact::penalty::PenaltyParams::stick_limit`): below
+    /// M μ F_n Δt / m* friction is viscous. 1 (default) bounds each pair's
+    /// damper alone; 2 keeps a node under the dampers of several pairs
+    /// from chattering (docs/guide.md, "Friction chatter").
+    #[serde(default = "default_stick_limit")]
+    pub stick_limit: f64,
 }
 
 fn default_slip() -> f64 {
     1e-6
+}
+
+fn default_stick_limit() -> f64 {
+    1.0
 }

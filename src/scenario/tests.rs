@@ -178,6 +178,21 @@ fn linear_tolerance_and_rms_settle_are_checked() {
             "{bad}: {e}"
         );
     }
+    let c = parse_str(&mech("", "rms_speed = 0.03"), p(), &[]).unwrap();
+    assert_eq!(
+        c.scenario.mechanics.unwrap().contact.unwrap().stick_limit,
+        1.0
+    );
+    for bad in ["0.5", "nan"] {
+        let e = parse_str(
+            &mech(&format!("stick_limit = {bad}"), "rms_speed = 0.03"),
+            p(),
+            &[],
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("mechanics.contact.stick_limit"), "{bad}: {e}");
+    }
     let e = parse_str(&mech("", "rms_speed = -1.0"), p(), &[])
         .unwrap_err()
         .to_string();

@@ -834,6 +834,15 @@ impl Scenario {
                     );
                 }
             }
+            if !(c.stick_limit.is_finite() && c.stick_limit >= 1.0) {
+                return bad(
+                    "mechanics.contact.stick_limit",
+                    format!(
+                        "must be at least 1 (one pair's explicit stick limit), got {}",
+                        c.stick_limit
+                    ),
+                );
+            }
             // k_t ≤ k_n keeps the explicit step of the normal spring stable for the tangential one.
             let kt = c.tangential_stiffness;
             if !(kt.is_finite() && (0.0..=1.0).contains(&kt)) {

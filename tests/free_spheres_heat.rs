@@ -260,11 +260,6 @@ fn bad_sphere_heat_input_is_a_clear_error() {
             "[thermal.ambient]\ntemperature = 20.0\nh = 10.0\n[contact]",
             "thermal.ambient",
         ),
-        (
-            "[output]",
-            "[output]\ncheckpoint = true",
-            "output.checkpoint",
-        ),
     ];
     for (i, (from, to, key)) in cases.iter().enumerate() {
         assert!(base.contains(from), "{from}");

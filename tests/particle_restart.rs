@@ -3,7 +3,9 @@
 //! ends as the run that never stopped. The checkpoint holds the spheres'
 //! motion, each bond's and link's incremental state and, with heat, the
 //! spheres' thermal rows, by global number. Free spheres (`[[spheres]]`)
-//! restart the same way: their motion, springs and energy account.
+//! restart the same way: their motion, springs and energy account, and
+//! with heat their temperatures, heat account and the heat handed to the
+//! bodies not yet released.
 
 mod common;
 
@@ -334,4 +336,144 @@ fn free_spheres_restart_bitwise_on_one_and_two_ranks() {
             );
         }
     }
+}
+
+/// The last output of a run of `scenarios/spheres-heat.toml` in `dir`:
+/// the free spheres' displacements and temperatures (by sphere number),
+/// the block's node temperatures (by node id), and the history's header
+/// and last row.
+struct HeatLast {
+    displacement: Vec<f64>,
+    spheres_t: Vec<f64>,
+    nodes_t: Vec<f64>,
+    header: Vec<String>,
+    row: Vec<f64>,
+}
+
+fn heat_last(dir: &Path) -> HeatLast {
+    let stem = "spheres-heat";
+    let h5 = dir.join(format!("{stem}_spheres.h5"));
+    let k = fdem::io::read_times(&h5).unwrap().len() - 1;
+    let field = |name: &str| fdem::io::read_node_field_step(&h5, name, k).unwrap();
+    let r = read_results(dir, stem);
+    let (header, rows) = history(dir, stem);
+    HeatLast {
+        displacement: field("displacement"),
+        spheres_t: field("temperature"),
+        nodes_t: r.temperature.last().unwrap().clone(),
+        header,
+        row: rows.last().unwrap().clone(),
+    }
+}
+
+/// Free spheres carrying heat (`scenarios/spheres-heat.toml`, 40 cold
+/// spheres falling onto a block heated from below, 0.2 s) stopped at
+/// 0.12 s on two ranks, while the first spheres touch the block and take
+/// its heat (heat pending for the next thermal step), and continued to
+/// 0.2 s on one and on two ranks. The checkpoint holds the spheres'
+/// temperatures and heat account and the heat handed to the block not yet
+/// released: on two ranks the spheres' motion and temperatures, the
+/// block's temperatures and the history's last row are bitwise those of
+/// the run that never stopped; on one rank the motion is bitwise and the
+/// temperatures and the history are within the direct solve's round-off
+/// on another rank count.
+#[test]
+fn free_spheres_heat_restart_bitwise_on_one_and_two_ranks() {
+    let src = root().join("scenarios/spheres-heat.toml");
+    let dir = out_dir("sphere-heat-restart");
+    let path = dir.join("spheres-heat.toml");
+    std::fs::copy(&src, &path).unwrap();
+    let end = ["--set", "time.steps=20"];
+    let full = out_dir("sphere-heat-restart-full");
+    run_ok(2, &path, &full, &end);
+    let want = heat_last(&full);
+    let first = out_dir("sphere-heat-restart-first");
+    run_ok(
+        2,
+        &path,
+        &first,
+        &["--set", "output.checkpoint=true", "--set", "time.steps=12"],
+    );
+    let ck = first.join("spheres-heat_checkpoint.h5");
+    // Heat moving at the checkpoint: taken from the faces, and pending.
+    let (h, rows) = history(&first, "spheres-heat");
+    let at = rows.last().unwrap();
+    let (taken, pending) = (
+        at[col(&h, "spheres_heat_from_faces")],
+        at[col(&h, "spheres_heat_pending")],
+    );
+    let warm = at[col(&h, "spheres_max_T")];
+    eprintln!("at the checkpoint: spheres took {taken:e} J, {pending:e} J pending, warmest {warm}");
+    assert!(taken > 0.0 && pending != 0.0 && warm > 20.0, "{at:?}");
+    for ranks in [1, 2] {
+        let out = out_dir(&format!("sphere-heat-restart-{ranks}"));
+        let mut args = vec!["--restart", ck.to_str().unwrap()];
+        args.extend_from_slice(&end);
+        run_ok(ranks, &path, &out, &args);
+        let got = heat_last(&out);
+        assert!(
+            got.displacement == want.displacement,
+            "{ranks} ranks: sphere displacements differ"
+        );
+        // Temperatures relative to the range T1 − T0 = 80 K, and the
+        // history: bitwise on as many ranks; on one, the direct solve's
+        // and the sums' round-off.
+        let tol = if ranks == 2 { 0.0 } else { 1e-12 };
+        for (what, a, b) in [
+            ("sphere", &got.spheres_t, &want.spheres_t),
+            ("node", &got.nodes_t, &want.nodes_t),
+        ] {
+            let worst = a
+                .iter()
+                .zip(b.iter())
+                .map(|(x, y)| (x - y).abs() / 80.0)
+                .fold(0.0, f64::max);
+            eprintln!("{ranks} ranks: {what} temperatures {worst:.2e} of T1 - T0 apart");
+            assert!(
+                a.len() == b.len() && worst <= tol,
+                "{ranks} ranks: {what}: {worst:e}"
+            );
+        }
+        assert_eq!(got.header, want.header);
+        // Heat columns against the boundary heat (`convection_heat_in` is
+        // a round-off residue of order 1e-12 J here), the others relative.
+        let heat_in = want.row[col(&want.header, "boundary_heat_in")].abs();
+        let mut worst: f64 = 0.0;
+        for (k, (a, b)) in got.row.iter().zip(&want.row).enumerate() {
+            let scale = match got.header[k].contains("heat") {
+                true => b.abs().max(heat_in),
+                false => b.abs().max(1e-30),
+            };
+            let d = (a - b).abs() / scale;
+            worst = worst.max(d);
+            assert!(
+                d <= tol,
+                "{ranks} ranks: history column {}: {a:e} against {b:e}",
+                got.header[k]
+            );
+        }
+        eprintln!("{ranks} ranks: history's last row {worst:.2e} apart (relative)");
+    }
+    // A checkpoint without the spheres' temperatures (a mechanical run's,
+    // or one from before they were saved): a clear error naming them.
+    let old = dir.join("no-temperatures_checkpoint.h5");
+    std::fs::copy(&ck, &old).unwrap();
+    hdf5::File::open_rw(&old)
+        .unwrap()
+        .unlink("spheres/temperature")
+        .unwrap();
+    let out = out_dir("sphere-heat-restart-old");
+    let args = [
+        "run",
+        path.to_str().unwrap(),
+        "--quiet",
+        "--output",
+        out.to_str().unwrap(),
+        "--restart",
+        old.to_str().unwrap(),
+    ];
+    let o = fdem(1, &args);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("spheres/temperature is missing"), "{err}");
 }

@@ -6,7 +6,8 @@
 //! - `/bodies/names`, `/bodies/templates` (newline-joined UTF-8 as u8),
 //!   `/bodies/nodes`, `/bodies/elems` (B×2 u32 ranges)
 //! - `/state/positions`, `/state/velocities` (N×3 f64, when mechanics ran),
-//!   `/state/temperature` (N f64, when the thermal problem ran)
+//!   `/state/temperature` (N f64, when the thermal problem ran),
+//!   `/state/pending_heat` (N f64, heat handed over, not yet released)
 //! - `/state/scalars` (f64): step, time, substeps, heat account (5 values),
 //!   dissipated energy, peak kinetic energy, thermal contacts, radiated heat,
 //!   frictional heat
@@ -21,6 +22,7 @@ use mpi::collective::SystemOperation;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
 
+use super::checkpoint_heat::{account_base, heat_of};
 use super::IoError;
 
 const FORMAT: &str = "fdem-checkpoint";
@@ -100,26 +102,6 @@ pub struct Checkpoint {
     /// The kinetic energy (J) at which the run settled, when this is the
     /// checkpoint of a settled run: a restart from it takes no more steps.
     pub settled: Option<f64>,
-}
-
-/// The heat account of the scalars (radiation and friction are 0 in
-/// checkpoints from before them).
-fn heat_of(sc: &[f64]) -> [f64; 7] {
-    let extra = |i: usize| sc.get(i).copied().unwrap_or(0.0);
-    [sc[3], sc[4], sc[5], sc[6], sc[7], extra(11), extra(12)]
-}
-
-/// The saved account base: 7 values, or 5 or 6 from before radiation and
-/// frictional heating (then 0).
-fn account_base(v: &[f64]) -> Option<[f64; 7]> {
-    match v.len() {
-        5..=7 => {
-            let mut b = [0.0; 7];
-            b[..v.len()].copy_from_slice(v);
-            Some(b)
-        }
-        _ => None,
-    }
 }
 
 fn tmp_path(path: &Path) -> PathBuf {
@@ -423,6 +405,8 @@ pub struct CheckpointRows<'a> {
     pub springs: Option<(&'a [u32], &'a [f64], u64)>,
     /// Free spheres (issue 21).
     pub spheres: Option<&'a super::checkpoint_spheres::SphereCheckpoint>,
+    /// Heat handed over and not yet released, per node (`checkpoint_heat`).
+    pub pending_heat: Option<&'a [f64]>,
 }
 
 /// Collective. Write a checkpoint: every rank its rows (moved to
@@ -643,6 +627,9 @@ fn write_parallel_to(
     if let Some(t) = rows.temperature {
         nodes("state/temperature", t, 1)?;
     }
+    if let Some(q) = rows.pending_heat {
+        nodes(super::checkpoint_heat::PENDING_HEAT, q, 1)?;
+    }
     if let Some((ids, v, total)) = rows.joints {
         let cols = crate::fracture::set::SAVED_JOINT;
         let (lo, block) = crate::parallel::exchange::to_blocks(comm, ids, v, cols, total);
@@ -834,6 +821,7 @@ impl CheckpointFile {
             "state/account_t0",
             "state/account_t_sum",
             "state/account_rad_sum",
+            super::checkpoint_heat::PENDING_HEAT,
         ] {
             if file.link_exists(name) && rows_of(name)? != nodes {
                 return bad(format!(
@@ -1074,6 +1062,7 @@ mod tests {
             particles: None,
             springs: None,
             spheres: None,
+            pending_heat: None,
         };
         crate::testutil::on_one_rank(|comm| write_parallel(comm, p, &head, &rows))
     }

@@ -92,6 +92,7 @@
 //! finalised.
 
 pub mod checkpoint;
+pub mod checkpoint_heat;
 pub mod checkpoint_particles;
 pub mod checkpoint_spheres;
 pub mod checkpoint_springs;

@@ -10,6 +10,7 @@ use mpi::traits::*;
 use crate::contact::ContactSet;
 use crate::error::{Error, Result};
 use crate::io::checkpoint::{CheckpointFile, CheckpointHead, CheckpointRows};
+use crate::io::checkpoint_heat::PENDING_HEAT;
 use crate::model::Model;
 use crate::parallel::{agree, Part};
 use crate::thermal::system::EnergyAccount;
@@ -154,6 +155,7 @@ impl Snapshot {
             ("state/account_t0", c.account_t0.map(|v| (1, v))),
             ("state/account_t_sum", c.account_t_sum.map(|v| (1, v))),
             ("state/account_rad_sum", c.account_rad_sum.map(|v| (1, v))),
+            (PENDING_HEAT, c.pending_heat.map(|v| (1, v))),
         ];
         let fields = present
             .into_iter()
@@ -171,6 +173,11 @@ impl Snapshot {
             particles: None,
             springs: Vec::new(),
         }
+    }
+
+    /// Whether the snapshot holds field `name`.
+    fn holds(&self, name: &str) -> bool {
+        self.fields.iter().any(|f| f.0 == name)
     }
 
     /// Collective. The rows of field `name` for nodes `ids`.
@@ -206,6 +213,14 @@ impl Saved<'_> {
         match self {
             Saved::File(r) => &r.path,
             Saved::Memory(_) => Path::new("(repartition)"),
+        }
+    }
+
+    /// Whether the state holds the node field `name`.
+    fn holds(&self, name: &str) -> bool {
+        match self {
+            Saved::File(r) => r.file.holds(name),
+            Saved::Memory(s) => s.holds(name),
         }
     }
 
@@ -303,7 +318,7 @@ pub(super) fn restore_spheres(
     r: &Restart,
     mech: &mut Mechanics,
 ) -> Result<()> {
-    let Some((total, sets)) = mech.domain.sphere_totals() else {
+    let Some((total, sets, heat)) = mech.domain.sphere_totals() else {
         return Ok(());
     };
     if !r.file.has_spheres() {
@@ -312,9 +327,13 @@ pub(super) fn restore_spheres(
             "the checkpoint has no free spheres, the scenario has [[spheres]]",
         ));
     }
-    let rows = r
-        .file
-        .sphere_rows(comm.rank() as usize, comm.size() as usize, total, sets);
+    let rows = r.file.sphere_rows(
+        comm.rank() as usize,
+        comm.size() as usize,
+        total,
+        sets,
+        heat,
+    );
     let rows = agree(comm, rows.map_err(|e| unreadable(r.file.path(), e)))?;
     mech.domain.restore_spheres(comm, &rows)
 }
@@ -434,6 +453,54 @@ pub(super) fn restore_thermal(
         _ => s.restore(&t, heat, ck.step)?,
     }
     s.iterations = ck.ksp_iterations;
+    restore_pending_heat(comm, model, part, saved, s)
+}
+
+/// Collective. The heat the mechanics handed over before the save and the
+/// next step has not released yet (frictional heat, the free spheres'),
+/// back into the rows of `part` (`io::checkpoint_heat`; a repartition's
+/// snapshot carries the same field); from a file, the free spheres' share
+/// of it and what they gave so far too (a repartition keeps those itself).
+fn restore_pending_heat(
+    comm: &SimpleCommunicator,
+    model: &Model,
+    part: &Part,
+    saved: Saved,
+    s: &mut ThermalSystem,
+) -> Result<()> {
+    let spheres = !model.spheres.is_empty();
+    if saved.holds(PENDING_HEAT) {
+        let q = saved.rows1(comm, PENDING_HEAT, part.owned_gids());
+        let q = agree(comm, q.map_err(|e| unreadable(saved.origin(), e)))?;
+        let heat: Vec<(u32, f64)> = part.petsc[..part.num_owned()]
+            .iter()
+            .zip(q)
+            .map(|(&r, q)| (r, q))
+            .collect();
+        s.add_heat(&heat)?;
+    } else if spheres {
+        return Err(missing(
+            saved.origin(),
+            "the checkpoint has no state/pending_heat (the free spheres' heat handed to \
+             the bodies), the scenario has [[spheres]] with [thermal]",
+        ));
+    }
+    if let (Saved::File(r), true) = (saved, spheres) {
+        let fe = agree(
+            comm,
+            r.file
+                .sphere_fe_heat()
+                .map_err(|e| unreadable(r.file.path(), e)),
+        )?;
+        let Some([pending, released]) = fe else {
+            return Err(missing(
+                r.file.path(),
+                "the checkpoint has no spheres/fe_heat, the scenario has [[spheres]] with \
+                 [thermal]",
+            ));
+        };
+        s.restore_sphere_source(pending, released);
+    }
     Ok(())
 }
 
@@ -448,6 +515,8 @@ pub(super) struct Captured {
     account_t0: Option<Vec<f64>>,
     account_t_sum: Option<Vec<f64>>,
     account_rad_sum: Option<Vec<f64>>,
+    /// Heat handed over and not yet released, per owned node.
+    pending_heat: Option<Vec<f64>>,
 }
 
 /// Collective. Write the checkpoint: every rank its part's rows.
@@ -478,8 +547,15 @@ pub(super) fn save_checkpoint(
         ),
         _ => None,
     };
-    // Free spheres: their motion and springs (issue 21).
-    let spheres = mech.as_deref().and_then(|m| m.domain.saved_spheres(comm));
+    // Free spheres: their motion and springs, with heat their temperatures,
+    // heat account and the FE's side of it (issue 21).
+    let mut spheres = mech.as_deref().and_then(|m| m.domain.saved_spheres(comm));
+    if let (Some((_, _, fe)), Some(s)) =
+        (spheres.as_mut().and_then(|c| c.heat.as_mut()), sys.as_ref())
+    {
+        let src = s.sphere_source();
+        *fe = [src.pending, src.released];
+    }
     let mut c = capture(comm, model, part, sys, mech, step, contacts)?;
     c.head.peak_kinetic = peak_kinetic;
     c.head.settled = settled;
@@ -513,6 +589,7 @@ pub(super) fn save_checkpoint(
         particles: particles.as_ref(),
         springs: springs.as_ref().map(|(i, v, t)| (&i[..], &v[..], *t)),
         spheres: spheres.as_ref(),
+        pending_heat: c.pending_heat.as_deref(),
     };
     crate::io::checkpoint::write_parallel(comm, path, &c.head, &rows).map_err(Error::from)
 }
@@ -572,7 +649,9 @@ pub(super) fn capture(
         positions = Some(x);
     }
     let (mut temperature, mut t0, mut t_sum, mut rad_sum) = (None, None, None, None);
+    let mut pending_heat = None;
     if let Some(s) = sys.as_mut() {
+        pending_heat = s.pending_heat(part)?;
         // Saved per node: copies tied by intact joints share a row.
         temperature = Some(s.node_temperatures(part)?);
         head.ksp_iterations = s.iterations;
@@ -620,5 +699,6 @@ pub(super) fn capture(
         account_t0: t0,
         account_t_sum: t_sum,
         account_rad_sum: rad_sum,
+        pending_heat,
     })
 }

@@ -90,13 +90,6 @@ pub fn run(
         model: clock.elapsed().as_secs_f64(),
         ..PhaseTimes::default()
     };
-    if opts.restart.is_some() && !model.spheres.is_empty() && model.thermal_active {
-        return Err(Error::Mechanics(
-            "--restart: checkpoints do not hold the free spheres' temperatures yet \
-             ([[spheres]] with [thermal], issue 21)"
-                .into(),
-        ));
-    }
     let restart = match &opts.restart {
         Some(p) => Some(Restart::read(p, &model)?),
         None => None,

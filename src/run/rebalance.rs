@@ -441,17 +441,9 @@ impl Stages<'_, '_> {
         let (counters, substeps_per_step) = (old.domain.counters, old.substeps_per_step);
         let friction_work = old.domain.friction_work_share();
         drop(old);
-        let old_sys = self.sys.take();
         // Frictional heat handed over and not yet released travels with
-        // its nodes (by node id, through blocks of ids).
-        let total_nodes = model.totals().0;
-        let pending = match old_sys.as_ref() {
-            Some(s) => s.pending_heat(&self.part)?,
-            None => None,
-        };
-        let pending = pending.map(|v| {
-            crate::parallel::exchange::to_blocks(comm, self.part.owned_gids(), &v, 1, total_nodes)
-        });
+        // its nodes in the snapshot (`state/pending_heat`, as a checkpoint).
+        let old_sys = self.sys.take();
         let (iterations, assemblies) = old_sys
             .as_ref()
             .map_or((0, 0), |s| (s.iterations, s.assemblies));
@@ -499,22 +491,6 @@ impl Stages<'_, '_> {
             checkpoint::restore_thermal(comm, model, part, Saved::Memory(&snapshot), s)?;
             s.iterations = iterations;
             s.assemblies += assemblies;
-            if let Some((lo, block)) = pending.as_ref() {
-                let gids = part.owned_gids();
-                let q = crate::parallel::exchange::from_blocks(
-                    comm,
-                    (*lo, block),
-                    1,
-                    total_nodes,
-                    gids,
-                );
-                let heat: Vec<(u32, f64)> = part.petsc[..part.num_owned()]
-                    .iter()
-                    .zip(q)
-                    .map(|(&r, q)| (r, q))
-                    .collect();
-                s.add_heat(&heat)?;
-            }
             // The free spheres' share of it stays theirs (issue 21).
             if let Some(src) = sphere_source {
                 s.set_sphere_source(src);

@@ -201,17 +201,6 @@ impl Scenario {
                     ));
                 }
             }
-            // Checkpoints hold the spheres' motion, not their temperatures.
-            if self.thermal.is_some()
-                && (self.output.checkpoint || self.output.checkpoint_every > 0)
-            {
-                return Err((
-                    "output.checkpoint".into(),
-                    "checkpoints do not hold the free spheres' temperatures yet: a run with \
-                     [[spheres]] and [thermal] writes none"
-                        .into(),
-                ));
-            }
         }
         Ok(())
     }

@@ -96,4 +96,11 @@ impl ThermalSystem<'_> {
     pub fn set_sphere_source(&mut self, s: SphereSource) {
         self.spheres = s;
     }
+
+    /// Continue with the spheres' heat `pending` (handed over, not yet
+    /// released) and `released` (J) of a checkpoint, whose pending heat
+    /// the restore handed over as [`Self::add_heat`].
+    pub fn restore_sphere_source(&mut self, pending: f64, released: f64) {
+        self.spheres = SphereSource { pending, released };
+    }
 }

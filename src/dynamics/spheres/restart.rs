@@ -5,7 +5,9 @@
 //! holds their spheres, and then every sphere, with its springs, goes to
 //! the owner of its slab by the same exchange the substeps use, which
 //! also makes the ghosts. So the restored slabs hold what the run's slabs
-//! held at the checkpoint, on any number of ranks.
+//! held at the checkpoint, on any number of ranks. With heat, each
+//! sphere's temperature travels with it and the heat account goes back as
+//! the energy account does.
 
 use std::collections::HashSet;
 
@@ -59,15 +61,27 @@ impl DomainSpheres {
             let (gid, values, total) = sorted_by_key(comm, flat, width);
             GlobalRows { gid, values, total }
         };
+        let gid: Vec<u32> = self.gid[..no].iter().map(|&g| g as u32).collect();
+        // With heat: the temperatures and the heat account; the FE's side
+        // is the thermal system's (`run::checkpoint::save_checkpoint`).
+        let heat = self.heat.is_some().then(|| {
+            let t = GlobalRows {
+                gid: gid.clone(),
+                values: self.t[..no].to_vec(),
+                total: self.total,
+            };
+            (t, [self.report.face_heat_in, self.report.fourier], [0.0; 2])
+        });
         SphereCheckpoint {
             state: GlobalRows {
-                gid: self.gid[..no].iter().map(|&g| g as u32).collect(),
+                gid,
                 values,
                 total: self.total,
             },
             pairs: sorted(&pairs, SAVED_SPHERE_PAIR),
             faces: sorted(&faces, SAVED_SPHERE_FACE),
             account: [self.report.gravity_work, self.report.damped],
+            heat,
         }
     }
 
@@ -127,13 +141,15 @@ impl DomainSpheres {
         self.set = s.state.iter().map(|r| r[0] as u32).collect();
         let col = |c: usize| -> Vec<V3> { s.state.iter().map(|r| v3(&r[c..])).collect() };
         (self.x0, self.x, self.v, self.w) = (col(1), col(4), col(7), col(10));
-        // Temperatures are not in checkpoints: the sets' initial ones
-        // (a thermal run with spheres takes no checkpoint or restart).
-        self.t = self
-            .set
-            .iter()
-            .map(|&k| self.initial_temperature(k))
-            .collect();
+        // The saved temperatures (a thermal run), else the sets' initial ones.
+        self.t = match &s.heat {
+            Some(h) => h.temperature.clone(),
+            None => self
+                .set
+                .iter()
+                .map(|&k| self.initial_temperature(k))
+                .collect(),
+        };
         // The energies so far: each rank its own on as many ranks. On
         // another number, rank 0 takes the gravity work's sum; the damped
         // energy is then in the checkpoint's total of the dissipated
@@ -143,9 +159,21 @@ impl DomainSpheres {
             _ if rank == 0 => [s.accounts.iter().map(|r| r[0]).sum(), 0.0],
             _ => [0.0; 2],
         };
+        // The heat from the faces and the largest Fourier number likewise:
+        // each rank its own on as many ranks, else rank 0 the sum and max.
+        let heat = match s.heat.as_ref().map(|h| &h.accounts[..]) {
+            Some(a) if a.len() == size => a[rank],
+            Some(a) if rank == 0 => [
+                a.iter().map(|r| r[0]).sum(),
+                a.iter().map(|r| r[1]).fold(0.0, f64::max),
+            ],
+            _ => [0.0; 2],
+        };
         self.report = SphereReport {
             gravity_work: mine[0],
             damped: mine[1],
+            face_heat_in: heat[0],
+            fourier: heat[1],
             ..SphereReport::default()
         };
         // Every sphere to its slab's owner with its springs; the ghosts.
@@ -168,9 +196,12 @@ impl crate::dynamics::ExplicitDomain {
         self.spheres.as_ref().map(|s| s.saved(comm))
     }
 
-    /// The number of free spheres and of their sets (None without).
-    pub fn sphere_totals(&self) -> Option<(u64, usize)> {
-        self.spheres.as_ref().map(|s| (s.total, s.sets.len()))
+    /// The number of free spheres and of their sets, and whether they
+    /// carry heat (None without).
+    pub fn sphere_totals(&self) -> Option<(u64, usize, bool)> {
+        self.spheres
+            .as_ref()
+            .map(|s| (s.total, s.sets.len(), s.has_heat()))
     }
 
     /// Collective. Replace the free spheres by a checkpoint's blocks `s`.

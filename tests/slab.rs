@@ -276,3 +276,56 @@ fn default_cholesky_orders_the_slab_by_rcm_and_a_cube_by_nd() {
     assert!(rel_diff(&r_slab.temperature[k], &r_nd.temperature[k]) < 1e-12);
     assert!(r_cube.temperature[k].iter().all(|t| t.is_finite()));
 }
+
+/// Issue 22: where CG needs many iterations (cell Fourier number above 1)
+/// each step starts from Fischer's projection onto the last solutions, not
+/// from the line through the last two steps: fewer iterations, the same
+/// temperatures to the solver's tolerance, on 1 and 2 ranks. The slab with
+/// long steps and CG + Jacobi forced (the default would factorise it).
+#[test]
+fn fischer_guess_saves_cg_iterations_where_the_fourier_number_is_large() {
+    let run = |ranks: usize, tag: &str, guess: &str| {
+        let out = out_dir(&format!("slab-guess-{tag}"));
+        let args = [
+            "--set",
+            "bodies.bar.mesh.element_size=0.025",
+            "--set",
+            "time.dt=0.5",
+            "--set",
+            "time.end_time=20",
+            "--set",
+            "output.times=[20.0]",
+            "--set",
+            "solver.ksp_type=cg",
+            "--set",
+            "solver.pc_type=jacobi",
+            "--set",
+            guess,
+        ];
+        let stdout = run_ok(ranks, &root().join("scenarios/slab-1d.toml"), &out, &args);
+        let solver = summary_line(&stdout, "solver").unwrap().to_string();
+        let its = number_before(summary_line(&stdout, "steps").unwrap(), "KSP");
+        (solver, its, read_results(&out, "slab-1d"))
+    };
+    let (auto, its_auto, r_auto) = run(1, "auto", "solver.guess=auto");
+    let (line, its_line, r_line) = run(1, "line", "solver.guess=line");
+    let (_, its_two, r_two) = run(2, "auto2", "solver.guess=auto");
+    let fourier = number_before(&auto[auto.find("number").unwrap()..], ";");
+    assert!(fourier > 1.0, "{auto}");
+    assert!(
+        auto.contains("cg/jacobi") && auto.contains("Fischer guess"),
+        "{auto}"
+    );
+    assert!(!line.contains("Fischer"), "{line}");
+    assert!(
+        its_auto < 0.8 * its_line,
+        "Fischer {its_auto} against the line's {its_line} iterations"
+    );
+    assert!(its_two < 0.8 * its_line, "2 ranks: {its_two}");
+    let k = r_auto.times.len() - 1;
+    assert_eq!(r_auto.times[k], 20.0);
+    for (r, what) in [(&r_line, "line"), (&r_two, "2 ranks")] {
+        let d = rel_diff(&r_auto.temperature[k], &r.temperature[k]);
+        assert!(d < 1e-8, "{what}: {d:.2e}");
+    }
+}

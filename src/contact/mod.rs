@@ -201,6 +201,35 @@ pub fn local_conductance_block(pair: &ContactPair, rc: f64) -> [f64; 64] {
     b
 }
 
+/// Row `a` (0..8) of [`local_conductance_block`] alone, the same values:
+/// a target node's links to the contactor's nodes and their sum on the
+/// diagonal, or a contactor node's (the other entries are zero).
+pub fn local_conductance_row(pair: &ContactPair, rc: f64, a: usize) -> [f64; 8] {
+    let s = &pair.surface;
+    let (at, ac) = (s.s_target / (2.0 * rc), s.s_contactor / (2.0 * rc));
+    let link = |i: usize, j: usize| {
+        at * s.w_target[i] * s.v_contactor[j] + ac * s.v_target[i] * s.w_contactor[j]
+    };
+    let mut r = [0.0; 8];
+    for k in 0..4 {
+        let l = if a < 4 { link(a, k) } else { link(k, a - 4) };
+        let other = if a < 4 { 4 + k } else { k };
+        r[other] = -l;
+        r[a] += l;
+    }
+    r
+}
+
+/// Row `a` (0..8) of [`rank_one_conductance_block`] alone, the same values.
+pub fn rank_one_conductance_row(pair: &ContactPair, rc: f64, a: usize) -> [f64; 8] {
+    let g = pair.area() / rc;
+    let v = |i: usize| match i {
+        0..4 => pair.surface.w_target[i],
+        _ => -pair.surface.w_contactor[i - 4],
+    };
+    std::array::from_fn(|b| g * (v(a) * v(b)))
+}
+
 /// Seed 000 eqs 26–28 read literally: the heat g (w_conᵀT_con − w_tarᵀT_tar)
 /// (g = S/Rc) enters the target's nodes by w_tar and leaves the
 /// contactor's by w_con, so every node of a pair sees the pair's
@@ -230,6 +259,35 @@ pub fn rank_one_conductance_block(pair: &ContactPair, rc: f64) -> [f64; 64] {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn conductance_rows_are_the_blocks_rows_bitwise() {
+        let surface = ContactSurface {
+            s_target: 0.3,
+            s_contactor: 0.25,
+            w_target: [0.1, 0.2, 0.3, 0.4],
+            v_target: [0.4, 0.3, 0.2, 0.1],
+            w_contactor: [0.25, 0.25, 0.3, 0.2],
+            v_contactor: [0.15, 0.35, 0.3, 0.2],
+            ..Default::default()
+        };
+        let pair = ContactPair {
+            target: 0,
+            contactor: 1,
+            surface,
+        };
+        let (lb, rb) = (
+            local_conductance_block(&pair, 0.7),
+            rank_one_conductance_block(&pair, 0.7),
+        );
+        for a in 0..8 {
+            assert_eq!(local_conductance_row(&pair, 0.7, a), lb[8 * a..8 * a + 8]);
+            assert_eq!(
+                rank_one_conductance_row(&pair, 0.7, a),
+                rb[8 * a..8 * a + 8]
+            );
+        }
+    }
 
     #[test]
     fn conductance_block_conserves_and_is_psd() {

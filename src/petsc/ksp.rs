@@ -72,6 +72,13 @@ impl<'p> Ksp<'p> {
         petsc_call!(KSPSetInitialGuessNonzero(self.raw, to_bool(yes)))
     }
 
+    /// Start each solve from Fischer's projection of the right-hand side
+    /// onto the last `size` solutions (PETSc `KSPSetUseFischerGuess`, model
+    /// 1); PETSc empties the space when the operator changes.
+    pub fn set_fischer_guess(&mut self, size: usize) -> Result<()> {
+        petsc_call!(KSPSetUseFischerGuess(self.raw, 1, size as PetscInt))
+    }
+
     /// Stop on the natural norm (for CG: sqrt(rᵀ z), which it computes
     /// anyway, so an iteration needs one reduction less).
     pub fn set_natural_norm(&mut self) -> Result<()> {

@@ -746,6 +746,24 @@ pub struct SolverSpec {
     /// Any other PETSc options, without the leading dash: `{ ksp_monitor = "" }`.
     #[serde(default)]
     pub options: BTreeMap<String, String>,
+    /// Where an iterative step starts (default: chosen by the cell Fourier number).
+    #[serde(default)]
+    pub guess: GuessKind,
+}
+
+/// Where an iterative thermal step starts its Krylov iterations.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum GuessKind {
+    /// Fischer's projection for CG where the cell Fourier number exceeds 1,
+    /// else the line through the last two steps.
+    #[default]
+    Auto,
+    /// The line through the last two steps, 2Tⁿ − Tⁿ⁻¹.
+    Line,
+    /// Fischer's projection onto the last solutions (PETSc `KSPGUESSFISCHER`,
+    /// model 1, 10 vectors), with CG only.
+    Fischer,
 }
 
 /// Output settings.

@@ -9,7 +9,8 @@ use mpi::topology::SimpleCommunicator;
 
 use crate::contact::gap::GapLink;
 use crate::contact::{
-    local_conductance_block, rank_one_conductance_block, ContactOperator, ContactSet, DeltaT,
+    local_conductance_block, local_conductance_row, rank_one_conductance_block,
+    rank_one_conductance_row, ContactOperator, ContactSet, DeltaT,
 };
 use crate::model::Model;
 use crate::parallel::Part;
@@ -18,6 +19,7 @@ use crate::scenario::{CapacityKind, ConductionKind};
 
 use super::element;
 use super::exchange::{Law, Laws, Unit};
+use super::row_sum::{Incidence, Item, RowSum};
 
 /// The unconstrained operators of M Ṫ + K T = f.
 pub struct Operators<'p> {
@@ -363,9 +365,12 @@ pub fn assemble<'p>(
     contacts: &ContactSet,
 ) -> crate::error::Result<Operators<'p>> {
     let mode = model.contact.as_ref().map_or(DeltaT::Local, |c| c.delta_t);
-    let block = match model.contact.as_ref().map(|c| c.operator) {
-        Some(ContactOperator::RankOne) => rank_one_conductance_block,
-        _ => local_conductance_block,
+    let (block, block_row) = match model.contact.as_ref().map(|c| c.operator) {
+        Some(ContactOperator::RankOne) => (
+            rank_one_conductance_block as fn(&_, _) -> _,
+            rank_one_conductance_row as fn(&_, _, _) -> _,
+        ),
+        _ => (local_conductance_block as _, local_conductance_row as _),
     };
     let owned = part.owned_rows();
     let g = |l: u32| part.petsc[l as usize] as i32;
@@ -397,10 +402,28 @@ pub fn assemble<'p>(
             .collect();
         (cols, vals)
     };
+    // The element blocks and the local-ΔT pairs' blocks go to PETSc row
+    // by row (`row_sum`); the other terms are few and go block by block.
+    let pair_rows = mode == DeltaT::Local;
+    let pair_idx = |d: &crate::contact::PairDofs| d.petsc.map(|n| n as i32);
+    let inc = Incidence::new(
+        (0..part.num_elements()).map(elem_idx),
+        contacts.dofs[..if pair_rows { contacts.dofs.len() } else { 0 }]
+            .iter()
+            .map(pair_idx),
+    );
+    let mut row = RowSum::default();
     let pattern = |p: &mut crate::petsc::Pattern| -> Result<()> {
-        for e in 0..part.num_elements() {
-            let idx = elem_idx(e);
-            p.add(&idx, &idx)?;
+        for (r, items) in inc.rows() {
+            row.clear();
+            for item in items {
+                let cols = match item {
+                    Item::Element(e) => elem_idx(e).to_vec(),
+                    Item::Pair(k) => pair_idx(&contacts.dofs[k]).to_vec(),
+                };
+                cols.iter().for_each(|&c| row.add(c, 0.0, 0.0));
+            }
+            p.add(&[r], row.sorted().0)?;
         }
         particles.pattern(p)?;
         for (f, _, _) in &part.bc.convection {
@@ -411,26 +434,11 @@ pub fn assemble<'p>(
             let idx = gap_rows(l);
             p.add(&idx, &idx)?;
         }
-        match mode {
-            DeltaT::Local => {
-                // The target's and the contactor's own 4 × 4 blocks are
-                // their elements' (above, on the rank of each): a pair adds
-                // its two cross blocks (half the entries of its 8 × 8).
-                for d in &contacts.dofs {
-                    let idx = d.petsc.map(|n| n as i32);
-                    let (target, contactor) = idx.split_at(4);
-                    p.add(target, contactor)?;
-                    p.add(contactor, target)?;
-                }
-            }
-            DeltaT::Average => {
-                for (&(a, b), r) in &rows {
-                    let (cols, _) = average_cols(a, b);
-                    for &n in r.keys() {
-                        p.add(&[n as i32], &cols)?;
-                        p.add(&cols, &[n as i32])?;
-                    }
-                }
+        for (&(a, b), r) in &rows {
+            let (cols, _) = average_cols(a, b);
+            for &n in r.keys() {
+                p.add(&[n as i32], &cols)?;
+                p.add(&cols, &[n as i32])?;
             }
         }
         Ok(())
@@ -442,21 +450,24 @@ pub fn assemble<'p>(
     load_flux.set(0.0)?;
     load_convection.set(0.0)?;
 
-    for e in 0..part.num_elements() {
+    // Seed 000 eqs 14–16: the element conductivity and capacity blocks;
+    // each row's sums go to PETSc with the local pairs' blocks (below).
+    let element_blocks = |e: usize| {
         let mat = &model.materials[part.elem_material[e] as usize];
         let geo = crate::geometry::tet4_geometry(&part.mesh.element_coords(e));
-        let idx = elem_idx(e);
         let k = element::conductivity(&geo, mat.conductivity);
         let rho_c = mat.density * mat.specific_heat;
         let m = match model.thermal.capacity {
             CapacityKind::Consistent => element::capacity_consistent(&geo, rho_c),
             CapacityKind::Lumped => element::capacity_lumped(&geo, rho_c),
         };
-        stiffness.add_values(&idx, &idx, &k)?;
-        capacity.add_values(&idx, &idx, &m)?;
+        (geo, k, m)
+    };
+    for e in 0..part.num_elements() {
         let q = model.thermal.source[part.mesh.body[e] as usize];
         if q != 0.0 {
-            load_flux.set_values(&idx, &element::source_load(&geo, q), true)?;
+            let geo = element_blocks(e).0;
+            load_flux.set_values(&elem_idx(e), &element::source_load(&geo, q), true)?;
         }
     }
     particles.add(&mut capacity, &mut stiffness, &mut load_flux)?;
@@ -524,30 +535,53 @@ pub fn assemble<'p>(
         }
     }
     // Contact conductance (the capacity holds zeros there: one pattern).
-    match mode {
-        DeltaT::Local => {
-            for (p, d) in contacts.local.iter().zip(&contacts.dofs) {
-                if let Some(law) = pair_law(model, d) {
-                    units.push(pair_unit(p, d, law, block));
-                    continue;
-                }
-                let rc = pair_resistance(model, d, 0.0);
-                if !rc.is_finite() {
-                    continue;
-                }
-                let idx = d.petsc.map(|n| n as i32);
-                stiffness.add_values(&idx, &idx, &block(p, rc))?;
+    // Per local-ΔT pair its resistance, infinite where it adds no block.
+    let mut rcs = Vec::new();
+    if pair_rows {
+        for (p, d) in contacts.local.iter().zip(&contacts.dofs) {
+            if let Some(law) = pair_law(model, d) {
+                units.push(pair_unit(p, d, law, block));
+                rcs.push(f64::INFINITY);
+            } else {
+                rcs.push(pair_resistance(model, d, 0.0));
             }
         }
-        DeltaT::Average => {
-            // Row i: g v_i (a_A − a_B), a_X = node capacity / body capacity.
-            for (&(a, b), r) in &rows {
-                let (cols, a_vals) = average_cols(a, b);
-                for (&n, &w) in r {
-                    let vals: Vec<f64> = a_vals.iter().map(|x| w * x).collect();
-                    stiffness.add_values(&[n as i32], &cols, &vals)?;
+    }
+    for (r, items) in inc.rows() {
+        row.clear();
+        for item in items {
+            match item {
+                Item::Element(e) => {
+                    let (_, k, m) = element_blocks(e);
+                    let idx = elem_idx(e);
+                    for a in (0..4).filter(|&a| idx[a] == r) {
+                        for (b, &c) in idx.iter().enumerate() {
+                            row.add(c, k[4 * a + b], m[4 * a + b]);
+                        }
+                    }
                 }
+                Item::Pair(k) if rcs[k].is_finite() => {
+                    let idx = pair_idx(&contacts.dofs[k]);
+                    for a in (0..8).filter(|&a| idx[a] == r) {
+                        let v = block_row(&contacts.local[k], rcs[k], a);
+                        for (&c, &v) in idx.iter().zip(&v).filter(|(_, &v)| v != 0.0) {
+                            row.add(c, v, 0.0);
+                        }
+                    }
+                }
+                Item::Pair(_) => {}
             }
+        }
+        let (cols, k, m) = row.sorted();
+        stiffness.add_values(&[r], cols, k)?;
+        capacity.add_values(&[r], cols, m)?;
+    }
+    // Average ΔT, row i: g v_i (a_A − a_B), a_X = node capacity / body capacity.
+    for (&(a, b), r) in &rows {
+        let (cols, a_vals) = average_cols(a, b);
+        for (&n, &w) in r {
+            let vals: Vec<f64> = a_vals.iter().map(|x| w * x).collect();
+            stiffness.add_values(&[n as i32], &cols, &vals)?;
         }
     }
     capacity.assemble()?;

@@ -15,6 +15,7 @@ pub mod node_rows;
 pub mod nonlinear;
 pub mod particles;
 pub mod radiation;
+mod row_sum;
 pub mod solver_choice;
 pub mod system;
 

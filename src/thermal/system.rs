@@ -36,6 +36,7 @@ use mpi::topology::SimpleCommunicator;
 use super::assembly::{assemble, Operators};
 use super::exchange::Exchange;
 use super::nonlinear::{radiated, GapRadiation, RadiatingStep};
+use super::solver_choice::initial_guess;
 #[path = "sphere_source.rs"]
 mod sphere_source;
 
@@ -463,11 +464,9 @@ impl<'p> ThermalSystem<'p> {
                 if kt == "cg" && pt == "jacobi" && !petsc.has_option("ksp_norm_type")? {
                     ksp.set_natural_norm()?;
                 }
-                // Warm start from the previous step (a direct solve ignores it).
-                if kt != "preonly" {
-                    ksp.set_initial_guess_nonzero(true)?;
-                    warm_start = true;
-                }
+                // Where an iterative solve starts (a direct one ignores it).
+                let (w, guess) = initial_guess(petsc, &mut ksp, &kt, fourier, solver.guess)?;
+                warm_start = w;
                 ksp.set_up()?;
                 let rhs = t.duplicate()?;
                 let b_diag = if theta == 1.0 && model.thermal.capacity == CapacityKind::Lumped {
@@ -491,7 +490,7 @@ impl<'p> ThermalSystem<'p> {
                         Some(o) => {
                             format!("{kt}/{pt} ({o} ordering; cell Fourier number {fourier:.3})")
                         }
-                        None => format!("{kt}/{pt} (cell Fourier number {fourier:.3})"),
+                        None => format!("{kt}/{pt} (cell Fourier number {fourier:.3}{guess})"),
                     },
                     a0,
                 )

@@ -79,6 +79,17 @@ impl<'p> Ksp<'p> {
         petsc_call!(KSPSetUseFischerGuess(self.raw, 1, size as PetscInt))
     }
 
+    /// Collective. Put `x` into the space of [`Ksp::set_fischer_guess`]
+    /// (empty until a solve, whose start would be zero): the next solve
+    /// then starts from the multiple of `x` that best fits its right-hand
+    /// side. After [`Ksp::set_up`], with the operator that will be solved.
+    pub fn seed_fischer_guess(&mut self, x: &Vector) -> Result<()> {
+        let mut g: ffi::KSPGuess = std::ptr::null_mut();
+        petsc_call!(KSPGetGuess(self.raw, &mut g))?;
+        petsc_call!(KSPGuessSetUp(g))?;
+        petsc_call!(KSPGuessUpdate(g, x.as_raw(), x.as_raw()))
+    }
+
     /// Stop on the natural norm (for CG: sqrt(rᵀ z), which it computes
     /// anyway, so an iteration needs one reduction less).
     pub fn set_natural_norm(&mut self) -> Result<()> {

@@ -163,21 +163,23 @@ const FISCHER_VECTORS: usize = 10;
 /// few (the seed's slab, 2.7 a step). A guess from the options database
 /// (`-ksp_guess_type`, `-ksp_fischer_guess`) wins. Returns whether the step
 /// puts its own start into the solution vector (false: a direct solve,
-/// which ignores it, or a PETSc guess, which replaces it) and the label
-/// for the run summary.
+/// which ignores it, or a PETSc guess, which replaces it), whether
+/// Fischer's space is to be seeded with Tⁿ before the first solve (else
+/// that solve, and the first after every rebuild, would start from zero:
+/// [`Ksp::seed_fischer_guess`]), and the label for the run summary.
 pub(super) fn initial_guess(
     petsc: &Petsc,
     ksp: &mut Ksp,
     kt: &str,
     fourier: f64,
     wanted: GuessKind,
-) -> Result<(bool, &'static str)> {
+) -> Result<(bool, bool, &'static str)> {
     if kt == "preonly" {
-        return Ok((false, ""));
+        return Ok((false, false, ""));
     }
     ksp.set_initial_guess_nonzero(true)?;
     if petsc.has_option("ksp_guess_type")? || petsc.has_option("ksp_fischer_guess")? {
-        return Ok((false, "; guess from the options"));
+        return Ok((false, false, "; guess from the options"));
     }
     let fischer = match wanted {
         GuessKind::Auto => kt == "cg" && fourier > 1.0,
@@ -186,9 +188,9 @@ pub(super) fn initial_guess(
     };
     if fischer {
         ksp.set_fischer_guess(FISCHER_VECTORS)?;
-        return Ok((false, "; Fischer guess"));
+        return Ok((false, true, "; Fischer guess"));
     }
-    Ok((true, ""))
+    Ok((true, false, ""))
 }
 
 /// Collective. The largest cell Fourier number θΔt K_ii / C_ii over the

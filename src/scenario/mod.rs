@@ -6,6 +6,7 @@
 
 mod overrides;
 mod schema;
+mod solver;
 mod spheres;
 mod validate;
 
@@ -13,6 +14,7 @@ use std::path::{Path, PathBuf};
 
 pub use overrides::apply_override;
 pub use schema::*;
+pub use solver::{GuessKind, SolverSpec};
 pub use spheres::{SphereBox, SphereSpec};
 
 /// A scenario problem: which file, which key, what is wrong.

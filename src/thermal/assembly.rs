@@ -417,11 +417,18 @@ pub fn assemble<'p>(
         for (r, items) in inc.rows() {
             row.clear();
             for item in items {
-                let cols = match item {
-                    Item::Element(e) => elem_idx(e).to_vec(),
-                    Item::Pair(k) => pair_idx(&contacts.dofs[k]).to_vec(),
+                let mut cols = [0; 8];
+                let n = match item {
+                    Item::Element(e) => {
+                        cols[..4].copy_from_slice(&elem_idx(e));
+                        4
+                    }
+                    Item::Pair(k) => {
+                        cols = pair_idx(&contacts.dofs[k]);
+                        8
+                    }
                 };
-                cols.iter().for_each(|&c| row.add(c, 0.0, 0.0));
+                cols[..n].iter().for_each(|&c| row.add(c, 0.0, 0.0));
             }
             p.add(&[r], row.sorted().0)?;
         }

@@ -495,6 +495,59 @@ impl LinearizedOverlap {
         }
     }
 
+    /// Floats in [`Self::to_record`].
+    pub const RECORD: usize = 65;
+
+    /// The model as floats, to send to another rank.
+    pub fn to_record(&self) -> [f64; Self::RECORD] {
+        let s = &self.state;
+        let mut r = [0.0; Self::RECORD];
+        let parts: [&[f64]; 7] = [
+            &[s.volume, s.g_len, self.tol2],
+            s.grad.as_flattened(),
+            &s.normal,
+            &s.point,
+            &s.weights_a,
+            &s.weights_b,
+            self.x0.as_flattened(),
+        ];
+        let mut at = 0;
+        for p in parts {
+            r[at..at + p.len()].copy_from_slice(p);
+            at += p.len();
+        }
+        r
+    }
+
+    /// The model from [`Self::to_record`]'s floats.
+    pub fn from_record(r: &[f64]) -> Self {
+        let mut at = 3;
+        let mut take = |n: usize| {
+            let x = &r[at..at + n];
+            at += n;
+            x
+        };
+        let mut grad = [[0.0; 3]; 8];
+        grad.as_flattened_mut().copy_from_slice(take(24));
+        let (normal, point) = (take(3).try_into(), take(3).try_into());
+        let (weights_a, weights_b) = (take(4).try_into(), take(4).try_into());
+        let mut x0 = [[0.0; 3]; 8];
+        x0.as_flattened_mut().copy_from_slice(take(24));
+        LinearizedOverlap {
+            state: OverlapState {
+                volume: r[0],
+                grad,
+                normal: normal.expect("3 floats"),
+                g_len: r[1],
+                point: point.expect("3 floats"),
+                weights_a: weights_a.expect("4 floats"),
+                weights_b: weights_b.expect("4 floats"),
+            },
+            x0,
+            tol2: r[2],
+        }
+    }
+
     /// The linearised overlap volume at corners `xa`, `xb`, or `None`
     /// when a node has moved beyond the tolerance relative to the pair's
     /// mean displacement, or the modelled volume is no longer positive:
@@ -941,6 +994,20 @@ mod tests {
                 worst_f < f_bound,
                 "tolerance {tolerance}: force error {worst_f}"
             );
+        }
+    }
+
+    /// A model sent as floats to another rank comes back bitwise.
+    #[test]
+    fn linearized_overlap_round_trips_through_its_record() {
+        let mut rng = Rng(17);
+        for _ in 0..20 {
+            let (a, b) = overlapping_pair(&mut rng);
+            let s = overlap_state((&a, &planes(&a)), (&b, &planes(&b))).unwrap();
+            let lin = LinearizedOverlap::new(s, &a, &b, 0.1);
+            let back = LinearizedOverlap::from_record(&lin.to_record());
+            assert_eq!(back, lin);
+            assert!(back.tol2 > 0.0 && back.state.volume > 0.0);
         }
     }
 

@@ -16,7 +16,7 @@ use nalgebra::Matrix3;
 
 use super::domain::PairTet;
 use super::{ExplicitDomain, NONE};
-use crate::contact::penalty::{pair_stiffness, LinearizedOverlap};
+use crate::contact::penalty::pair_stiffness;
 use crate::contact::{
     tet_pair_contact, ContactPair, ContactSurface, OwnAndGhosts, PairDofs, SearchOptions, TetFaces,
 };
@@ -182,14 +182,6 @@ impl ExplicitDomain {
         self.witness = Vec::new();
     }
 
-    /// Room for the linearised overlaps of the coming substeps: a quarter
-    /// more than the last detection's pairs used (about as many pairs
-    /// touch from one detection to the next), so the array is not
-    /// doubled, old and new at once, while the substeps fill it.
-    fn linearized_room(&self, used_before: usize) -> Vec<LinearizedOverlap> {
-        Vec::with_capacity(used_before + used_before / 4)
-    }
-
     /// Collective. Rebuild the contact candidates from the one contact
     /// search over this rank's tets and the ghost copies of the tets of
     /// other ranks within the margin, the contact ghosts and the halo;
@@ -198,7 +190,7 @@ impl ExplicitDomain {
         self.flush_friction();
         self.cracks_marked = false;
         let clock = std::time::Instant::now();
-        let linearized_before = self.linearized.len();
+        let carried = self.contacts_before_detection(comm.size() as usize);
         let springs = self.has_springs().then(|| self.springs_before_detection());
         let planes_before = self.pair_planes.len();
         self.release_pair_arrays();
@@ -246,13 +238,12 @@ impl ExplicitDomain {
             self.install_none();
         }
         self.refresh_local_arrays();
-        // Fresh candidates: planes rebuilt on demand, no linearisations.
+        // Fresh candidates: planes rebuilt on demand; the touching pairs
+        // keep their linearised overlaps (`carry`).
         let nt = self.pair_tets.len();
         self.planes_of = vec![super::NONE; nt];
         self.pair_planes = Vec::with_capacity(planes_before + planes_before / 4);
-        self.lin_of = vec![super::NONE; self.candidates.len()];
-        self.linearized = self.linearized_room(linearized_before);
-        self.witness = vec![super::substep::UNSEEN; self.candidates.len()];
+        self.contacts_after_detection(comm, carried);
         if let Some(held) = springs {
             self.springs_after_detection(comm, held);
         }
@@ -660,6 +651,10 @@ impl ExplicitDomain {
             let (ta, tb) = (one(a, self), one(b, self));
             thermal_only.push((ta, tb));
         }
+        // In key order, so each node's pair forces arrive in the order
+        // they are summed in (`pair_sum`), and the state of the pairs
+        // merges across detections (`carry`).
+        super::carry::in_key_order(&mut candidates);
         self.counters.candidates += candidates.len() as u64;
         self.candidates = candidates;
         self.pair_tets = pt.tets;

@@ -60,9 +60,11 @@
 
 mod balance;
 mod candidates;
+mod carry;
 mod domain;
 mod force_sum;
 mod gaps;
+mod handover;
 mod joints;
 mod pair_sum;
 mod particles;

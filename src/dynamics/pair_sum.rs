@@ -61,6 +61,12 @@ pub(super) struct PairForces {
     /// each node's bucket.
     order: Vec<u32>,
     end: Vec<u32>,
+    /// Whether `route` met the touching pairs in ascending key order (the
+    /// candidates are sorted by key at each detection), and how many
+    /// entries it made: then a bucket needs sorting only where received
+    /// entries follow the rank's own.
+    own_sorted: bool,
+    own_entries: usize,
     /// Per neighbour: contributions to its nodes, and from it to ours.
     pub(super) send: Vec<Vec<f64>>,
     pub(super) recv: Vec<Vec<f64>>,
@@ -81,6 +87,8 @@ impl PairForces {
         self.active.clear();
         self.forces.clear();
         self.entries.clear();
+        self.own_sorted = false;
+        self.own_entries = 0;
     }
 
     /// Pair `j` touches, with these forces on a's and b's nodes.
@@ -100,8 +108,14 @@ impl PairForces {
         self.send.resize(nn, Vec::new());
         self.recv.resize(nn, Vec::new());
         self.send.iter_mut().for_each(Vec::clear);
+        self.own_sorted = true;
+        let mut last = None;
         for (a, &j) in self.active.iter().enumerate() {
             let (ls, key) = nodes(j as usize);
+            if last.is_some_and(|k| k >= key) {
+                self.own_sorted = false;
+            }
+            last = Some(key);
             for (k, &l) in ls.iter().enumerate() {
                 let at = 8 * a + k;
                 if (l as usize) < routes.n_owned {
@@ -129,6 +143,7 @@ impl PairForces {
                 }
             }
         }
+        self.own_entries = self.entries.len();
     }
 
     /// The contributions received from the neighbours (in `recv`), to
@@ -154,8 +169,8 @@ impl PairForces {
         }
     }
 
-    /// Bucket the entries by node (a counting sort), each bucket in key
-    /// order.
+    /// Bucket the entries by node (a counting sort, which keeps the
+    /// entries' order), each bucket in key order.
     pub(super) fn order(&mut self, n_owned: usize) {
         self.end.clear();
         self.end.resize(n_owned, 0);
@@ -178,10 +193,13 @@ impl PairForces {
         }
         // Now end[i] is where node i's bucket ends.
         let entries = &self.entries;
+        let (sorted, own) = (self.own_sorted, self.own_entries as u32);
         let mut begin = 0usize;
         for &end in &self.end {
             let bucket = &mut self.order[begin..end as usize];
-            if bucket.len() > 1 {
+            // Own entries in key order, and none received after them.
+            let in_order = sorted && bucket.last().is_none_or(|&i| i < own);
+            if bucket.len() > 1 && !in_order {
                 bucket.sort_by_key(|&i| entries[i as usize].key);
             }
             begin = end as usize;

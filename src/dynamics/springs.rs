@@ -7,35 +7,21 @@
 //! one rank bitwise.
 //!
 //! A detection keeps F_e of the pairs this rank evaluated before and still
-//! evaluates. The others meet at a home rank fixed by the pair's global
-//! tet numbers: each rank sends there the springs it no longer evaluates
-//! (`released`) and the pairs it now evaluates without a spring
-//! (`wanted`); the home rank returns each wanted pair's spring, and drops
-//! released springs no rank wants (the pair is no longer a candidate, as
-//! on one rank). After a repartition or a restart every spring starts as
+//! evaluates. The others are handed over (`handover`): the pairs this rank
+//! now evaluates without a spring ask for theirs, and released springs no
+//! rank wants are dropped (the pair is no longer a candidate, as on one
+//! rank). After a repartition or a restart every spring starts as
 //! released ([`ExplicitDomain::set_spring_pool`]).
 
 use std::collections::HashMap;
 
 use mpi::topology::SimpleCommunicator;
-use mpi::traits::*;
 
+use super::handover::{hand_over, Records};
 use super::ExplicitDomain;
 use crate::contact::penalty::Spring;
-use crate::parallel::exchange::all_to_all;
 
-/// A pair by the global numbers of its two tets.
-pub type PairKey = (u32, u32);
-
-/// Floats per released spring (a, b, F_e) and per wanted pair (a, b).
-const RELEASED: usize = 6;
-const WANTED: usize = 2;
-
-/// The home rank of a pair among `size`.
-fn home(key: PairKey, size: usize) -> usize {
-    let h = u64::from(key.0).wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ u64::from(key.1);
-    (h % size as u64) as usize
-}
+pub use super::handover::PairKey;
 
 impl ExplicitDomain {
     /// Whether pairs carry tangential springs.
@@ -79,67 +65,26 @@ impl ExplicitDomain {
                 None => wanted.push(j),
             }
         }
-        let size = comm.size() as usize;
-        if size == 1 {
-            self.drop_springs(held.into_values());
-            return;
+        let mut released = Records::default();
+        for (key, x) in held {
+            released.push(key, &x);
         }
-        // Released springs first, then the wanted pairs, per home rank.
-        let mut released: Vec<Vec<f64>> = vec![Vec::new(); size];
-        let mut released_keys: Vec<(PairKey, Spring)> = held.into_iter().collect();
-        released_keys.sort_unstable_by_key(|e| e.0);
-        for ((a, b), x) in released_keys {
-            let r = &mut released[home((a, b), size)];
-            r.extend_from_slice(&[f64::from(a), f64::from(b), x[0], x[1], x[2], x[3]]);
-        }
-        let mut asks: Vec<Vec<f64>> = vec![Vec::new(); size];
-        for &j in &wanted {
-            let c = &self.candidates[j];
-            asks[home((c.a, c.b), size)].extend_from_slice(&[f64::from(c.a), f64::from(c.b)]);
-        }
-        let send: Vec<Vec<f64>> = released
-            .into_iter()
-            .zip(asks)
-            .map(|(r, a)| {
-                let mut m = Vec::with_capacity(1 + r.len() + a.len());
-                m.push((r.len() / RELEASED) as f64);
-                m.extend_from_slice(&r);
-                m.extend_from_slice(&a);
-                m
-            })
-            .collect();
-        let got = all_to_all(comm, send);
-        // At home: the released springs, then each asker's answers in the
-        // order of its asks (zero: no rank held one).
-        let mut pool: HashMap<PairKey, Spring> = HashMap::new();
-        let mut asked: Vec<&[f64]> = Vec::with_capacity(size);
-        for m in &got {
-            let nr = m[0] as usize;
-            let (r, a) = m[1..].split_at(nr * RELEASED);
-            for e in r.chunks_exact(RELEASED) {
-                pool.insert((e[0] as u32, e[1] as u32), [e[2], e[3], e[4], e[5]]);
-            }
-            asked.push(a);
-        }
-        let answers: Vec<Vec<f64>> = asked
+        let asks: Vec<PairKey> = wanted
             .iter()
-            .map(|a| {
-                a.chunks_exact(WANTED)
-                    .flat_map(|k| pool.remove(&(k[0] as u32, k[1] as u32)).unwrap_or([0.0; 4]))
-                    .collect()
-            })
+            .map(|&j| (self.candidates[j].a, self.candidates[j].b))
             .collect();
-        // Springs no rank wants: their pairs are no longer candidates.
-        self.drop_springs(pool.into_values());
-        let back = all_to_all(comm, answers);
-        let mut at = vec![0usize; size];
-        for &j in &wanted {
-            let c = &self.candidates[j];
-            let r = home((c.a, c.b), size);
-            let x = &back[r][4 * at[r]..4 * at[r] + 4];
-            at[r] += 1;
+        let got = hand_over(comm, 4, released, &asks);
+        for (k, &j) in wanted.iter().enumerate() {
+            let x = &got.data[4 * k..4 * k + 4];
             self.springs[j] = [x[0], x[1], x[2], x[3]];
         }
+        // Springs no rank wants: their pairs are no longer candidates.
+        self.drop_springs(
+            got.unclaimed
+                .data
+                .chunks_exact(4)
+                .map(|x| [x[0], x[1], x[2], x[3]]),
+        );
     }
 
     /// Zero the springs of the candidates that did not touch at substep

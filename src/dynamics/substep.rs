@@ -16,14 +16,14 @@ use crate::contact::penalty::{
     overlap_state, penalty_forces_with, LinearizedOverlap, PenaltyParams,
 };
 use crate::error::{Error, Result};
-use crate::geometry::{separated_along, separating_axis, tet_bounds, TetPlanes};
+use crate::geometry::{pair_size2, separated_along, separating_axis, tet_bounds, TetPlanes};
 use crate::mechanics::explicit::{element_forces, update_nodes_damped, NodeUpdate, ThermalLoad};
 
 /// A candidate's witness before its first evaluation after a detection.
 pub(super) const UNSEEN: u8 = 0;
 /// A candidate's witness when no axis separated its tets at its last
 /// evaluation (they overlapped or touched): the clipping comes first.
-const OVERLAPPED: u8 = u8::MAX;
+pub(super) const OVERLAPPED: u8 = u8::MAX;
 
 /// Corners of a tet and its bounding box (low, high corner).
 pub(super) type TetGeometry = ([[f64; 3]; 4], [f64; 3], [f64; 3]);
@@ -32,13 +32,15 @@ impl ExplicitDomain {
     /// Collective. Advance by `n` substeps.
     pub fn advance(&mut self, comm: &SimpleCommunicator, n: u64) -> Result<()> {
         // Linearised pairs depend on when their models were made: starting
-        // every step with fresh candidates (and models) makes a restart,
+        // every step with fresh candidates and no models makes a restart,
         // which detects afresh, repeat the run bitwise.
         // (A detection at these very positions, by a thermal detection or
-        // a restore, already is that fresh start.)
-        if self.linear_tolerance > 0.0 && n > 0 && self.detected_at != Some(self.counters.substeps)
-        {
-            self.redetect = true;
+        // a restore, already gives those candidates.)
+        if self.linear_tolerance > 0.0 && n > 0 {
+            if self.detected_at != Some(self.counters.substeps) {
+                self.redetect = true;
+            }
+            self.drop_models();
         }
         let sent_before = crate::parallel::bytes_sent();
         for i in 0..n {
@@ -122,7 +124,12 @@ impl ExplicitDomain {
                 // axis that separated them when they were last evaluated.
                 if lin_volume.is_none()
                     && ((0..3).any(|d| lo_a[d] > hi_b[d] || lo_b[d] > hi_a[d])
-                        || separated_along(xa, xb, witness[j]))
+                        || separated_along(
+                            xa,
+                            xb,
+                            witness[j],
+                            pair_size2((*lo_a, *hi_a), (*lo_b, *hi_b)),
+                        ))
                 {
                     lin_of[j] = NONE;
                     continue;

@@ -16,7 +16,7 @@ pub use clip::{
     TetShape,
 };
 pub use overlap::{
-    face_planes, planes_within, separated_along, separating_axis, tet_tet_intersection,
+    face_planes, pair_size2, planes_within, separated_along, separating_axis, tet_tet_intersection,
     tet_tet_intersection_with, tets_within, FacePatch, Intersection, TetPlanes,
 };
 pub use tet4::{tet4_geometry, Tet4Geometry};

@@ -911,12 +911,34 @@ fn interval(dir: [f64; 3], t: &[[f64; 3]; 4]) -> [f64; 2] {
 /// any contact scale.
 const WITNESS_GAP: f64 = 1e-9;
 
-/// Whether tets a and b are apart by more than [`WITNESS_GAP`] along the
-/// axis coded `axis` (see [`separating_axis`]; 0 is no axis: false).
-/// Needs no planes: a face normal or an edge cross product from the
-/// corners, then 8 projections.
+/// The squared diagonal of the box around tets a and b (boxes given as
+/// low and high corners): the size [`separated_along`] scales its
+/// clearance with.
 #[inline]
-pub fn separated_along(a: &[[f64; 3]; 4], b: &[[f64; 3]; 4], axis: u8) -> bool {
+pub fn pair_size2(a: ([f64; 3], [f64; 3]), b: ([f64; 3], [f64; 3])) -> f64 {
+    (0..3)
+        .map(|d| {
+            let w = a.1[d].max(b.1[d]) - a.0[d].min(b.0[d]);
+            w * w
+        })
+        .sum()
+}
+
+/// Whether the projections of a and b on `dir` are apart by more than
+/// [`WITNESS_GAP`] of the pair's size.
+#[inline]
+fn apart_on(dir: [f64; 3], a: &[[f64; 3]; 4], b: &[[f64; 3]; 4], size2: f64) -> bool {
+    let ([amin, amax], [bmin, bmax]) = (interval(dir, a), interval(dir, b));
+    let gap = WITNESS_GAP * (size2 * dot(dir, dir)).sqrt();
+    amax + gap < bmin || bmax + gap < amin
+}
+
+/// Whether tets a and b are apart by more than [`WITNESS_GAP`] along the
+/// axis coded `axis` (see [`separating_axis`]; 0 is no axis: false);
+/// `size2` from [`pair_size2`]. Needs no planes: a face normal or an edge
+/// cross product from the corners, then 8 projections.
+#[inline]
+pub fn separated_along(a: &[[f64; 3]; 4], b: &[[f64; 3]; 4], axis: u8, size2: f64) -> bool {
     let axis = axis as usize;
     let dir = match axis {
         1..=8 => {
@@ -934,14 +956,7 @@ pub fn separated_along(a: &[[f64; 3]; 4], b: &[[f64; 3]; 4], axis: u8) -> bool {
         }
         _ => return false,
     };
-    let ([amin, amax], [bmin, bmax]) = (interval(dir, a), interval(dir, b));
-    let size2 = a
-        .iter()
-        .chain(b)
-        .map(|p| dot(sub(*p, a[0]), sub(*p, a[0])))
-        .fold(0.0, f64::max);
-    let gap = WITNESS_GAP * (size2 * dot(dir, dir)).sqrt();
-    amax + gap < bmin || bmax + gap < amin
+    apart_on(dir, a, b, size2)
 }
 
 /// A separating axis of tets a and b with clearance (see
@@ -949,9 +964,27 @@ pub fn separated_along(a: &[[f64; 3]; 4], b: &[[f64; 3]; 4], axis: u8) -> bool {
 /// for those of b, 9 + 6 i + j for edge i of a crossed with edge j of b;
 /// `None` when they overlap or touch. Kept per contact candidate, it
 /// rules the pair out in a few operations while it still separates
-/// (temporal coherence), instead of a clipping each substep.
+/// (temporal coherence), instead of a clipping each substep. The axes are
+/// those [`separated_along`] builds, each edge computed once.
 pub fn separating_axis(a: &[[f64; 3]; 4], b: &[[f64; 3]; 4]) -> Option<u8> {
-    (1..=44u8).find(|&axis| separated_along(a, b, axis))
+    let size2 = pair_size2(super::tet_bounds(a), super::tet_bounds(b));
+    for (base, p) in [(1u8, a), (5, b)] {
+        for (f, [i, j, k]) in TET_FACES.iter().enumerate() {
+            if apart_on(cross(sub(p[*j], p[*i]), sub(p[*k], p[*i])), a, b, size2) {
+                return Some(base + f as u8);
+            }
+        }
+    }
+    let edges = |p: &[[f64; 3]; 4]| TET_EDGES.map(|(i, j)| sub(p[j], p[i]));
+    let (ea, eb) = (edges(a), edges(b));
+    for (i, u) in ea.iter().enumerate() {
+        for (j, w) in eb.iter().enumerate() {
+            if apart_on(cross(*u, *w), a, b, size2) {
+                return Some(9 + (6 * i + j) as u8);
+            }
+        }
+    }
+    None
 }
 
 #[cfg(test)]
@@ -973,7 +1006,11 @@ mod within_tests {
             match separating_axis(&a, &b) {
                 Some(axis) => {
                     assert_eq!(v, 0.0, "axis {axis} for an overlap of {v}");
-                    assert!(separated_along(&a, &b, axis));
+                    let size2 = pair_size2(
+                        crate::geometry::tet_bounds(&a),
+                        crate::geometry::tet_bounds(&b),
+                    );
+                    assert!(separated_along(&a, &b, axis, size2));
                     found += 1;
                     if axis >= 9 {
                         edge_axes += 1;
@@ -999,7 +1036,7 @@ mod within_tests {
         assert_eq!(separating_axis(&a, &touching), None);
         let apart = tests::shift(&a, [0.0, 0.0, -1.0 - 1e-6]);
         assert!(separating_axis(&a, &apart).is_some());
-        assert!(!separated_along(&a, &apart, 0));
+        assert!(!separated_along(&a, &apart, 0, 1.0));
     }
 
     #[test]

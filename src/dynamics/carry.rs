@@ -15,6 +15,7 @@
 //! the start of every step (`ExplicitDomain::advance`), where a restart
 //! starts.
 
+use mpi::collective::SystemOperation;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
 
@@ -45,17 +46,24 @@ pub(super) fn in_key_order(candidates: &mut Vec<Candidate>) {
         .enumerate()
         .map(|(i, c)| (pair_key(c), i as u32))
         .collect();
+    // Digits of 11 bits (a table that stays in the L1 cache), up to the
+    // highest bit in which the keys differ.
+    const BITS: u32 = 11;
+    let (lo, hi) = keys
+        .iter()
+        .fold((u64::MAX, 0), |(lo, hi), &(k, _)| (lo.min(k), hi.max(k)));
+    let top = 64 - (lo ^ hi).leading_zeros();
     let mut buf = vec![(0u64, 0u32); keys.len()];
-    for shift in (0..64).step_by(8) {
-        let digit = |k: u64| ((k >> shift) & 0xff) as usize;
-        let mut start = [0usize; 257];
+    for shift in (0..top).step_by(BITS as usize) {
+        let digit = |k: u64| ((k >> shift) & ((1 << BITS) - 1)) as usize;
+        let mut start = [0usize; (1 << BITS) + 1];
         for &(k, _) in &keys {
             start[digit(k) + 1] += 1;
         }
         if start.contains(&keys.len()) {
             continue; // every key has this digit
         }
-        for d in 0..256 {
+        for d in 0..1 << BITS {
             start[d + 1] += start[d];
         }
         for &e in &keys {
@@ -160,7 +168,14 @@ impl ExplicitDomain {
                 }
             }
         }
+        // Models can change rank only if some rank releases one (not after
+        // a step start, which drops them, nor at the first detection).
+        let mine = touched.iter().zip(&kept).any(|(e, k)| !*k && e.1 != NONE);
+        let mut any = false;
         if several {
+            comm.all_reduce_into(&mine, &mut any, SystemOperation::logical_or());
+        }
+        if any {
             drop(evaluated);
             // The models of pairs this rank no longer evaluates, by key.
             let mut released = Records::default();

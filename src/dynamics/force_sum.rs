@@ -144,7 +144,6 @@ impl ExplicitDomain {
     /// load. The pair forces must have been routed and received.
     pub(super) fn sum_owned_forces(&mut self) {
         let no = self.n_owned;
-        self.pair_forces.order(no);
         for i in 0..no {
             let mut f = Vector3::zeros();
             for &s in
@@ -152,8 +151,11 @@ impl ExplicitDomain {
             {
                 f += self.contrib[s as usize];
             }
-            self.pair_forces.add_to(i, &mut f);
-            self.f[i] = f + self.ext[i];
+            self.f[i] = f;
+        }
+        self.pair_forces.add_all(&mut self.f[..no]);
+        for (f, e) in self.f[..no].iter_mut().zip(&self.ext[..no]) {
+            *f += *e;
         }
     }
 }

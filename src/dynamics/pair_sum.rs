@@ -67,6 +67,9 @@ pub(super) struct PairForces {
     /// entries follow the rank's own.
     own_sorted: bool,
     own_entries: usize,
+    /// Per owned node, whether it received entries this substep (all
+    /// false between calls of [`Self::add_all`]).
+    mixed: Vec<bool>,
     /// Per neighbour: contributions to its nodes, and from it to ours.
     pub(super) send: Vec<Vec<f64>>,
     pub(super) recv: Vec<Vec<f64>>,
@@ -214,6 +217,49 @@ impl PairForces {
         }
     }
 
+    /// Add each owned node's pair forces to `f` (one per owned node,
+    /// holding its element sum), in key order. When the rank's own pairs
+    /// came in key order, a node without received entries takes them in
+    /// arrival order: no buckets, no sort. Nodes with received entries, and
+    /// every node otherwise, take the order of [`Self::order`].
+    pub(super) fn add_all(&mut self, f: &mut [Vector3<f64>]) {
+        if !self.own_sorted {
+            self.order(f.len());
+            for (i, fi) in f.iter_mut().enumerate() {
+                self.add_to(i, fi);
+            }
+            return;
+        }
+        let (own, received) = self.entries.split_at(self.own_entries);
+        if received.is_empty() {
+            for e in own {
+                f[e.node as usize] += self.forces[e.at as usize];
+            }
+            return;
+        }
+        if self.mixed.len() < f.len() {
+            self.mixed.resize(f.len(), false);
+        }
+        for e in received {
+            self.mixed[e.node as usize] = true;
+        }
+        let mut late: Vec<Entry> = Vec::new();
+        for e in own {
+            if self.mixed[e.node as usize] {
+                late.push(*e);
+            } else {
+                f[e.node as usize] += self.forces[e.at as usize];
+            }
+        }
+        late.extend_from_slice(received);
+        // Stable: arrival order among equal keys, as in `order`.
+        late.sort_by_key(|e| (e.node, e.key));
+        for e in &late {
+            f[e.node as usize] += self.forces[e.at as usize];
+            self.mixed[e.node as usize] = false;
+        }
+    }
+
     /// Give back the per-neighbour message buffers. They are held at the
     /// size of the busiest substep for reuse, but only on ranks with
     /// neighbours, on top of their share of the pairs; the next substep
@@ -231,6 +277,7 @@ impl PairForces {
             + self.forces.capacity() * size_of::<Vector3<f64>>()
             + self.entries.capacity() * size_of::<Entry>()
             + (self.order.capacity() + self.end.capacity()) * 4
+            + self.mixed.capacity()
             + self
                 .send
                 .iter()
@@ -284,5 +331,66 @@ mod tests {
         let mut f1 = Vector3::new(5.0, 0.0, 0.0);
         p.add_to(1, &mut f1);
         assert_eq!(f1, Vector3::new(5.0, 0.0, 0.0));
+    }
+
+    /// With the pairs in key order, `add_all` sums each node's forces as
+    /// `order` and `add_to` do, bitwise, for nodes with and without
+    /// received entries.
+    #[test]
+    fn add_all_matches_the_bucket_order() {
+        let n_owned = 40usize;
+        let gid: Vec<u32> = (0..n_owned as u32 + 10).collect();
+        let owner: Vec<u32> = (0..gid.len()).map(|l| u32::from(l >= n_owned)).collect();
+        let routes = NodeRoutes {
+            n_owned,
+            gid: &gid,
+            owner: &owner,
+            neighbours: &[1],
+        };
+        let mut seed = 7u64;
+        let mut next = || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 33) as usize
+        };
+        let mut p = PairForces::default();
+        for round in 0..3 {
+            p.clear();
+            let mut nodes = Vec::new();
+            for j in 0..60 {
+                let ls: [u32; 8] = std::array::from_fn(|_| (next() % gid.len()) as u32);
+                let force = |k: usize| [[(j * 8 + k) as f64 * 0.37 - 50.0, 1e16, -1.0]; 4];
+                p.push(j, &force(0), &force(4));
+                nodes.push((ls, 3 * j as u64 + 1));
+            }
+            p.route(&routes, |j| nodes[j]);
+            assert!(p.own_sorted);
+            // Received: keys between and around ours, on a few nodes.
+            let n_recv = if round == 0 { 0 } else { 25 };
+            p.recv[0] = (0..n_recv)
+                .flat_map(|i| {
+                    let g = (next() % n_owned) as u64;
+                    let key = (next() % 200) as u64;
+                    [g, key]
+                        .map(f64::from_bits)
+                        .into_iter()
+                        .chain([i as f64, -1e16, 0.5])
+                })
+                .collect();
+            p.take_received(&routes);
+            let start: Vec<Vector3<f64>> = (0..n_owned)
+                .map(|i| Vector3::new(i as f64, 3.0, 1e-3))
+                .collect();
+            let mut want = start.clone();
+            p.order(n_owned);
+            for (i, f) in want.iter_mut().enumerate() {
+                p.add_to(i, f);
+            }
+            let mut got = start.clone();
+            p.add_all(&mut got);
+            assert_eq!(got, want, "round {round}");
+            assert!(p.mixed.iter().all(|m| !m));
+        }
     }
 }

@@ -110,7 +110,7 @@ pub(super) fn hand_over(
                         out.push(1.0);
                         out.extend_from_slice(x);
                     }
-                    None => out.extend(std::iter::repeat(0.0).take(1 + width)),
+                    None => out.extend(std::iter::repeat_n(0.0, 1 + width)),
                 }
             }
             out

@@ -39,6 +39,10 @@
 //! - `candidates`: contact detection (the one contact search, the ghost
 //!   list and halo), `balance_pairs`, and the thermal narrow phase on the
 //!   candidates in a coupled run (`thermal_contacts`);
+//! - `carry`: what a touching pair keeps across a detection (its
+//!   linearised overlap, its touch mark), and the candidates' key order;
+//! - `handover`: per-pair records (those models, the friction springs)
+//!   handed to whichever rank evaluates the pair after a detection;
 //! - `force_sum`: the global-order force summation that makes the
 //!   trajectories bitwise the same on any number of ranks (the elements'
 //!   fixed slots);

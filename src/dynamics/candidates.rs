@@ -2,7 +2,7 @@
 //! ([`crate::contact::search`]) at each detection over this rank's tets and
 //! the ghost copies of other ranks' tets within the margin
 //! ([`crate::parallel::ghosts`]), the penalty candidates pruned by face
-//! planes and their balancing over the ranks (`balance_pairs`), the
+//! planes and their balancing over the ranks (`pair_balance`), the
 //! thermal-only candidates of a coupled run, the ghosts and halo they
 //! need, and the thermal narrow phase on them (`thermal_contacts`, seed 000
 //! sec 3.1). The penalty potential itself is `contact::penalty`.
@@ -24,7 +24,6 @@ use crate::contact::{tet_tet_penalty, PenaltyParams};
 use crate::error::{Error, Result};
 use crate::geometry::{face_planes, planes_within};
 use crate::mechanics::MechElement;
-use crate::parallel::exchange::all_to_all;
 use crate::parallel::ghosts::exchange_ghosts;
 use crate::parallel::Halo;
 
@@ -59,18 +58,18 @@ pub(super) struct Candidate {
 /// A tet of a pair as it travels between ranks: what the pair's rank
 /// keeps of it, and its nodes (global id, owner, PETSc number).
 #[derive(Debug, Clone, Copy, Default)]
-struct TetRecord {
+pub(super) struct TetRecord {
     info: PairTet,
     nodes: [[u32; 3]; 4],
 }
 
 /// Values per tet record and per pair (two tet slots, stiffness and
 /// reduced mass) in an `f64` message.
-const TET_F64S: usize = 5 + 12;
-const PAIR_F64S: usize = 4;
+pub(super) const TET_F64S: usize = 5 + 12;
+pub(super) const PAIR_F64S: usize = 4;
 
 impl TetRecord {
-    fn of(og: &OwnAndGhosts, h: u32) -> TetRecord {
+    pub(super) fn of(og: &OwnAndGhosts, h: u32) -> TetRecord {
         let n = og.own.len() as u32;
         let (s, t) = if h < n {
             (og.own, h as usize)
@@ -92,7 +91,7 @@ impl TetRecord {
         }
     }
 
-    fn push(&self, out: &mut Vec<f64>) {
+    pub(super) fn push(&self, out: &mut Vec<f64>) {
         let i = &self.info;
         out.extend_from_slice(&[
             f64::from(i.gid),
@@ -106,7 +105,7 @@ impl TetRecord {
         }
     }
 
-    fn read(v: &[f64]) -> TetRecord {
+    pub(super) fn read(v: &[f64]) -> TetRecord {
         let mut r = TetRecord {
             info: PairTet {
                 gid: v[0] as u32,
@@ -130,9 +129,9 @@ impl TetRecord {
 /// per source rank) and, per pair, its two tets' indices in `tets`,
 /// stiffness and reduced mass.
 #[derive(Default)]
-struct ReceivedPairs {
-    tets: Vec<TetRecord>,
-    pairs: Vec<(u32, u32, f64, f64)>,
+pub(super) struct ReceivedPairs {
+    pub(super) tets: Vec<TetRecord>,
+    pub(super) pairs: Vec<(u32, u32, f64, f64)>,
 }
 
 /// Local index of a node of the part by global id (`gids`: owned ones
@@ -228,7 +227,7 @@ impl ExplicitDomain {
             let (kept, weights, thermal) = self.find_pairs(&og);
             crate::run::trace_memory(r, "detect found");
             self.count_pair_work(&og, &kept, &weights);
-            let (here, received) = self.balance_pairs(comm, &og, &kept, &weights);
+            let (here, received) = self.balance_pairs(comm, &og, &kept, &weights, &carried);
             crate::run::trace_memory(r, "detect balanced");
             crate::run::release_fragmented_memory();
             self.install(&og, &here, &received, &thermal);
@@ -323,7 +322,7 @@ impl ExplicitDomain {
 
     /// This rank's candidates from the one contact search over own and
     /// ghost tets (handles of `og`), with their estimated costs (see
-    /// [`Self::balance_pairs`]). Pairs of two boundary tets of bodies not
+    /// `pair_balance`). Pairs of two boundary tets of bodies not
     /// both held are the penalty candidates, pruned by face planes; when
     /// the thermal contact is coupled, the search also returns a boundary
     /// tet against another body's interior tets and pairs of two held
@@ -404,7 +403,12 @@ impl ExplicitDomain {
 
     /// The bodies, stiffness and reduced mass of the penalty pair of tets
     /// `a` (of a free body) and `b`, handles of `og`.
-    fn pair_record_values(&self, og: &OwnAndGhosts, a: u32, b: u32) -> (u32, u32, f64, f64) {
+    pub(super) fn pair_record_values(
+        &self,
+        og: &OwnAndGhosts,
+        a: u32,
+        b: u32,
+    ) -> (u32, u32, f64, f64) {
         let (sa, ia) = og.locate(a);
         let (sb, ib) = og.locate(b);
         let (ra, rb) = (
@@ -424,119 +428,6 @@ impl ExplicitDomain {
         };
         let penalty = self.penalty.map_or(0.0, |(_, pn)| pn);
         (ra.0, rb.0, pair_stiffness(penalty, va, vb), reduced_mass)
-    }
-
-    /// Collective. Share the work evenly over the ranks. Each rank finds
-    /// the pairs of the tets it owns, so the ranks holding the bottom of
-    /// a settling column (or its contacts) would do all the contact work
-    /// while the others wait. With `weights` the estimated cost of each
-    /// found pair, each rank's share of the pair work is what brings its
-    /// elements' work up to the mean work (elements and pairs) of the
-    /// ranks; the pairs of all ranks, in rank order, are cut into runs of
-    /// those shares and rank r takes run r: an excess moves to the next
-    /// ranks as one contiguous, spatially coherent run (the pair's nodes
-    /// become ghosts there). After a repartition by work the shares are
-    /// about what each rank found, and few pairs move. The forces do not
-    /// depend on which rank evaluates a pair (they are summed by pair
-    /// key). Returns the pairs this rank evaluates.
-    #[allow(clippy::type_complexity)]
-    fn balance_pairs(
-        &mut self,
-        comm: &SimpleCommunicator,
-        og: &OwnAndGhosts,
-        kept: &[(u32, u32)],
-        weights: &[u64],
-    ) -> (Vec<(u32, u32)>, ReceivedPairs) {
-        let size = comm.size() as usize;
-        let rank = comm.rank() as usize;
-        let mine: u64 = weights.iter().sum();
-        self.pair_share = mine as f64;
-        if size == 1 {
-            return (kept.to_vec(), ReceivedPairs::default());
-        }
-        let local = [mine as f64, self.element_work];
-        let mut all = vec![0.0f64; 2 * size];
-        comm.all_gather_into(&local[..], &mut all[..]);
-        let found: Vec<f64> = all.iter().step_by(2).copied().collect();
-        let total: f64 = found.iter().sum();
-        if total == 0.0 {
-            return (kept.to_vec(), ReceivedPairs::default());
-        }
-        let shares = pair_shares(
-            &found,
-            &all.iter().skip(1).step_by(2).copied().collect::<Vec<_>>(),
-        );
-        // Run r of the pair sequence: [ends[r], ends[r + 1]).
-        let mut ends = vec![0.0f64; size + 1];
-        for r in 0..size {
-            ends[r + 1] = ends[r] + shares[r];
-        }
-        self.pair_share = shares[rank];
-        let mut at: f64 = found[..rank].iter().sum();
-        // The pairs this rank keeps are the middle of its stretch of the
-        // sequence; the ends go to other ranks. Hot pairs go first to the
-        // ends: the same work handed over in the fewest pairs, hence the
-        // fewest force contributions that travel back every substep (a
-        // pair's forces do not depend on the rank that evaluates it).
-        let front = (ends[rank] - at).clamp(0.0, found[rank]);
-        let order = hot_to_the_ends(weights, front);
-        // Per destination: its tets (each once) and its pairs (tet slots,
-        // stiffness, reduced mass).
-        let mut tets: Vec<Vec<f64>> = vec![Vec::new(); size];
-        let mut pairs: Vec<Vec<f64>> = vec![Vec::new(); size];
-        let mut slot: Vec<HashMap<u32, u32>> = vec![HashMap::new(); size];
-        let mut here = Vec::with_capacity(kept.len());
-        let mut dest = 0usize;
-        for i in order {
-            let ((a, b), w) = (kept[i], weights[i]);
-            // The rank whose run holds the pair's mid-point.
-            let mid = at + 0.5 * w as f64;
-            at += w as f64;
-            while dest + 1 < size && ends[dest + 1] <= mid {
-                dest += 1;
-            }
-            if dest == rank {
-                here.push((a, b));
-            } else {
-                let (_, _, stiffness, reduced_mass) = self.pair_record_values(og, a, b);
-                let mut slot_of = |h: u32| -> f64 {
-                    let next = slot[dest].len() as u32;
-                    let s = *slot[dest].entry(h).or_insert_with(|| {
-                        TetRecord::of(og, h).push(&mut tets[dest]);
-                        next
-                    });
-                    f64::from(s)
-                };
-                let (sa, sb) = (slot_of(a), slot_of(b));
-                pairs[dest].extend_from_slice(&[sa, sb, stiffness, reduced_mass]);
-            }
-        }
-        drop(slot);
-        let out: Vec<Vec<f64>> = tets
-            .into_iter()
-            .zip(pairs)
-            .map(|(mut t, p)| {
-                let mut m = Vec::with_capacity(1 + t.len() + p.len());
-                m.push((t.len() / TET_F64S) as f64);
-                m.append(&mut t);
-                m.extend_from_slice(&p);
-                m
-            })
-            .collect();
-        let mut received = ReceivedPairs::default();
-        for m in all_to_all(comm, out).iter().filter(|m| !m.is_empty()) {
-            let nt = m[0] as usize;
-            let (t, p) = m[1..].split_at(nt * TET_F64S);
-            let base = received.tets.len() as u32;
-            received
-                .tets
-                .extend(t.chunks_exact(TET_F64S).map(TetRecord::read));
-            received.pairs.extend(
-                p.chunks_exact(PAIR_F64S)
-                    .map(|r| (base + r[0] as u32, base + r[1] as u32, r[2], r[3])),
-            );
-        }
-        (here, received)
     }
 
     /// No contact: no pairs, no contact ghosts.
@@ -896,95 +787,5 @@ impl ExplicitDomain {
         // Not in the seeds: Verlet-list skin, re-detect after the margin/2 a node may move in DETECT_EVERY substeps.
         (2.0 * DETECT_EVERY * v_max * self.dt)
             .clamp(self.margin_min, MARGIN_GROWTH * self.margin_min)
-    }
-}
-
-/// Each rank's share of the pair work (`found` per rank, summing to the
-/// total): what brings its `elements` work up to the mean of elements
-/// and pairs, a rank whose elements alone exceed a share taking none, the
-/// shares scaled to the total found.
-fn pair_shares(found: &[f64], elements: &[f64]) -> Vec<f64> {
-    let pairs: f64 = found.iter().sum();
-    // The level L with sum over r of max(0, L - elements_r) = pairs: filled
-    // over the ranks sorted by element work.
-    let mut e: Vec<f64> = elements.to_vec();
-    e.sort_by(f64::total_cmp);
-    let (mut sum, mut level) = (0.0, 0.0);
-    for k in 0..e.len() {
-        sum += e[k];
-        level = (sum + pairs) / (k + 1) as f64;
-        if k + 1 == e.len() || level <= e[k + 1] {
-            break;
-        }
-    }
-    let raw: Vec<f64> = elements.iter().map(|&x| (level - x).max(0.0)).collect();
-    let sum: f64 = raw.iter().sum();
-    if sum > 0.0 {
-        raw.iter().map(|&x| x * pairs / sum).collect()
-    } else {
-        found.to_vec()
-    }
-}
-
-/// An order of pairs of `weights` with hot pairs (above the least weight)
-/// first until `front` work is reached, then the cold ones, then the rest
-/// of the hot ones: the work at either end of the sequence, which other
-/// ranks take, is carried by as few pairs as the weights allow.
-fn hot_to_the_ends(weights: &[u64], front: f64) -> Vec<usize> {
-    let cold = weights.iter().copied().min().unwrap_or(0);
-    let (hot, cool): (Vec<usize>, Vec<usize>) =
-        (0..weights.len()).partition(|&i| weights[i] > cold);
-    let mut order = Vec::with_capacity(weights.len());
-    let mut w = 0.0;
-    let mut rest = hot.iter().copied().peekable();
-    while w < front {
-        let Some(i) = rest.next() else { break };
-        w += weights[i] as f64;
-        order.push(i);
-    }
-    order.extend(cool);
-    order.extend(rest);
-    order
-}
-
-#[cfg(test)]
-mod shares {
-    use super::{hot_to_the_ends, pair_shares};
-
-    #[test]
-    fn hot_pairs_carry_the_ends_of_a_ranks_stretch() {
-        let w = [1, 32, 1, 1, 32, 1, 32, 1];
-        // 40 of work to the ranks before: two hot pairs (64 >= 40), then
-        // the cold ones, then the last hot one.
-        let order = hot_to_the_ends(&w, 40.0);
-        assert_eq!(order, vec![1, 4, 0, 2, 3, 5, 7, 6]);
-        // Nothing before: the cold ones first, every hot pair at the end.
-        assert_eq!(hot_to_the_ends(&w, 0.0), vec![0, 2, 3, 5, 7, 1, 4, 6]);
-        // Equal weights, or none: the order found.
-        assert_eq!(hot_to_the_ends(&[1, 1, 1], 2.0), vec![0, 1, 2]);
-        assert!(hot_to_the_ends(&[], 1.0).is_empty());
-        // Always a permutation.
-        let mut o = hot_to_the_ends(&w, 1e9);
-        o.sort_unstable();
-        assert_eq!(o, (0..w.len()).collect::<Vec<_>>());
-    }
-
-    #[test]
-    fn shares_fill_the_ranks_up_to_the_mean_work() {
-        let close = |a: &[f64], b: &[f64]| a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-12);
-        // Equal elements: the pairs evenly.
-        assert!(close(&pair_shares(&[10.0, 0.0], &[4.0, 4.0]), &[5.0, 5.0]));
-        // A rank with more elements takes fewer pairs: 8 + 1 = 0 + 9.
-        assert!(close(&pair_shares(&[10.0, 0.0], &[8.0, 0.0]), &[1.0, 9.0]));
-        // Elements alone above the level: no pairs there.
-        assert!(close(
-            &pair_shares(&[3.0, 3.0, 0.0], &[20.0, 0.0, 0.0]),
-            &[0.0, 3.0, 3.0]
-        ));
-        // Shares always sum to the pairs found.
-        let s = pair_shares(&[7.0, 1.0, 0.5], &[3.0, 2.0, 9.0]);
-        assert!((s.iter().sum::<f64>() - 8.5).abs() < 1e-12);
-        // No pairs: no shares.
-        assert!(close(&pair_shares(&[0.0, 0.0], &[1.0, 2.0]), &[0.0, 0.0]));
     }
 }

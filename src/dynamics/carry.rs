@@ -85,6 +85,13 @@ fn pair_of(key: u64) -> PairKey {
     )
 }
 
+impl Carried {
+    /// Whether the pair of `key` touched here at its last evaluation.
+    pub(super) fn touched_here(&self, key: u64) -> bool {
+        self.touched.binary_search_by_key(&key, |e| e.0).is_ok()
+    }
+}
+
 impl ExplicitDomain {
     /// Drop every linearised overlap: the next evaluations are exact.
     pub(super) fn drop_models(&mut self) {

@@ -108,6 +108,9 @@ pub struct ExplicitDomain {
     pub(super) element_work: f64,
     /// Work of the pairs this rank evaluates since the last detection.
     pub(super) pair_share: f64,
+    /// The hot pairs this rank found and another rank evaluated since the
+    /// last detection: key (`force_sum::pair_key`) to that rank.
+    pub(super) pairs_given: HashMap<u64, u32>,
     /// Local nodes of the tets of the candidate pairs, each tet once, and
     /// what the thermal contact needs of them.
     pub(super) pair_tets: Vec<[u32; 4]>,
@@ -405,6 +408,7 @@ impl ExplicitDomain {
                 .map(|&b| crate::parallel::element_work(model, b as usize))
                 .sum(),
             pair_share: 0.0,
+            pairs_given: HashMap::new(),
             pair_tets: Vec::new(),
             pair_info: Vec::new(),
             pair_geometry: Vec::new(),

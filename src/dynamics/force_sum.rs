@@ -163,8 +163,13 @@ impl ExplicitDomain {
 /// The summation key of a pair's contributions: after every element's
 /// (the top bit), by (a, b).
 pub(super) fn pair_key(c: &super::candidates::Candidate) -> u64 {
+    key_of(c.a, c.b)
+}
+
+/// The summation key of the pair of tets `a` and `b` (global ids).
+pub(super) fn key_of(a: u32, b: u32) -> u64 {
     const PAIR: u64 = 1 << 63;
-    PAIR | (u64::from(c.a) << 31) | u64::from(c.b)
+    PAIR | (u64::from(a) << 31) | u64::from(b)
 }
 
 /// Make `v` hold `n` copies of `value`, keeping its allocation when it is

@@ -70,6 +70,7 @@ mod force_sum;
 mod gaps;
 mod handover;
 mod joints;
+mod pair_balance;
 mod pair_sum;
 mod particles;
 mod self_contact;

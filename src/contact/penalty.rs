@@ -21,7 +21,7 @@
 //!
 //! Pure, no MPI, no allocation.
 
-use crate::geometry::{dot, tet_tet_intersection_with, TetPlanes};
+use crate::geometry::{dot, intersect_tets, TetPlanes};
 
 /// Parameters of one tet pair.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -174,7 +174,7 @@ pub fn overlap_state(
     (xa, pa): (&[[f64; 3]; 4], &TetPlanes),
     (xb, pb): (&[[f64; 3]; 4], &TetPlanes),
 ) -> Option<OverlapState> {
-    let it = tet_tet_intersection_with(xa, pa, xb, pb);
+    let it = intersect_tets(xa, pa, xb, pb);
     let v = it.volume;
     if v <= 0.0 {
         return None;
@@ -184,7 +184,7 @@ pub fn overlap_state(
     let mut grad = [[0.0; 3]; 8];
     let mut g = [0.0; 3];
     let mut s_total = 0.0;
-    for (side, (faces, planes)) in [(&it.faces_a, &it.planes_a), (&it.faces_b, &it.planes_b)]
+    for (side, (faces, planes)) in [(&it.faces_a, pa), (&it.faces_b, pb)]
         .into_iter()
         .enumerate()
     {
@@ -224,8 +224,8 @@ pub fn overlap_state(
         normal,
         g_len,
         point: p,
-        weights_a: it.planes_a.barycentric(p),
-        weights_b: it.planes_b.barycentric(p),
+        weights_a: pa.barycentric(p),
+        weights_b: pb.barycentric(p),
     })
 }
 

@@ -16,8 +16,9 @@ pub use clip::{
     TetShape,
 };
 pub use overlap::{
-    face_planes, pair_size2, planes_within, separated_along, separating_axis, tet_tet_intersection,
-    tet_tet_intersection_with, tets_within, FacePatch, Intersection, TetPlanes,
+    face_planes, intersect_tets, pair_size2, planes_within, separated_along, separating_axis,
+    tet_tet_intersection, tet_tet_intersection_with, tets_within, FacePatch, Intersection, Overlap,
+    TetPlanes,
 };
 pub use tet4::{tet4_geometry, Tet4Geometry};
 

@@ -132,8 +132,17 @@ pub struct FacePatch {
     pub area: f64,
     /// First moment: area × centroid (well defined for vanishing slivers).
     pub moment: [f64; 3],
+}
+
+impl FacePatch {
     /// Area centroid (`moment / area`; the origin when the area is 0).
-    pub centroid: [f64; 3],
+    pub fn centroid(&self) -> [f64; 3] {
+        if self.area > 0.0 {
+            self.moment.map(|m| m / self.area)
+        } else {
+            [0.0; 3]
+        }
+    }
 }
 
 /// Intersection of two tets a and b.
@@ -154,18 +163,22 @@ pub struct Intersection {
     pub planes_b: TetPlanes,
 }
 
-impl Intersection {
-    fn empty(planes_a: TetPlanes, planes_b: TetPlanes) -> Self {
-        Intersection {
-            volume: 0.0,
-            centroid: [0.0; 3],
-            faces_a: [FacePatch::default(); 4],
-            faces_b: [FacePatch::default(); 4],
-            planes_a,
-            planes_b,
-        }
-    }
+/// Intersection of two tets whose planes the caller holds: an
+/// [`Intersection`] without its copies of the planes (what the penalty's
+/// inner loop needs, without moving them around).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Overlap {
+    /// Volume of a ∩ b (≥ 0).
+    pub volume: f64,
+    /// Centroid of a ∩ b (meaningful when `volume > 0`).
+    pub centroid: [f64; 3],
+    /// Face i of a inside b.
+    pub faces_a: [FacePatch; 4],
+    /// Face j of b inside a.
+    pub faces_b: [FacePatch; 4],
+}
 
+impl Intersection {
     /// Σ over the patches of both tets of area × outward normal: zero up to
     /// round-off, since they close the surface of a ∩ b (up to gap ×
     /// perimeter for faces merged as flush, see the module notes).
@@ -360,16 +373,34 @@ pub fn tet_tet_intersection_with(
     b: &[[f64; 3]; 4],
     pb: &TetPlanes,
 ) -> Intersection {
-    let (pa, pb) = (*pa, *pb);
-    let mut out = Intersection::empty(pa, pb);
+    let o = intersect_tets(a, pa, b, pb);
+    Intersection {
+        volume: o.volume,
+        centroid: o.centroid,
+        faces_a: o.faces_a,
+        faces_b: o.faces_b,
+        planes_a: *pa,
+        planes_b: *pb,
+    }
+}
+
+/// [`tet_tet_intersection_with`] without copies of the planes in the
+/// result.
+pub fn intersect_tets(
+    a: &[[f64; 3]; 4],
+    pa: &TetPlanes,
+    b: &[[f64; 3]; 4],
+    pb: &TetPlanes,
+) -> Overlap {
+    let mut out = Overlap::default();
     let size = pa.size.max(pb.size);
     let eps = 1e-12 * size;
     if !pa.is_proper() || !pb.is_proper() || boxes_separated(a, b, eps) {
         return out;
     }
     // da[v][k]: vertex v of a against plane k of b; db likewise.
-    let da = distances(a, &pb);
-    let db = distances(b, &pa);
+    let da = distances(a, pb);
+    let db = distances(b, pa);
     // Separating axes along the 8 face normals: b wholly beyond a face
     // plane of a (or the reverse), up to eps.
     for k in 0..4 {
@@ -402,8 +433,8 @@ pub fn tet_tet_intersection_with(
     };
     let mut bufs = (empty, empty);
     for (t, dist, p, q, flush, faces) in [
-        (a, &da, &pa, &pb, &flush_a, &mut out.faces_a),
-        (b, &db, &pb, &pa, &flush_b, &mut out.faces_b),
+        (a, &da, pa, pb, &flush_a, &mut out.faces_a),
+        (b, &db, pb, pa, &flush_b, &mut out.faces_b),
     ] {
         for f in 0..4 {
             let [i, j, k] = TET_FACES[f];
@@ -425,19 +456,11 @@ pub fn tet_tet_intersection_with(
             for d in 0..3 {
                 total_m[d] += m[d];
             }
-            faces[f] = FacePatch {
-                area,
-                moment: m,
-                centroid: if area > 0.0 {
-                    [m[0] / area, m[1] / area, m[2] / area]
-                } else {
-                    [0.0; 3]
-                },
-            };
+            faces[f] = FacePatch { area, moment: m };
         }
     }
     if total_area <= 0.0 {
-        return Intersection::empty(pa, pb);
+        return Overlap::default();
     }
     // Reference point: the area centroid of ∂(a∩b), close to the polygons
     // so that the pyramid heights below lose little to cancellation.
@@ -448,7 +471,7 @@ pub fn tet_tet_intersection_with(
     ];
     let mut vol = 0.0;
     let mut first = [0.0; 3];
-    for (faces, p) in [(&out.faces_a, &pa), (&out.faces_b, &pb)] {
+    for (faces, p) in [(&out.faces_a, pa), (&out.faces_b, pb)] {
         for (f, patch) in faces.iter().enumerate() {
             if patch.area == 0.0 {
                 continue;
@@ -468,7 +491,7 @@ pub fn tet_tet_intersection_with(
     // the remaining separating axes (skipped for real overlaps: they cost
     // as much as the clipping).
     if vol <= 1e-10 * pa.volume.min(pb.volume) && (vol <= 0.0 || edges_separated(a, b, eps)) {
-        return Intersection::empty(pa, pb);
+        return Overlap::default();
     }
     out.volume = vol;
     out.centroid = [

@@ -478,9 +478,29 @@ impl LinearizedOverlap {
         xb: &[[f64; 3]; 4],
         tolerance: f64,
     ) -> Self {
-        let mut x0 = [[0.0; 3]; 8];
-        x0[..4].copy_from_slice(xa);
-        x0[4..].copy_from_slice(xb);
+        let mut m = LinearizedOverlap {
+            state,
+            x0: [[0.0; 3]; 8],
+            tol2: 0.0,
+        };
+        m.set(&state, xa, xb, tolerance);
+        m
+    }
+
+    /// Make this the model of `state` (see [`Self::new`]) in place: a model
+    /// is 520 bytes, and the substep's copies of new ones into their slots
+    /// were 3 % of a settled bed's time.
+    #[inline]
+    pub fn set(
+        &mut self,
+        state: &OverlapState,
+        xa: &[[f64; 3]; 4],
+        xb: &[[f64; 3]; 4],
+        tolerance: f64,
+    ) {
+        self.state = *state;
+        self.x0[..4].copy_from_slice(xa);
+        self.x0[4..].copy_from_slice(xb);
         // No direction, no model: such pairs stay exact.
         let depth = if state.normal == [0.0; 3] {
             0.0
@@ -488,11 +508,7 @@ impl LinearizedOverlap {
             state.volume / state.g_len
         };
         let tol = tolerance * depth;
-        LinearizedOverlap {
-            state,
-            x0,
-            tol2: tol * tol,
-        }
+        self.tol2 = tol * tol;
     }
 
     /// Floats in [`Self::to_record`].

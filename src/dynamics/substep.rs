@@ -178,12 +178,12 @@ impl ExplicitDomain {
                             Some(s) => {
                                 witness[j] = OVERLAPPED;
                                 if tolerance > 0.0 {
-                                    let m = LinearizedOverlap::new(s, xa, xb, tolerance);
                                     if slot < linearized.len() {
-                                        linearized[slot] = m;
+                                        linearized[slot].set(&s, xa, xb, tolerance);
                                     } else {
                                         lin_of[j] = linearized.len() as u32;
-                                        linearized.push(m);
+                                        linearized
+                                            .push(LinearizedOverlap::new(s, xa, xb, tolerance));
                                     }
                                 }
                                 Some(penalty_forces_with(&s, s.volume, &va, &vb, &p, spring))

@@ -188,6 +188,9 @@ impl ExplicitDomain {
     pub(super) fn detect(&mut self, comm: &SimpleCommunicator) -> Result<()> {
         self.flush_friction();
         self.cracks_marked = false;
+        // Within a step only, with linearised models to keep in place, pairs
+        // go back to the rank that evaluated them (`pair_balance`).
+        self.last_detect_fresh = !(self.sticky_detect && self.linear_tolerance > 0.0);
         let clock = std::time::Instant::now();
         let carried = self.contacts_before_detection(comm.size() as usize);
         let springs = self.has_springs().then(|| self.springs_before_detection());

@@ -93,10 +93,13 @@ impl Carried {
 }
 
 impl ExplicitDomain {
-    /// Drop every linearised overlap: the next evaluations are exact.
+    /// Drop every linearised overlap and every touch mark or separating
+    /// axis (the state a restart starts from: which rank evaluates a pair
+    /// within the step depends on the touch marks, `pair_balance`).
     pub(super) fn drop_models(&mut self) {
         self.linearized.clear();
         self.lin_of.fill(NONE);
+        self.witness.fill(UNSEEN);
     }
 
     /// Take the touching pairs' state before the candidates are rebuilt.

@@ -111,6 +111,12 @@ pub struct ExplicitDomain {
     /// The hot pairs this rank found and another rank evaluated since the
     /// last detection: key (`force_sum::pair_key`) to that rank.
     pub(super) pairs_given: HashMap<u64, u32>,
+    /// Whether the detection under way may use `pairs_given`: only one
+    /// within a step (after its first substep). Detections at a step start,
+    /// where a restart starts, share pairs by the positions alone.
+    pub(super) sticky_detect: bool,
+    /// Whether the last detection shared pairs by the positions alone.
+    pub(super) last_detect_fresh: bool,
     /// Local nodes of the tets of the candidate pairs, each tet once, and
     /// what the thermal contact needs of them.
     pub(super) pair_tets: Vec<[u32; 4]>,
@@ -409,6 +415,8 @@ impl ExplicitDomain {
                 .sum(),
             pair_share: 0.0,
             pairs_given: HashMap::new(),
+            sticky_detect: false,
+            last_detect_fresh: true,
             pair_tets: Vec::new(),
             pair_info: Vec::new(),
             pair_geometry: Vec::new(),

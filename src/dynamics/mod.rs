@@ -37,8 +37,10 @@
 //! - `substep`: [`ExplicitDomain::advance`], one substep (contact and
 //!   element forces, halo exchange, central differences);
 //! - `candidates`: contact detection (the one contact search, the ghost
-//!   list and halo), `balance_pairs`, and the thermal narrow phase on the
-//!   candidates in a coupled run (`thermal_contacts`);
+//!   list and halo) and the thermal narrow phase on the candidates in a
+//!   coupled run (`thermal_contacts`);
+//! - `pair_balance`: `balance_pairs`, the pair work shared over the
+//!   ranks, a pair going back within a step to the rank that evaluated it;
 //! - `carry`: what a touching pair keeps across a detection (its
 //!   linearised overlap, its touch mark), and the candidates' key order;
 //! - `handover`: per-pair records (those models, the friction springs)

@@ -1,11 +1,15 @@
 //! The balancing of the penalty pairs over the ranks at a detection
 //! (issue 22): each rank's share of the pair work (`pair_shares`), the
 //! work it hands to each other rank (`quotas`), and which pairs carry it
-//! (`assign_pairs`). A pair handed to the rank that evaluated it since the
-//! last detection keeps its linearised overlap and touch mark there
-//! (`carry`); before, the pairs handed over were picked afresh at every
-//! detection, and about a tenth of the touching ones changed rank, each
-//! with its model (520 bytes) and without its touch mark.
+//! (`assign_pairs`). Within a step, a pair handed to the rank that
+//! evaluated it since the last detection keeps its linearised overlap and
+//! touch mark there (`carry`); before, the pairs handed over were picked
+//! afresh at every detection, and about a tenth of the touching ones
+//! changed rank, each with its model (520 bytes) and without its touch
+//! mark. A detection at a step start (where models are dropped, and where
+//! a restart starts) shares the pairs by the positions alone, so a
+//! restarted run gives each rank the same pairs, hence the same share of
+//! the dissipated energy, as the uninterrupted one.
 
 use std::collections::HashMap;
 
@@ -29,8 +33,8 @@ impl ExplicitDomain {
     /// ranks; the pairs of all ranks, in rank order, are cut into runs of
     /// those shares, and the overlap of this rank's stretch with run r is
     /// the work it hands to rank r (`quotas`). Which pairs fill that is
-    /// [`assign_pairs`]: first those rank r evaluated since the last
-    /// detection (`pairs_given`), so a touching pair keeps its model and
+    /// [`assign_pairs`]: first (within a step) those rank r evaluated since
+    /// the last detection (`pairs_given`), so a touching pair keeps its model and
     /// touch mark where they are (`carry`), then hot pairs (the same work
     /// in the fewest pairs, hence the fewest force contributions that
     /// travel back every substep). After a repartition by work the shares
@@ -78,7 +82,9 @@ impl ExplicitDomain {
         let cold = weights.iter().copied().min().unwrap_or(0);
         let key = |i: usize| key_of(og.gid(kept[i].0), og.gid(kept[i].1));
         let hands_over = quota.iter().enumerate().any(|(d, &q)| d != rank && q > 0.0);
-        let before: Vec<u32> = if hands_over && !self.pairs_given.is_empty() {
+        // Only with linearised models is there anything to keep in place.
+        let sticky = !self.last_detect_fresh;
+        let before: Vec<u32> = if sticky && hands_over && !self.pairs_given.is_empty() {
             (0..kept.len())
                 .map(|i| match weights[i] > cold {
                     true => self.pairs_given.get(&key(i)).copied().unwrap_or(NONE),
@@ -89,8 +95,10 @@ impl ExplicitDomain {
             Vec::new()
         };
         let dest = match hands_over {
+            // Touch marks are history too: used within a step only (they
+            // are dropped at its start, `carry`).
             true => assign_pairs(weights, &quota, rank, &before, |i| {
-                carried.touched_here(key(i))
+                sticky && carried.touched_here(key(i))
             }),
             false => vec![rank as u32; kept.len()],
         };
@@ -108,7 +116,7 @@ impl ExplicitDomain {
                 here.push((a, b));
                 continue;
             }
-            if weights[i] > cold {
+            if weights[i] > cold && self.linear_tolerance > 0.0 {
                 self.pairs_given.insert(key(i), d as u32);
             }
             let (_, _, stiffness, reduced_mass) = self.pair_record_values(og, a, b);
@@ -193,10 +201,11 @@ fn quotas(ends: &[f64], start: f64, found: f64) -> Vec<f64> {
 /// each pair goes back to the rank it went to at the last detection
 /// (`before`, NONE for none) while that rank has room; then the room
 /// left is filled, in the order found, by the hot pairs (above the least
-/// weight) that did not touch here (`touched`), then those that did, then
-/// the cold ones. A pair goes where at least half its weight of room is
-/// left (the mid-point rule of a cut sequence), so each rank gets its
-/// quota to within half a pair; the rest stay here.
+/// weight: the same work in the fewest pairs) that did not touch here
+/// (`touched`), then those that did (their models would move), then the
+/// cold ones. A pair goes where at least half its weight of room is left
+/// (the mid-point rule of a cut sequence), so each rank gets its quota to
+/// within half a pair; the rest stay here.
 fn assign_pairs(
     weights: &[u64],
     quota: &[f64],
@@ -270,9 +279,9 @@ mod shares {
         before[6] = 2;
         let touched = |i: usize| i == 1;
         let d = assign_pairs(&w, &quota, 0, &before, touched);
-        // 3 back to rank 1 (32), then the untouched hot pair 4 would need
-        // 16 of the 8 left: no; the touched one neither; the four cold
-        // pairs fill the 8 left of rank 1 (the lower rank first).
+        // 3 back to rank 1 (32), then a hot pair would need 16 of the 8
+        // left: no; the four cold pairs fill the 8 left of rank 1 (the
+        // lower rank first).
         assert_eq!(d, vec![1, 0, 1, 1, 0, 1, 0, 1]);
         // Rank 1 got 32 + 4 = 36: short by 4, yet more than half a hot
         // pair; every quota is met to within half the largest weight.
@@ -291,6 +300,9 @@ mod shares {
         // (30 left >= 16): 128, no room left for the cold ones.
         let d = assign_pairs(&w, &[0.0, 126.0, 0.0], 0, &[NONE; 8], touched);
         assert_eq!(d, vec![0, 1, 0, 1, 1, 0, 1, 0]);
+        // Without touch marks, the hot pairs in the order found.
+        let d = assign_pairs(&w, &[0.0, 70.0, 0.0], 0, &[NONE; 8], |_| false);
+        assert_eq!(d, vec![1, 1, 1, 1, 0, 1, 0, 1]);
         // No room anywhere: everything stays, whatever the history.
         let d = assign_pairs(&w, &[50.0, 0.0, 0.0], 0, &before, touched);
         assert!(d.iter().all(|&r| r == 0));

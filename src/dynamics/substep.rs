@@ -36,8 +36,10 @@ impl ExplicitDomain {
         // which detects afresh, repeat the run bitwise.
         // (A detection at these very positions, by a thermal detection or
         // a restore, already gives those candidates.)
+        // The same for the pairs' ranks (`pair_balance`): a detection at
+        // a step start shares them by the positions alone.
         if self.linear_tolerance > 0.0 && n > 0 {
-            if self.detected_at != Some(self.counters.substeps) {
+            if self.detected_at != Some(self.counters.substeps) || !self.last_detect_fresh {
                 self.redetect = true;
             }
             self.drop_models();
@@ -49,7 +51,10 @@ impl ExplicitDomain {
                 self.v_prev.extend_from_slice(&self.v[..self.n_owned]);
             }
             if self.redetect {
-                self.detect(comm)?;
+                self.sticky_detect = i > 0;
+                let detected = self.detect(comm);
+                self.sticky_detect = false;
+                detected?;
                 self.redetect = false;
             }
             let local = self.substep(comm);

@@ -208,7 +208,7 @@ echo "$overlap_line" >&2
   echo "## Packings (issue 5)"
   echo
   echo "The nut deposition rows above run \`scenarios/nut-packing-deposit.toml\` as it is (E = p_n = 1 MPa"
-  echo "packing stage, mass damping 10 /s, 5 /s in free flight, linearised contact at 0.02 of the overlap"
+  echo "packing stage, mass damping 10 /s, 5 /s in free flight, linearised contact at 0.1 of the overlap"
   echo "depth, settled below 3 cm/s rms) at N = 500 and N = 2000, each to settled; the drop placement"
   echo "and the settling are in the mechanics time. The deposited N = 2000 packing is then heated"
   echo "(\`scenarios/nut-packing-heatup.toml\`: Table 4, container at 300 C, 80 backward-Euler steps of"
@@ -219,11 +219,11 @@ echo "$overlap_line" >&2
   echo "Nodal temperature bounds of the N = 2000 heat-up on 2 ranks (every node, every written"
   echo "step; issue 15 requires [0, 300] C): ${heatup_bounds}. A lowest value of order -1e-8 C"
   echo "is the CG tolerance (rtol 1e-10 of 300 C), not a failure of the maximum principle. The same"
-  echo "heat-up with the operator before issue 15 (\\`contact.operator = \"rank_one\"\\`, consistent capacity,"
-  echo "last row of the first table): ${old_heatup_wall} s wall, ${old_heatup_bounds}."
+  echo "heat-up with the operator before issue 15 (\`contact.operator = \"rank_one\"\`, consistent capacity,"
+  echo "the row after the two heat-up rows of the first table): ${old_heatup_wall} s wall, ${old_heatup_bounds}."
   echo "The largest N that deposits and heats within an hour is not run here (it takes the hour);"
-  echo "measured by hand on 2 ranks (2026-12-01, README \"Packings: performance\"): N = 3000 in"
-  echo "57.3 min (deposition 3387 s, heat-up 49.0 s); N = 4000 had not settled after 70 min."
+  echo "measured by hand on 2 ranks (2026-12-05, \"Ten thousand nuts on 2 ranks\" below): N = 10,000"
+  echo "in 58.9 min (deposition 3,490.2 s, heat-up 45.9 s, 2,273 MiB per rank)."
   echo
   echo "## Thermal contact physics (issue 20)"
   echo
@@ -265,6 +265,9 @@ echo "$overlap_line" >&2
   echo "change of the kernel keeps its results bitwise):"
   echo
   echo "- $overlap_line"
+  echo
+  # The figures measured by hand, kept across reruns (their file says why).
+  sed '1,/^$/d' docs/benchmarks-by-hand.md
   echo
   echo "## Commands"
   echo

@@ -82,7 +82,8 @@ impl ExplicitDomain {
         let cold = weights.iter().copied().min().unwrap_or(0);
         let key = |i: usize| key_of(og.gid(kept[i].0), og.gid(kept[i].1));
         let hands_over = quota.iter().enumerate().any(|(d, &q)| d != rank && q > 0.0);
-        // Only with linearised models is there anything to keep in place.
+        // Whether this detection may use what earlier ones did: within a
+        // step, with linearised models to keep in place (`detect`).
         let sticky = !self.last_detect_fresh;
         let before: Vec<u32> = if sticky && hands_over && !self.pairs_given.is_empty() {
             (0..kept.len())

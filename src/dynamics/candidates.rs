@@ -23,7 +23,6 @@ use crate::contact::{
 use crate::contact::{tet_tet_penalty, PenaltyParams};
 use crate::error::{Error, Result};
 use crate::geometry::{face_planes, planes_within};
-use crate::mechanics::MechElement;
 use crate::parallel::ghosts::exchange_ghosts;
 use crate::parallel::Halo;
 
@@ -277,8 +276,9 @@ impl ExplicitDomain {
     /// linear time.
     fn order_elements(&mut self) {
         let n_owned = self.n_owned;
-        let touches = |el: &MechElement| el.nodes.iter().any(|&l| l as usize >= n_owned);
         let (ids, ne, nb_old) = (&self.elem_ids, self.elem_ids.len(), self.n_boundary);
+        let hexes = &self.hexes;
+        let touches = |i: usize| hexes.touches(&self.elements[i], ids[i], n_owned);
         let mut by_id: Vec<usize> = Vec::with_capacity(ne);
         let (mut i, mut j) = (0, nb_old);
         while i < nb_old || j < ne {
@@ -293,23 +293,15 @@ impl ExplicitDomain {
         if !by_id.windows(2).all(|w| ids[w[0]] < ids[w[1]]) {
             by_id.sort_by_key(|&i| ids[i]);
         }
-        let mut order: Vec<usize> = by_id
-            .iter()
-            .copied()
-            .filter(|&i| touches(&self.elements[i]))
-            .collect();
+        let mut order: Vec<usize> = by_id.iter().copied().filter(|&i| touches(i)).collect();
         self.n_boundary = order.len();
-        order.extend(
-            by_id
-                .iter()
-                .copied()
-                .filter(|&i| !touches(&self.elements[i])),
-        );
+        order.extend(by_id.iter().copied().filter(|&i| !touches(i)));
         drop(by_id);
         // Only a repartition changes the order (contact ghosts come after
         // the part's nodes, so no element touches them): keep the arrays.
         if order.iter().enumerate().all(|(k, &i)| k == i) {
             self.stress.resize(self.elements.len(), Matrix3::zeros());
+            self.hexes.locate(&self.elem_ids, &self.elements);
             return;
         }
         self.elements = order.iter().map(|&i| self.elements[i]).collect();
@@ -321,6 +313,7 @@ impl ExplicitDomain {
         }
         // Every substep writes every element's stress: no need to permute it.
         self.stress.resize(self.elements.len(), Matrix3::zeros());
+        self.hexes.locate(&self.elem_ids, &self.elements);
     }
 
     /// This rank's candidates from the one contact search over own and

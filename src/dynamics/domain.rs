@@ -52,6 +52,8 @@ pub struct ExplicitDomain {
     pub(super) elements: Vec<MechElement>,
     pub(super) elem_ids: Vec<u32>,
     pub(super) elem_tref: Vec<f64>,
+    /// The Hex8 elements (issue 21), whose tets in `elements` are HEX_TET.
+    pub(super) hexes: super::hexes::DomainHexes,
     pub(super) n_boundary: usize,
     pub(super) materials: Vec<ElasticMaterial>,
     /// Material densities (for the pairs' masses).
@@ -266,16 +268,62 @@ impl ExplicitDomain {
                 }
             }
         }
+        // Hex8 bodies' hexes (issue 21), each six consecutive tets.
+        let part_hexes = crate::parallel::PartHexes::new(model, part);
+        let mut hex_list = Vec::with_capacity(part_hexes.hexes.len());
+        for h in &part_hexes.hexes {
+            let e = h.first as usize;
+            let made = super::hexes::DomainHexes::element(
+                h,
+                part.elem_gid[e],
+                0,
+                |l| pm.nodes[l as usize],
+                part.elem_material[e],
+            );
+            match made {
+                Ok(x) => hex_list.push(x),
+                Err(err) => {
+                    local_error.get_or_insert(Error::Mechanics(format!(
+                        "the Hex8 element of tets {}..{}: {err}",
+                        part.elem_gid[e],
+                        part.elem_gid[e] + 5
+                    )));
+                }
+            }
+        }
         crate::parallel::agree(comm, local_error.map_or(Ok(()), Err))?;
+        let density_of = |e: usize| model.materials[part.elem_material[e] as usize].density;
         // Lumped masses of the owned nodes, summed in element order over
         // the ranks (the same bits on any rank count).
-        // Not numbered in the seeds: row-sum lumped mass ρ V0/4 per node of a Tet4.
-        let mass = part.sum_to_owned_in_order(comm, |e| {
-            model.materials[part.elem_material[e] as usize].density * pm.element_volume(e) / 4.0
+        let mass = part.sum_corners_to_owned_in_order(comm, |e| {
+            match part_hexes.of_element.get(e) {
+                Some(&h) if h != crate::parallel::PartHexes::NONE => {
+                    let (ph, he) = (&part_hexes.hexes[h as usize], &hex_list[h as usize]);
+                    let m = he.reference.lumped_masses(density_of(e));
+                    crate::parallel::PartHexes::corner_values(ph, &m, e - ph.first as usize)
+                }
+                // Not numbered in the seeds: row-sum lumped mass ρ V0/4 per node of a Tet4.
+                _ => [density_of(e) * pm.element_volume(e) / 4.0; 4],
+            }
         });
+        let is_hex_tet = |e: usize| {
+            part_hexes
+                .of_element
+                .get(e)
+                .is_some_and(|&h| h != crate::parallel::PartHexes::NONE)
+        };
         let free: Vec<usize> = (0..part.num_elements())
             .filter(|&e| !body_held[pm.body[e] as usize])
             .collect();
+        let hexes = super::hexes::DomainHexes {
+            list: hex_list
+                .into_iter()
+                .zip(&part_hexes.hexes)
+                .filter(|(_, ph)| !body_held[pm.body[ph.first as usize] as usize])
+                .map(|(h, _)| h)
+                .collect(),
+        };
+        let free_tets: Vec<usize> = free.iter().copied().filter(|&e| !is_hex_tet(e)).collect();
         let elem_ids: Vec<u32> = free.iter().map(|&e| part.elem_gid[e]).collect();
         let penalty = mm.contact.as_ref().map(|c| {
             (
@@ -313,7 +361,8 @@ impl ExplicitDomain {
             model,
             part,
             &materials,
-            &free,
+            &free_tets,
+            hexes.time_step(&materials, pn),
             pn,
             coupling_dt,
             &particle_w2,
@@ -343,7 +392,11 @@ impl ExplicitDomain {
                 .map(|&e| MechElement {
                     nodes: pm.tets[e],
                     reference: refs[e].expect("checked above"),
-                    material: part.elem_material[e],
+                    material: if is_hex_tet(e) {
+                        crate::mechanics::explicit::HEX_TET
+                    } else {
+                        part.elem_material[e]
+                    },
                 })
                 .collect(),
             elem_tref: free
@@ -351,6 +404,7 @@ impl ExplicitDomain {
                 .map(|&e| model.bodies[pm.body[e] as usize].reference_temperature)
                 .collect(),
             elem_ids,
+            hexes,
             n_boundary: 0,
             density: materials.iter().map(|m| m.density).collect(),
             materials,
@@ -564,6 +618,9 @@ impl ExplicitDomain {
                     - tref
             })
             .collect();
+        let mut new = new;
+        self.hexes
+            .element_temperatures(&self.node_t, &self.elem_tref, &mut new);
         self.elem_rate = match (dt, self.elem_dt.len() == new.len()) {
             (Some(dt), true) => new
                 .iter()

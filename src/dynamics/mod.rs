@@ -71,6 +71,7 @@ mod domain;
 mod force_sum;
 mod gaps;
 mod handover;
+mod hexes;
 mod joints;
 mod pair_balance;
 mod pair_sum;

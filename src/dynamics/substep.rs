@@ -253,6 +253,18 @@ impl ExplicitDomain {
             Ok(w) => strain += w,
             Err(e) => elem_error = Some((e, 0)),
         }
+        if !self.hexes.is_empty() {
+            let (x, v) = (&self.x, &self.v);
+            match self
+                .hexes
+                .forces(0..nb, &self.materials, x, v, dt_b, rate_b, f_b, s_b)
+            {
+                Ok(w) => strain += w,
+                Err(e) => {
+                    elem_error.get_or_insert((e, 0));
+                }
+            }
+        }
         // Ghost contributions, one by one, to their owners: the halo
         // elements' (fixed slots), and the touching pairs'.
         let mut send = std::mem::take(&mut self.send_buf);
@@ -299,12 +311,13 @@ impl ExplicitDomain {
             .collect();
         let interior = &self.elements[nb..];
         let (materials, x, v) = (&self.materials, &self.x, &self.v);
+        let hexes = &self.hexes;
         let mut inner: std::result::Result<f64, crate::mechanics::MechanicsError> = Ok(0.0);
         // Without penalty contact no pair forces travel (all ranks agree).
         let pairs = &mut self.pair_forces;
         let sized = (self.penalty.is_some()).then(|| (&pairs.send[..], &mut pairs.recv[..]));
         self.halo.exchange_into_sized(comm, &send, recv, sized, || {
-            inner = element_forces(
+            let tets = element_forces(
                 interior,
                 materials,
                 x,
@@ -313,6 +326,15 @@ impl ExplicitDomain {
                 f_i,
                 Some(s_i),
             );
+            inner = match tets {
+                Ok(w) if !hexes.is_empty() => {
+                    let range = nb..nb + interior.len();
+                    hexes
+                        .forces(range, materials, x, v, dt_i, rate_i, f_i, s_i)
+                        .map(|h| w + h)
+                }
+                other => other,
+            };
         });
         self.send_buf = send;
         self.pair_forces.take_received(&routes);

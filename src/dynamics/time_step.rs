@@ -18,7 +18,8 @@ use crate::model::Model;
 use crate::parallel::Part;
 
 /// Collective. The explicit step of the free elements `free` (local
-/// indices) of this rank's part (`pn` the contact penalty, if any): the
+/// indices, Tet4 only; `hex_bound` is the Hex8 elements' step and
+/// shortest length) of this rank's part (`pn` the contact penalty, if any): the
 /// scenario's, checked against the critical one, or safety × critical, cut
 /// to fill `coupling_dt`. `particle_w2`: per body, the square of the
 /// highest frequency its particles add (issue 21), added to the body's
@@ -32,6 +33,7 @@ pub(super) fn time_step(
     part: &Part,
     materials: &[ElasticMaterial],
     free: &[usize],
+    hex_bound: (f64, f64),
     pn: Option<f64>,
     coupling_dt: f64,
     particle_w2: &[(u32, f64)],
@@ -105,6 +107,9 @@ pub(super) fn time_step(
         }
     }
     crate::parallel::agree(comm, local_error.map_or(Ok(()), Err))?;
+    // The Hex8 elements (issue 21): their own bound, and shortest length.
+    dt_local = dt_local.min(hex_bound.0);
+    min_len = min_len.min(hex_bound.1);
     // The free spheres' contacts (issue 21), the same on every rank.
     dt_local = dt_local.min(sphere_dt);
     let mut crit: f64 = 0.0;

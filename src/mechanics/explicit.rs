@@ -72,6 +72,10 @@ pub struct MechElement {
     pub material: u32,
 }
 
+/// The material of a tet that is one of a Hex8's six (issue 21): the
+/// Tet4 kernels skip it; its hex's kernel fills its slots.
+pub const HEX_TET: u32 = u32::MAX;
+
 /// Builds the elements of `mesh`, material index = body id. Errors if a
 /// body id has no material or an element is inverted or degenerate.
 pub fn mesh_elements(
@@ -264,6 +268,10 @@ fn for_each_element(
     let constants: Vec<KernelMaterial> = materials.iter().map(KernelMaterial::new).collect();
     let mut energy = 0.0;
     for (e, el) in elements.iter().enumerate() {
+        if el.material == HEX_TET {
+            // A Hex8's tet: its hex's kernel fills its slots (issue 21).
+            continue;
+        }
         let idx = el.nodes.map(|i| i as usize);
         let material = match constants.get(el.material as usize) {
             Some(m) if idx.iter().all(|&i| i < n) => m,

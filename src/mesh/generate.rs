@@ -70,6 +70,11 @@ fn cells(len: f64, h: f64) -> Result<usize, MeshError> {
     Ok(n as usize)
 }
 
+/// The cells per axis of [`box_mesh`] for `size` and `h`.
+pub fn box_cells(size: [f64; 3], h: f64) -> Result<[usize; 3], MeshError> {
+    Ok([cells(size[0], h)?, cells(size[1], h)?, cells(size[2], h)?])
+}
+
 /// Tetrahedral mesh of the box `[origin, origin + size]` with target element
 /// size `h`.
 ///

@@ -42,6 +42,7 @@ mod geometry;
 pub mod gmsh;
 pub mod heat_links;
 pub mod hex8;
+pub mod hex_tets;
 pub mod lattice;
 pub mod nut;
 pub mod particle_region;

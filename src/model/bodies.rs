@@ -25,6 +25,9 @@ pub struct SourceMesh {
     pub joints: Option<SourceJoints>,
     /// The particles of an element set taken out of the mesh (issue 21).
     pub particles: Option<super::particles::SourceParticles>,
+    /// The hexes of a Hex8 mesh (issue 21): hex `h` is tets `6 h .. 6 h + 6`
+    /// (`mesh::hex_tets`), over the mesh's nodes, seed 002 Table 1 order.
+    pub hexes: Option<std::sync::Arc<[[u32; 8]]>>,
 }
 
 /// The joints of a source mesh made discontinuous (issue 19), kept as
@@ -105,6 +108,7 @@ impl SourceMesh {
             mesh,
             joints: None,
             particles: None,
+            hexes: None,
         }
     }
 
@@ -424,6 +428,36 @@ impl super::Model {
             src.tet_nodes(e).map(|n| body.node_range.0 + n),
             src.material[e],
         )
+    }
+
+    /// The hex element global id `elem` belongs to (issue 21), if its
+    /// body is a Hex8 mesh: the global id of the hex's first tet and its
+    /// eight global node ids (seed 002 Table 1 order).
+    pub fn element_hex(&self, elem: u32) -> Option<(u32, [u32; 8])> {
+        let body = &self.bodies[self.body_of_elem(elem)];
+        let BodySource::Mesh { mesh, .. } = body.source else {
+            return None;
+        };
+        let hexes = self.meshes[mesh as usize].hexes.as_ref()?;
+        let h = (elem - body.elem_range.0) / 6;
+        Some((
+            body.elem_range.0 + 6 * h,
+            hexes[h as usize].map(|n| body.node_range.0 + n),
+        ))
+    }
+
+    /// How many elements are a Hex8's tets (six per hex, issue 21).
+    pub fn hex_tets(&self) -> u64 {
+        (0..self.bodies.len())
+            .filter(|&b| self.body_is_hex8(b))
+            .map(|b| u64::from(self.bodies[b].elem_range.1 - self.bodies[b].elem_range.0))
+            .sum()
+    }
+
+    /// Whether body `b` is a Hex8 mesh (issue 21).
+    pub fn body_is_hex8(&self, b: usize) -> bool {
+        matches!(self.bodies[b].source, BodySource::Mesh { mesh, .. }
+            if self.meshes[mesh as usize].hexes.is_some())
     }
 
     /// Per body, the global number of its first joint (joints numbered

@@ -9,6 +9,7 @@ pub mod ambient;
 mod bcs;
 mod bodies;
 mod contact;
+mod make_mesh;
 mod particles;
 mod spheres;
 
@@ -407,90 +408,11 @@ impl Model {
                 }
                 continue;
             }
-            let mut m = match &b.mesh {
-                MeshSpec::Box {
-                    origin,
-                    size,
-                    element_size,
-                } => mesh::generate::box_mesh(*origin, *size, *element_size),
-                MeshSpec::Cylinder {
-                    center,
-                    radius,
-                    width,
-                    element_size,
-                    boundary,
-                } => mesh::generate::cylinder_mesh(
-                    *center,
-                    *radius,
-                    *width,
-                    *element_size,
-                    *boundary,
-                ),
-                MeshSpec::Annulus {
-                    center,
-                    inner_radius,
-                    radius,
-                    width,
-                    element_size,
-                } => mesh::generate::annulus_mesh(
-                    *center,
-                    *inner_radius,
-                    *radius,
-                    *width,
-                    *element_size,
-                ),
-                MeshSpec::Concentric {
-                    center,
-                    core_radius,
-                    radius,
-                    width,
-                    element_size,
-                } => mesh::generate::concentric_cylinder_mesh(
-                    *center,
-                    *core_radius,
-                    *radius,
-                    *width,
-                    *element_size,
-                ),
-                MeshSpec::Nut {
-                    center,
-                    across_flats,
-                    hole_radius,
-                    thickness,
-                    per_side,
-                    radial,
-                    layers,
-                } => mesh::nut::nut_mesh(
-                    *center,
-                    *across_flats,
-                    *hole_radius,
-                    *thickness,
-                    *per_side,
-                    *radial,
-                    *layers,
-                ),
-                MeshSpec::Container {
-                    center,
-                    inner_radius,
-                    wall,
-                    bottom,
-                    height,
-                    element_size,
-                } => mesh::container::container_mesh(
-                    *center,
-                    *inner_radius,
-                    *wall,
-                    bottom.unwrap_or(*wall),
-                    *height,
-                    *element_size,
-                ),
-                MeshSpec::Checkpoint { .. } => unreachable!("handled above"),
-                MeshSpec::Gmsh { file } => mesh::gmsh::read_msh(&sc.resolve(file)),
-            }
-            .map_err(|source| Error::Mesh {
-                context: context.clone(),
-                source,
-            })?;
+            let (mut m, hexes) =
+                make_mesh::body_mesh(&b.mesh, sc).map_err(|source| Error::Mesh {
+                    context: context.clone(),
+                    source,
+                })?;
             if let Some(r) = b.rotate {
                 rotate_points(&mut m.nodes, &rotation_xyz_degrees(r));
             }
@@ -552,6 +474,10 @@ impl Model {
                 }
             };
             source.particles = particles;
+            if let Some(h) = hexes {
+                make_mesh::hex8_allowed(b, &source, &h).map_err(model_err)?;
+                source.hexes = Some(h.into());
+            }
             let m = &source.mesh;
             // The body itself, its copies on a lattice, or a pack of
             // particles: refused before they are placed if the model would

@@ -134,12 +134,18 @@ impl Part {
             let src = &model.meshes[*mesh as usize];
             let ne = src.mesh.tets.len() as u64;
             let w = weight(b) / ne as f64;
-            let (e0, e1) = block(ne, size, rank);
-            for e in e0 as usize..e1 as usize {
-                let x = src.mesh.element_coords(e);
-                let c = std::array::from_fn(|d| (x[0][d] + x[1][d] + x[2][d] + x[3][d]) / 4.0);
+            // A Hex8 body's hexes go whole: six tets, by the first (issue 21).
+            let unit = if src.hexes.is_some() { 6 } else { 1 };
+            let (u0, u1) = block(ne / unit, size, rank);
+            for u in u0 as usize..u1 as usize {
+                let e = unit as usize * u;
+                let x: Vec<[f64; 3]> = (e..e + unit as usize)
+                    .flat_map(|t| src.mesh.element_coords(t))
+                    .collect();
+                let n = x.len() as f64;
+                let c = std::array::from_fn(|d| x.iter().map(|p| p[d]).sum::<f64>() / n);
                 objects.push(super::rcb::Object {
-                    weight: w,
+                    weight: w * unit as f64,
                     point: motion.apply(c),
                 });
                 ids.push([b as u32, e as u32]);
@@ -212,7 +218,12 @@ impl Part {
             if e == u32::MAX {
                 held.insert(b, Held::Whole);
             } else if let Held::Elements(v) = held.entry(b).or_insert(Held::Elements(Vec::new())) {
-                v.push(e);
+                let r = model.bodies[b as usize].elem_range;
+                if model.body_is_hex8(b as usize) && e < r.1 - r.0 {
+                    v.extend(e..e + 6);
+                } else {
+                    v.push(e);
+                }
             }
         }
         for h in held.values_mut() {

@@ -12,6 +12,7 @@ pub mod exchange;
 mod fingerprint;
 pub mod ghosts;
 mod halo;
+mod hexes;
 mod part;
 mod partition;
 pub mod rcb;
@@ -22,6 +23,7 @@ mod tied_rows;
 pub use build::{element_work, Placement, IMBALANCE};
 pub use fingerprint::fingerprint;
 pub use halo::Halo;
+pub use hexes::{PartHex, PartHexes};
 pub use part::{GlobalBcs, LocalBcs, Part, PartJoint, WholeMaps};
 pub use partition::{
     dual_graph, dual_graph_with, partition_collective, partition_elements,

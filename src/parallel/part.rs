@@ -258,6 +258,16 @@ impl Part {
         comm: &C,
         share: impl Fn(usize) -> f64,
     ) -> Vec<f64> {
+        self.sum_corners_to_owned_in_order(comm, |e| [share(e); 4])
+    }
+
+    /// Collective. As [`Part::sum_to_owned_in_order`], element `e` giving
+    /// `share(e)[c]` to its corner `c`.
+    pub fn sum_corners_to_owned_in_order<C: mpi::traits::Communicator>(
+        &self,
+        comm: &C,
+        share: impl Fn(usize) -> [f64; 4],
+    ) -> Vec<f64> {
         let mut w = vec![0.0; self.n_owned];
         // Local elements ascend by id, so each owned node's local shares
         // arrive in id order; remote ones are merged in below.
@@ -265,8 +275,8 @@ impl Part {
         let mut local_terms: Vec<(u32, u32, f64)> = Vec::new();
         let shared = self.shared_owned(comm);
         for e in 0..self.num_elements() {
-            let x = share(e);
-            for &l in &self.mesh.tets[e] {
+            let xs = share(e);
+            for (&l, &x) in self.mesh.tets[e].iter().zip(&xs) {
                 let l = l as usize;
                 if l >= self.n_owned {
                     let o = self.node_owner[l] as usize;

@@ -109,6 +109,8 @@ pub struct RunSummary {
     pub nodes: usize,
     /// Elements.
     pub elements: usize,
+    /// Of the elements, those that are Hex8 tets (six per hex, issue 21).
+    pub hex_tets: u64,
     /// Bonded particles (issue 21).
     pub particles: u64,
     /// Steps taken.
@@ -167,9 +169,16 @@ impl std::fmt::Display for RunSummary {
         writeln!(f, "fdem run summary")?;
         writeln!(
             f,
-            "  mesh        {} nodes, {} Tet4{} on {} rank(s)",
+            "  mesh        {} nodes, {}{} on {} rank(s)",
             self.nodes,
-            self.elements,
+            match self.hex_tets {
+                0 => format!("{} Tet4", self.elements),
+                n => format!(
+                    "{} Tet4, {} Hex8 (as {n} tets)",
+                    self.elements as u64 - n,
+                    n / 6
+                ),
+            },
             match self.particles {
                 0 => String::new(),
                 n => format!(", {n} bonded particles"),
@@ -617,6 +626,7 @@ impl Stages<'_, '_> {
             ranks: self.part.size,
             nodes: self.model.totals().0 as usize,
             elements: self.model.totals().1 as usize,
+            hex_tets: self.model.hex_tets(),
             particles: self.model.particle_offsets().1,
             steps: step - start_step,
             ksp_iterations: sys.map_or(0, |s| s.iterations),

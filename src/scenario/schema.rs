@@ -455,6 +455,10 @@ pub enum MeshSpec {
         size: [f64; 3],
         /// Target element size h (m): round(L/h) cells per axis.
         element_size: f64,
+        /// `tet4` (default: six tets per cell) or `hex8` (one hexahedron
+        /// per cell, issue 21).
+        #[serde(default)]
+        element: ElementKind,
     },
     /// A solid cylinder (disc) with its axis along z (named sets side, zmin, zmax).
     Cylinder {
@@ -559,7 +563,23 @@ pub enum MeshSpec {
     Gmsh {
         /// Path, relative to the scenario file.
         file: String,
+        /// `tet4` (default: the file's tetrahedra) or `hex8` (its 8-node
+        /// hexahedra, issue 21).
+        #[serde(default)]
+        element: ElementKind,
     },
+}
+
+/// The finite element of a body's own mesh (issue 21).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ElementKind {
+    /// Linear tetrahedra.
+    #[default]
+    Tet4,
+    /// Trilinear hexahedra (seed 002 eqs 6–7), selective-reduced with
+    /// hourglass control; also split into six tets for contact and output.
+    Hex8,
 }
 
 fn default_nut_width() -> f64 {

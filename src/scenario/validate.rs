@@ -198,6 +198,7 @@ impl Scenario {
                 size,
                 element_size,
                 origin,
+                ..
             } = &b.mesh
             {
                 if size.iter().any(|s| !(s.is_finite() && *s > 0.0)) {

@@ -406,8 +406,28 @@ pub fn assemble<'p>(
     // by row (`row_sum`); the other terms are few and go block by block.
     let pair_rows = mode == DeltaT::Local;
     let pair_idx = |d: &crate::contact::PairDofs| d.petsc.map(|n| n as i32);
+    // Hex8 bodies (issue 21): a hex's block at its first tet, none at its other five.
+    let hexes = crate::parallel::PartHexes::new(model, part);
+    let hex_of = |e: usize| {
+        hexes
+            .of_element
+            .get(e)
+            .filter(|&&h| h != crate::parallel::PartHexes::NONE)
+            .map(|&h| &hexes.hexes[h as usize])
+    };
+    let elem_rows = |e: usize| -> ([i32; 8], usize) {
+        let mut rows = [0; 8];
+        match hex_of(e) {
+            Some(h) if h.first as usize == e => (h.nodes.map(g), 8),
+            Some(_) => (rows, 0),
+            None => {
+                rows[..4].copy_from_slice(&elem_idx(e));
+                (rows, 4)
+            }
+        }
+    };
     let inc = Incidence::new(
-        (0..part.num_elements()).map(elem_idx),
+        (0..part.num_elements()).map(elem_rows),
         contacts.dofs[..if pair_rows { contacts.dofs.len() } else { 0 }]
             .iter()
             .map(pair_idx),
@@ -417,16 +437,9 @@ pub fn assemble<'p>(
         for (r, items) in inc.rows() {
             row.clear();
             for item in items {
-                let mut cols = [0; 8];
-                let n = match item {
-                    Item::Element(e) => {
-                        cols[..4].copy_from_slice(&elem_idx(e));
-                        4
-                    }
-                    Item::Pair(k) => {
-                        cols = pair_idx(&contacts.dofs[k]);
-                        8
-                    }
+                let (cols, n) = match item {
+                    Item::Element(e) => elem_rows(e),
+                    Item::Pair(k) => (pair_idx(&contacts.dofs[k]), 8),
                 };
                 cols[..n].iter().for_each(|&c| row.add(c, 0.0, 0.0));
             }
@@ -470,11 +483,37 @@ pub fn assemble<'p>(
         };
         (geo, k, m)
     };
+    // The Hex8 counterparts (2×2×2 Gauss, `thermal::hex8`) of hex `h`.
+    let hex_reference = |h: &crate::parallel::PartHex| {
+        let x = h.nodes.map(|l| part.mesh.nodes[l as usize]);
+        crate::mechanics::hex8_element::Hex8Reference::from_coords(&x)
+            .expect("a Hex8 body's hexes were checked when its mesh was made")
+    };
+    let hex_blocks = |e: usize, h: &crate::parallel::PartHex| {
+        let mat = &model.materials[part.elem_material[e] as usize];
+        let r = hex_reference(h);
+        let rho_c = mat.density * mat.specific_heat;
+        let m = match model.thermal.capacity {
+            CapacityKind::Consistent => super::hex8::hex8_capacity_consistent(&r, rho_c),
+            CapacityKind::Lumped => super::hex8::hex8_capacity_lumped(&r, rho_c),
+        };
+        (super::hex8::hex8_conductivity(&r, mat.conductivity), m)
+    };
     for e in 0..part.num_elements() {
         let q = model.thermal.source[part.mesh.body[e] as usize];
         if q != 0.0 {
-            let geo = element_blocks(e).0;
-            load_flux.set_values(&elem_idx(e), &element::source_load(&geo, q), true)?;
+            match hex_of(e) {
+                // ∫ N_I q dV of the hex, at its first tet.
+                Some(h) if h.first as usize == e => {
+                    let load = hex_reference(h).lumped_masses(q);
+                    load_flux.set_values(&h.nodes.map(g), &load, true)?;
+                }
+                Some(_) => {}
+                None => {
+                    let geo = element_blocks(e).0;
+                    load_flux.set_values(&elem_idx(e), &element::source_load(&geo, q), true)?;
+                }
+            }
         }
     }
     particles.add(&mut capacity, &mut stiffness, &mut load_flux)?;
@@ -558,15 +597,26 @@ pub fn assemble<'p>(
         row.clear();
         for item in items {
             match item {
-                Item::Element(e) => {
-                    let (_, k, m) = element_blocks(e);
-                    let idx = elem_idx(e);
-                    for a in (0..4).filter(|&a| idx[a] == r) {
-                        for (b, &c) in idx.iter().enumerate() {
-                            row.add(c, k[4 * a + b], m[4 * a + b]);
+                Item::Element(e) => match hex_of(e) {
+                    Some(h) => {
+                        let (k, m) = hex_blocks(e, h);
+                        let idx = h.nodes.map(g);
+                        for a in (0..8).filter(|&a| idx[a] == r) {
+                            for (b, &c) in idx.iter().enumerate() {
+                                row.add(c, k[8 * a + b], m[8 * a + b]);
+                            }
                         }
                     }
-                }
+                    None => {
+                        let (_, k, m) = element_blocks(e);
+                        let idx = elem_idx(e);
+                        for a in (0..4).filter(|&a| idx[a] == r) {
+                            for (b, &c) in idx.iter().enumerate() {
+                                row.add(c, k[4 * a + b], m[4 * a + b]);
+                            }
+                        }
+                    }
+                },
                 Item::Pair(k) if rcs[k].is_finite() => {
                     let idx = pair_idx(&contacts.dofs[k]);
                     for a in (0..8).filter(|&a| idx[a] == r) {

@@ -21,15 +21,17 @@ pub(super) enum Item {
 }
 
 impl Incidence {
-    /// The rows of `elements` (4 global rows each) and of `pairs` (8 each).
+    /// The rows of `elements` (the first n of each (rows, n): 4 for a
+    /// Tet4, 8 for a Hex8, 0 for a tet that is part of a Hex8) and of
+    /// `pairs` (8 each).
     pub(super) fn new(
-        elements: impl ExactSizeIterator<Item = [i32; 4]>,
+        elements: impl ExactSizeIterator<Item = ([i32; 8], usize)>,
         pairs: impl ExactSizeIterator<Item = [i32; 8]>,
     ) -> Incidence {
         let ne = elements.len();
         let mut inc = Vec::with_capacity(4 * ne + 8 * pairs.len());
-        for (e, idx) in elements.enumerate() {
-            inc.extend(idx.iter().map(|&r| (r, e as u32)));
+        for (e, (idx, n)) in elements.enumerate() {
+            inc.extend(idx[..n].iter().map(|&r| (r, e as u32)));
         }
         for (p, idx) in pairs.enumerate() {
             inc.extend(idx.iter().map(|&r| (r, (ne + p) as u32)));
@@ -104,7 +106,11 @@ mod tests {
 
     #[test]
     fn rows_list_their_blocks_once_and_sums_merge_columns() {
-        let elements = [[0, 1, 2, 3], [2, 3, 4, 5]];
+        let elements = [[0, 1, 2, 3], [2, 3, 4, 5]].map(|r| {
+            let mut rows = [0; 8];
+            rows[..4].copy_from_slice(&r);
+            (rows, 4)
+        });
         let pairs = [[3, 4, 5, 6, 6, 7, 8, 3]];
         let inc = Incidence::new(elements.into_iter(), pairs.into_iter());
         let rows: Vec<(i32, Vec<Item>)> = inc.rows().map(|(r, i)| (r, i.collect())).collect();

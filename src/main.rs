@@ -308,8 +308,13 @@ fn dispatch(
                 } else {
                     "mechanics only, no heat conduction".to_string()
                 };
+                let hex_tets = model.hex_tets() as usize;
+                let hexes = match hex_tets {
+                    0 => String::new(),
+                    n => format!(" ({} of them split {} Hex8)", n, n / 6),
+                };
                 println!(
-                    "  {} bodies, {} nodes, {} Tet4, {} steps of {} s ({scheme})",
+                    "  {} bodies, {} nodes, {} Tet4{hexes}, {} steps of {} s ({scheme})",
                     model.bodies.len(),
                     whole.mesh.nodes.len(),
                     whole.mesh.tets.len(),

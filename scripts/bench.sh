@@ -157,9 +157,12 @@ echo "$joint_lines" >&2
 
 # Bonded-lattice kernel throughput (issue 21) and the exact tet-tet
 # overlap kernel of the penalty contact (issue 22).
-cargo build --release --example bond_kernel_bench --example overlap_kernel_bench
+cargo build --release --example bond_kernel_bench --example overlap_kernel_bench \
+  --example hex8_kernel_bench
 bond_lines=$(target/release/examples/bond_kernel_bench)
 echo "$bond_lines" >&2
+hex8_lines=$(target/release/examples/hex8_kernel_bench)
+echo "$hex8_lines" >&2
 overlap_line=$(target/release/examples/overlap_kernel_bench)
 echo "$overlap_line" >&2
 
@@ -257,6 +260,15 @@ echo "$overlap_line" >&2
   echo "spinning; one core; issue 21 asks at least 20 million bond updates per second per core):"
   echo
   echo "$bond_lines" | sed 's/^/- /'
+  echo
+  echo "## Hex8 kernel"
+  echo
+  echo "\`cargo run --release --example hex8_kernel_bench\` (finite-strain Hex8 internal forces"
+  echo "of a 40^3 box, 2x2x2 Gauss points with selective-reduced shear and twist hourglass"
+  echo "control, thermal split, one core; issue 21 asks at least 10 million element updates per"
+  echo "second per core):"
+  echo
+  echo "$hex8_lines" | sed 's/^/- /'
   echo
   echo "## Contact overlap kernel"
   echo

@@ -277,6 +277,7 @@ pub fn hex8_forces(
     let f_c_off = off_diagonal(&(at * (f_c - Matrix3::identity()) * r.frame));
     let fd_c_off = off_diagonal(&(at * fd_c * r.frame));
     let mut forces = [Vector3::zeros(); 8];
+    let mut p_off_sum = Matrix3::zeros();
     let mut gauss_stress = [Matrix3::zeros(); 8];
     let mut mean = Matrix3::zeros();
     let mut volume = 0.0;
@@ -322,12 +323,17 @@ pub fn hex8_forces(
         // First Piola P = J σ F⁻ᵀ, split in the natural frame into the parts conjugate to the Gauss-point diagonal and the centre off-diagonal.
         let p = sigma * f_inv.transpose() * j;
         let p_nat = r.frame_inv * p * r.frame_inv.transpose();
-        let p_diag = r.frame * Matrix3::from_diagonal(&p_nat.diagonal()) * at;
-        let p_off = r.frame * off_diagonal(&p_nat) * at;
-        for (i, fi) in forces.iter_mut().enumerate() {
+        let p_diag = r.frame * Matrix3::from_diagonal(&p_nat.diagonal()) * (at * r.dv[g]);
+        p_off_sum += off_diagonal(&p_nat) * r.dv[g];
+        for (fi, gi) in forces.iter_mut().zip(&r.grad[g]) {
             // Not numbered in the seeds (virtual work): f_I = −Σ_g dV_g (P_diag ∇N_I(g) + P_off ∇N_I(0)).
-            *fi -= (p_diag * r.grad[g][i] + p_off * r.grad_centre[i]) * r.dv[g];
+            *fi -= p_diag * gi;
         }
+    }
+    // The centre parts of every Gauss point at once: (Σ_g dV_g P_off,g) ∇N_I(0).
+    let p_off = r.frame * p_off_sum * at;
+    for (fi, gi) in forces.iter_mut().zip(&r.grad_centre) {
+        *fi -= p_off * gi;
     }
     // Hourglass control of the three twist modes, in the co-rotated frame.
     let rot = polar_rotation(&f_c);

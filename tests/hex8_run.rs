@@ -26,8 +26,8 @@ fn tip_deflection(m: &Mech, k: usize, length: f64) -> f64 {
 /// Seed 002 sec 4.1, FE alone, Hex8 of 0.5 mm (4 through the thickness)
 /// by damped explicit dynamics: the static tip deflection within 3 % of
 /// P L³/(3EI) + P L/(κ G A) = 0.403 mm (measured −1.4 %: 0.3974 mm), the
-/// beam at rest, the root's bending stress antisymmetric about the
-/// mid-plane, and the same bits on 1 and 2 ranks (the beam, 1845 nodes,
+/// beam at rest, its bending stress as beam theory's within 2 %, and the
+/// same bits on 1 and 2 ranks (the beam, 1845 nodes,
 /// is cut over the two, its hexes whole).
 #[test]
 fn hex8_cantilever_deflects_as_timoshenko_on_one_and_two_ranks() {
@@ -55,27 +55,26 @@ fn hex8_cantilever_deflects_as_timoshenko_on_one_and_two_ranks() {
     // Static: the last two outputs (0.5 ms apart) agree to 1e-4.
     let before = tip_deflection(m, k - 1, beam.length);
     assert!((tip - before).abs() < 1e-4 * tip, "{before:e} -> {tip:e}");
-    // Bending: σ_xx of the root cells above and below the mid-plane are
-    // opposite (their centroids mirror each other).
-    let centroid = |c: &[usize; 4]| -> [f64; 3] {
-        std::array::from_fn(|d| c.iter().map(|&n| m.coords[n][d]).sum::<f64>() / 4.0)
-    };
-    let (mut top, mut bottom) = (0.0, 0.0);
+    // Bending: σ_xx of the cells 4–6 mm from the clamp against beam
+    // theory P (L − x)(z − H/2)/I at their centroids, each half of the
+    // section summed (measured +0.6 % low in both; the tension half on top).
+    let i = beam.width * beam.height.powi(3) / 12.0;
+    let (mut sums, mut theory) = ([0.0; 2], [0.0; 2]);
     for (c, s) in m.cells.iter().zip(&m.stress[k]) {
-        let x = centroid(c);
-        if x[0] < 0.5e-3 {
-            if x[2] > beam.height / 2.0 {
-                top += s[0][0];
-            } else {
-                bottom += s[0][0];
-            }
+        let x: [f64; 3] =
+            std::array::from_fn(|d| c.iter().map(|&n| m.coords[n][d]).sum::<f64>() / 4.0);
+        if (4e-3..6e-3).contains(&x[0]) {
+            let half = usize::from(x[2] < beam.height / 2.0);
+            sums[half] += s[0][0];
+            theory[half] += beam.load * (beam.length - x[0]) * (x[2] - beam.height / 2.0) / i;
         }
     }
-    assert!(top < 0.0 && bottom > 0.0, "top {top:e}, bottom {bottom:e}");
-    assert!(
-        (top + bottom).abs() < 0.02 * bottom,
-        "top {top:e}, bottom {bottom:e}"
-    );
+    for h in 0..2 {
+        let ratio = sums[h] / theory[h];
+        eprintln!("bending stress, half {h}: {ratio:.4} of beam theory");
+        assert!((ratio - 1.0).abs() < 0.02, "half {h}: {ratio}");
+    }
+    assert!(sums[0] > 0.0 && sums[1] < 0.0);
     // 1 and 2 ranks: the same bits.
     for (a, b) in runs[0].disp.iter().zip(&runs[1].disp) {
         assert!(a == b, "displacements differ between 1 and 2 ranks");

@@ -4,13 +4,16 @@
 use crate::mesh::{self, MeshError, TetMesh};
 use crate::scenario::{ElementKind, LoadedScenario, MeshSpec};
 
-/// The mesh of `spec` (not a checkpoint), and its hexes if Hex8
-/// (hex `h` is tets `6 h .. 6 h + 6`, `mesh::hex_tets`).
+/// The hexes of a Hex8 mesh: hex `h` is tets `6 h .. 6 h + 6`
+/// (`mesh::hex_tets`); `None` for a Tet4 mesh.
+type Hexes = Option<Vec<[u32; 8]>>;
+
+/// The mesh of `spec` (not a checkpoint), and its hexes if Hex8.
 pub(super) fn body_mesh(
     spec: &MeshSpec,
     sc: &LoadedScenario,
-) -> Result<(TetMesh, Option<Vec<[u32; 8]>>), MeshError> {
-    let mut hexes: Option<Vec<[u32; 8]>> = None;
+) -> Result<(TetMesh, Hexes), MeshError> {
+    let mut hexes: Hexes = None;
     let m = match spec {
         MeshSpec::Box {
             origin,

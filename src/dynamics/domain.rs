@@ -276,9 +276,8 @@ impl ExplicitDomain {
             let made = super::hexes::DomainHexes::element(
                 h,
                 part.elem_gid[e],
-                0,
                 |l| pm.nodes[l as usize],
-                part.elem_material[e],
+                (part.elem_material[e], pm.body[e]),
             );
             match made {
                 Ok(x) => hex_list.push(x),
@@ -362,7 +361,7 @@ impl ExplicitDomain {
             part,
             &materials,
             &free_tets,
-            hexes.time_step(&materials, pn),
+            hexes.time_step(&materials, pn, &particle_w2),
             pn,
             coupling_dt,
             &particle_w2,

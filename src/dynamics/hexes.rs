@@ -30,6 +30,8 @@ pub(super) struct HexElement {
     pub(super) corner: [(u8, u8); 8],
     pub(super) reference: Hex8Reference,
     pub(super) material: u32,
+    /// Its body.
+    pub(super) body: u32,
     /// Element index of its first tet (refreshed by `order_elements`).
     pub(super) slot: u32,
 }
@@ -41,14 +43,13 @@ pub(super) struct DomainHexes {
 }
 
 impl DomainHexes {
-    /// The hex of `part_hex` (its first tet has global id `gid_first` and
-    /// element index `slot`), of material `material`.
+    /// The hex of `part_hex` (its first tet has global id `gid_first`),
+    /// of material `material` and body `body`.
     pub(super) fn element(
         part_hex: &PartHex,
         gid_first: u32,
-        slot: u32,
         coords: impl Fn(u32) -> [f64; 3],
-        material: u32,
+        (material, body): (u32, u32),
     ) -> Result<HexElement, MechanicsError> {
         let reference = Hex8Reference::from_coords(&part_hex.nodes.map(coords))?;
         Ok(HexElement {
@@ -57,7 +58,8 @@ impl DomainHexes {
             corner: part_hex.corner,
             reference,
             material,
-            slot,
+            body,
+            slot: 0,
         })
     }
 
@@ -152,13 +154,25 @@ impl DomainHexes {
     }
 
     /// The stable step of the hexes (`Hex8Reference::critical_dt` with the
-    /// viscous reduction of the Tet4 bound; with a contact penalty `pn`,
-    /// the element bound with the hex's shortest length), and that length.
-    pub(super) fn time_step(&self, materials: &[ElasticMaterial], pn: Option<f64>) -> (f64, f64) {
+    /// viscous reduction of the Tet4 bound, a body's particles adding
+    /// their ω² `particle_w2` as to its Tet4 elements; with a contact
+    /// penalty `pn`, the element bound with the hex's shortest length), and
+    /// that length.
+    pub(super) fn time_step(
+        &self,
+        materials: &[ElasticMaterial],
+        pn: Option<f64>,
+        particle_w2: &[(u32, f64)],
+    ) -> (f64, f64) {
         let (mut dt, mut len) = (f64::INFINITY, f64::INFINITY);
         for h in &self.list {
             let mat = &materials[h.material as usize];
-            let omega = 2.0 / h.reference.critical_dt(mat);
+            let w2: f64 = particle_w2
+                .iter()
+                .filter(|&&(b, _)| b == h.body)
+                .map(|&(_, w2)| w2)
+                .sum();
+            let omega = (4.0 / h.reference.critical_dt(mat).powi(2) + w2).sqrt();
             dt = dt.min(stable_step(
                 omega,
                 mat.viscosity / mat.p_wave_modulus() * omega,

@@ -108,8 +108,8 @@ pub(super) fn body_mesh(
 }
 
 /// Whether body `b`'s Hex8 mesh (`source`, hexes `hexes`) can be run:
-/// not jointed, no particles (both work on tets), and each hex of one
-/// material (a region's element set is a set of tets).
+/// not jointed (joints work on tets), and each hex of one material (a
+/// region's element set is a set of tets).
 pub(super) fn hex8_allowed(
     b: &crate::scenario::BodySpec,
     source: &super::bodies::SourceMesh,
@@ -123,9 +123,6 @@ pub(super) fn hex8_allowed(
     };
     if b.fracture.is_some() {
         return refuse("fracture");
-    }
-    if b.particles.is_some() || source.particles.is_some() {
-        return refuse("particles");
     }
     for h in 0..hexes.len() {
         let m = &source.material[6 * h..6 * h + 6];

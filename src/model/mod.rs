@@ -443,8 +443,8 @@ impl Model {
                     mat_of_elem[e as usize] = material_index(mat);
                 }
             }
-            let (m, material_vec, particles) =
-                particles::split_off(b, m, mat_of_elem).map_err(model_err)?;
+            let (m, material_vec, particles, hexes) =
+                particles::split_off(b, m, mat_of_elem, hexes).map_err(model_err)?;
             let mut source = match &b.fracture {
                 None => SourceMesh::new(m, material_vec),
                 Some(f) => {

@@ -108,20 +108,45 @@ pub(super) fn initial_target<'a>(
     Ok(t)
 }
 
-/// The body `b`'s mesh `m` (element materials `material`) without the
-/// element set of its `particles` key, and the particles; unchanged
-/// without the key. Errors name the body and the key.
+/// The body `b`'s mesh `m` (element materials `material`, Hex8 `hexes`
+/// if any) without the element set of its `particles` key, and the
+/// particles; unchanged without the key. A Hex8 body's set must be whole
+/// hexes; its remaining hexes are numbered again with their tets (the
+/// links attach to their tets, `mesh::particle_region`). Errors name the
+/// body and the key.
+#[allow(clippy::type_complexity)]
 pub(super) fn split_off(
     b: &BodySpec,
     m: TetMesh,
     material: Vec<u32>,
-) -> Result<(TetMesh, Vec<u32>, Option<SourceParticles>), String> {
+    hexes: Option<Vec<[u32; 8]>>,
+) -> Result<
+    (
+        TetMesh,
+        Vec<u32>,
+        Option<SourceParticles>,
+        Option<Vec<[u32; 8]>>,
+    ),
+    String,
+> {
     let Some(p) = &b.particles else {
-        return Ok((m, material, None));
+        return Ok((m, material, None, hexes));
     };
     let elems = super::bodies::elements_of(&m, &p.set, &b.name, "particles.set")?;
     let mut in_set = vec![false; m.tets.len()];
     elems.iter().for_each(|&e| in_set[e as usize] = true);
+    if hexes.is_some() {
+        if let Some(h) = (0..m.tets.len() / 6).find(|&h| {
+            let s = &in_set[6 * h..6 * h + 6];
+            s.iter().any(|&x| x != s[0])
+        }) {
+            return Err(format!(
+                "body `{}`: particles.set: `{}` cuts Hex8 element {h} (it holds some of its six \
+                 tets); make the set whole hexes (a box whose faces lie on element faces)",
+                b.name, p.set
+            ));
+        }
+    }
     if elems.len() == m.tets.len() {
         return Err(format!(
             "body `{}`: particles.set: `{}` is every element of the body; \
@@ -137,6 +162,24 @@ pub(super) fn split_off(
         ));
     }
     let (fe, index) = without_elements(&m, &in_set);
+    // The remaining hexes: hex node k is a corner of one of its tets,
+    // which keep their corners' order in the new mesh.
+    let hexes = hexes.map(|hs| {
+        hs.iter()
+            .enumerate()
+            .filter(|&(h, _)| !in_set[6 * h])
+            .map(|(h, hex)| {
+                hex.map(|n| {
+                    (0..24)
+                        .find_map(|k| {
+                            let (t, c) = (6 * h + k / 4, k % 4);
+                            (m.tets[t][c] == n).then(|| fe.tets[index[t] as usize][c])
+                        })
+                        .expect("each node of a hex is a corner of one of its tets")
+                })
+            })
+            .collect()
+    });
     let region = particle_region(&m, &p.set, &in_set, &index, p.radius)
         .map_err(|e| format!("body `{}`: particles: {e}", b.name))?;
     let sphere_sets = sphere_sets(&m, &region);
@@ -158,6 +201,7 @@ pub(super) fn split_off(
             material: mat,
             sphere_sets,
         }),
+        hexes,
     ))
 }
 

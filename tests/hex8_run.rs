@@ -441,3 +441,40 @@ fn hex8_bar_with_particles_conducts_the_linear_profile() {
     let d = rel_diff(&finals[0], &finals[1]);
     assert!(d < 1e-8, "1 vs 2 ranks: {d:e}");
 }
+
+/// Eight Hex8 blocks dropped onto a Hex8 floor (`scenarios/drop8.toml`):
+/// contact between hexes' tets, and repartitions on 2 ranks that move the
+/// Hex8 bodies (measured: 3, 9 bodies moved), in the same bits as 1 rank.
+#[test]
+fn hex8_bodies_collide_and_repartition_bitwise() {
+    let scen = root().join("scenarios/drop8.toml");
+    let hex = [
+        "--set",
+        "bodies.block.mesh.element=hex8",
+        "--set",
+        "bodies.floor.mesh.element=hex8",
+    ];
+    let one = out_dir("drop8-hex8-1");
+    run_ok(1, &scen, &one, &hex);
+    let two = out_dir("drop8-hex8-2");
+    let rebalance = [
+        "--set",
+        "mechanics.rebalance.every=5",
+        "--set",
+        "mechanics.rebalance.threshold=1.0001",
+    ];
+    let stdout = run_ok(2, &scen, &two, &[&hex[..], &rebalance[..]].concat());
+    assert!(!stdout.contains("0 repartition(s)"), "{stdout}");
+    assert!(stdout.contains("repartition(s)"), "{stdout}");
+    let (a, b) = (read_mech(&one, "drop8"), read_mech(&two, "drop8"));
+    assert!(a.disp == b.disp, "1 and 2 ranks differ");
+    let k = a.times.len() - 1;
+    // The blocks fell and landed: every block node moved down, none below the floor's top.
+    let fell = a
+        .coords
+        .iter()
+        .zip(&a.disp[k])
+        .filter(|(c, _)| c[2] > 0.01)
+        .all(|(c, u)| u[2] < 0.0 && c[2] + u[2] > -0.01);
+    assert!(fell);
+}

@@ -8,7 +8,6 @@ mod common;
 
 use common::*;
 use fdem::validation::cantilever::Cantilever;
-use fdem::validation::SlabProblem;
 
 /// The tip (x = L) nodes' mean displacement along −z at output `k` (m).
 fn tip_deflection(m: &Mech, k: usize, length: f64) -> f64 {
@@ -82,19 +81,6 @@ fn hex8_cantilever_deflects_as_timoshenko_on_one_and_two_ranks() {
     assert!(runs[0].stress == runs[1].stress);
 }
 
-/// Mean over nodes of |T − T_analytic| / (T_D − T_i), in percent.
-fn slab_error_percent(r: &Results, k: usize) -> f64 {
-    let p = SlabProblem::seed_000();
-    let t = r.times[k];
-    let sum: f64 = r
-        .coords
-        .iter()
-        .zip(&r.temperature[k])
-        .map(|(x, &v)| (v - p.temperature(x[0], t)).abs())
-        .sum();
-    100.0 * sum / r.coords.len() as f64 / (p.t_dirichlet - p.t_initial).abs()
-}
-
 /// Seed 000 sec 4.2 with Hex8 (`thermal::hex8` matrices in the one PETSc
 /// system): the slab series at h = 0.1 and 0.05 m, its error falling
 /// about fourfold as h halves, within the measured errors + 10 %
@@ -114,7 +100,7 @@ fn hex8_slab_matches_the_series_at_second_order() {
             let args = ["--set", "bodies.bar.mesh.element=hex8", "--set", &size];
             run_ok(ranks, &root().join("scenarios/slab-1d.toml"), &out, &args);
             let r = read_results(&out, "slab-1d");
-            let e = [10.0, 50.0, 100.0].map(|t| slab_error_percent(&r, step_at(&r, t)));
+            let e = [10.0, 50.0, 100.0].map(|t| slab_mean_error_percent(&r, step_at(&r, t)));
             eprintln!("Hex8 slab h = {h}, {ranks} rank(s): errors {e:?} %");
             for (j, &x) in e.iter().enumerate() {
                 assert!(x <= 1.1 * measured[i][j], "h = {h}, output {j}: {x} %");

@@ -6,20 +6,6 @@
 mod common;
 
 use common::*;
-use fdem::validation::SlabProblem;
-
-/// Mean over nodes of |T − T_analytic| / (T_D − T_i), in percent.
-fn mean_error_percent(r: &Results, k: usize) -> f64 {
-    let p = SlabProblem::seed_000();
-    let t = r.times[k];
-    let sum: f64 = r
-        .coords
-        .iter()
-        .zip(&r.temperature[k])
-        .map(|(x, &v)| (v - p.temperature(x[0], t)).abs())
-        .sum();
-    100.0 * sum / r.coords.len() as f64 / (p.t_dirichlet - p.t_initial).abs()
-}
 
 fn slab_errors(h: f64, name: &str) -> [f64; 3] {
     let out = out_dir(name);
@@ -31,7 +17,7 @@ fn slab_errors(h: f64, name: &str) -> [f64; 3] {
         &["--set", &set],
     );
     let r = read_results(&out, "slab-1d");
-    [10.0, 50.0, 100.0].map(|t| mean_error_percent(&r, step_at(&r, t)))
+    [10.0, 50.0, 100.0].map(|t| slab_mean_error_percent(&r, step_at(&r, t)))
 }
 
 /// Seed 000 Table 2, FEM column. The mesh layout here (six Kuhn tets per

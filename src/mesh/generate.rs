@@ -60,7 +60,7 @@ const KUHN_TETS: [[usize; 4]; 6] = [
 const SIDES: [&str; 6] = ["xmin", "xmax", "ymin", "ymax", "zmin", "zmax"];
 
 /// Number of cells along an axis of length `len` with target spacing `h`.
-fn cells(len: f64, h: f64) -> Result<usize, MeshError> {
+pub(crate) fn cells(len: f64, h: f64) -> Result<usize, MeshError> {
     let n = (len / h).round().max(1.0);
     if n > u32::MAX as f64 {
         return Err(MeshError::TooLarge(format!(
@@ -68,11 +68,6 @@ fn cells(len: f64, h: f64) -> Result<usize, MeshError> {
         )));
     }
     Ok(n as usize)
-}
-
-/// The cells per axis of [`box_mesh`] for `size` and `h`.
-pub fn box_cells(size: [f64; 3], h: f64) -> Result<[usize; 3], MeshError> {
-    Ok([cells(size[0], h)?, cells(size[1], h)?, cells(size[2], h)?])
 }
 
 /// Tetrahedral mesh of the box `[origin, origin + size]` with target element

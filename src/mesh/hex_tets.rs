@@ -97,7 +97,8 @@ pub fn split_hex_mesh(hm: &HexMesh) -> Result<SplitHexes, MeshError> {
 /// the nodes of [`super::hex8::hex_box`], so the hexes are that box's.
 pub fn box_hex8(origin: [f64; 3], size: [f64; 3], h: f64) -> Result<SplitHexes, MeshError> {
     let mesh = super::generate::box_mesh(origin, size, h)?;
-    let n = super::generate::box_cells(size, h)?;
+    let cells = |d: usize| super::generate::cells(size[d], h);
+    let n = [cells(0)?, cells(1)?, cells(2)?];
     let hi = std::array::from_fn(|d| origin[d] + size[d]);
     let hm = super::hex8::hex_box(origin, hi, n)?;
     Ok(SplitHexes {

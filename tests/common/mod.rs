@@ -680,3 +680,18 @@ pub fn joint_fields(dir: &Path, stem: &str) -> Vec<[Vec<f64>; 4]> {
         })
         .collect()
 }
+
+/// Seed 000 sec 4.2: the mean over nodes of |T − T_analytic| / (T_D − T_i)
+/// at output `k`, in percent, against the slab series of
+/// `fdem::validation::SlabProblem::seed_000`.
+pub fn slab_mean_error_percent(r: &Results, k: usize) -> f64 {
+    let p = fdem::validation::SlabProblem::seed_000();
+    let t = r.times[k];
+    let sum: f64 = r
+        .coords
+        .iter()
+        .zip(&r.temperature[k])
+        .map(|(x, &v)| (v - p.temperature(x[0], t)).abs())
+        .sum();
+    100.0 * sum / r.coords.len() as f64 / (p.t_dirichlet - p.t_initial).abs()
+}

@@ -15,7 +15,7 @@ use nalgebra::{Matrix3, Vector3};
 
 use crate::mechanics::explicit::HEX_TET;
 use crate::mechanics::frequency::stable_step;
-use crate::mechanics::hex8_element::{hex8_forces, Hex8Reference};
+use crate::mechanics::hex8_element::{hex8_forces, Hex8Material, Hex8Reference};
 use crate::mechanics::{ElasticMaterial, MechElement, MechanicsError, ThermalState};
 use crate::parallel::PartHex;
 
@@ -129,6 +129,7 @@ impl DomainHexes {
         stress: &mut [Matrix3<f64>],
     ) -> Result<f64, MechanicsError> {
         let mut energy = 0.0;
+        let kernel: Vec<Hex8Material> = materials.iter().map(Hex8Material::new).collect();
         for h in self
             .list
             .iter()
@@ -141,7 +142,7 @@ impl DomainHexes {
                 delta_t: delta_t[s],
                 rate: rate[s],
             };
-            let r = hex8_forces(&h.reference, &materials[h.material as usize], &xs, &vs, th)
+            let r = hex8_forces(&h.reference, &kernel[h.material as usize], &xs, &vs, th)
                 .map_err(|e| e.at_element(s))?;
             out[s..s + 6].fill([Vector3::zeros(); 4]);
             for (k, &(t, c)) in h.corner.iter().enumerate() {

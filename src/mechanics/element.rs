@@ -542,7 +542,7 @@ pub(crate) fn tet4_forces(
 /// x + x² P(x), P by Estrin's scheme (short dependency chains), so its
 /// round-off enters scaled by |x|/2 and the result is within 1 ulp.
 #[inline(always)]
-fn ln_1p_small(x: f64) -> f64 {
+pub(crate) fn ln_1p_small(x: f64) -> f64 {
     if x.abs() <= 1.0 / 32.0 {
         // Not numbered in the seeds: ln(1 + x) = Σ_{k>=1} (−1)^(k+1) x^k/k.
         let x2 = x * x;

@@ -486,7 +486,7 @@ pub fn assemble<'p>(
     // The Hex8 counterparts (2×2×2 Gauss, `thermal::hex8`) of hex `h`.
     let hex_reference = |h: &crate::parallel::PartHex| {
         let x = h.nodes.map(|l| part.mesh.nodes[l as usize]);
-        crate::mechanics::hex8_element::Hex8Reference::from_coords(&x)
+        crate::mechanics::hex8_element::Hex8Gauss::from_coords(&x)
             .expect("a Hex8 body's hexes were checked when its mesh was made")
     };
     let hex_blocks = |e: usize, h: &crate::parallel::PartHex| {

@@ -7,11 +7,11 @@
 use nalgebra::Vector3;
 
 use crate::mechanics::hex8::hex8_shape;
-use crate::mechanics::hex8_element::{hex8_gauss_points, Hex8Reference};
+use crate::mechanics::hex8_element::{hex8_gauss_points, Hex8Gauss};
 
 /// Seed 000 eq 16 on a Hex8: K_IJ = k Σ_g ∇N_I·∇N_J dV_g (2×2×2 Gauss, exact
 /// for a parallelepiped).
-pub fn hex8_conductivity(r: &Hex8Reference, k: f64) -> [f64; 64] {
+pub fn hex8_conductivity(r: &Hex8Gauss, k: f64) -> [f64; 64] {
     let mut m = [0.0; 64];
     for g in 0..8 {
         let grad: &[Vector3<f64>; 8] = &r.grad[g];
@@ -26,7 +26,7 @@ pub fn hex8_conductivity(r: &Hex8Reference, k: f64) -> [f64; 64] {
 }
 
 /// Seed 000 eq 15 on a Hex8: M_IJ = ρc Σ_g N_I N_J dV_g (consistent).
-pub fn hex8_capacity_consistent(r: &Hex8Reference, rho_c: f64) -> [f64; 64] {
+pub fn hex8_capacity_consistent(r: &Hex8Gauss, rho_c: f64) -> [f64; 64] {
     let mut m = [0.0; 64];
     for (g, xi) in hex8_gauss_points().iter().enumerate() {
         let n = hex8_shape(xi);
@@ -42,7 +42,7 @@ pub fn hex8_capacity_consistent(r: &Hex8Reference, rho_c: f64) -> [f64; 64] {
 
 /// Row-sum lumped capacity ρc ∫ N_I dV on the diagonal (zeros elsewhere, so
 /// it shares K's pattern as the Tet4 lumped matrix does).
-pub fn hex8_capacity_lumped(r: &Hex8Reference, rho_c: f64) -> [f64; 64] {
+pub fn hex8_capacity_lumped(r: &Hex8Gauss, rho_c: f64) -> [f64; 64] {
     let mut m = [0.0; 64];
     for (i, mi) in r.lumped_masses(rho_c).iter().enumerate() {
         m[9 * i] = *mi;
@@ -57,7 +57,7 @@ mod tests {
     use rand::{Rng, SeedableRng};
     use rand_pcg::Pcg64;
 
-    fn distorted() -> Hex8Reference {
+    fn distorted() -> Hex8Gauss {
         let mut rng = Pcg64::seed_from_u64(1);
         let x0 = HEX8_NATURAL.map(|c| {
             Vector3::new(
@@ -66,7 +66,7 @@ mod tests {
                 0.8 * (c[2] + 1.0) + rng.gen_range(-0.1..0.1),
             )
         });
-        Hex8Reference::new(&x0).unwrap()
+        Hex8Gauss::new(&x0).unwrap()
     }
 
     #[test]
@@ -74,7 +74,7 @@ mod tests {
         let r = distorted();
         let k = 3.5;
         let m = hex8_conductivity(&r, k);
-        let scale = k * r.volume0.cbrt();
+        let scale = k * r.volume().cbrt();
         for i in 0..8 {
             let s: f64 = (0..8).map(|j| m[8 * i + j]).sum();
             assert!(s.abs() < 1e-13 * scale, "row {i}: {s}");
@@ -86,7 +86,7 @@ mod tests {
         // Energy of a linear field T = g·X is k |g|² V (exact with 2×2×2 Gauss).
         let g = Vector3::new(2.0, -1.0, 0.5);
         let xb = HEX8_NATURAL.map(|c| Vector3::new(c[0] * 0.5, c[1] * 1.5, c[2] * 0.25));
-        let rb = Hex8Reference::new(&xb).unwrap();
+        let rb = Hex8Gauss::new(&xb).unwrap();
         let mb = hex8_conductivity(&rb, k);
         let t: Vec<f64> = xb.iter().map(|p| g.dot(p)).collect();
         let mut energy = 0.0;
@@ -95,7 +95,7 @@ mod tests {
                 energy += t[i] * mb[8 * i + j] * t[j];
             }
         }
-        let expect = k * g.norm_squared() * rb.volume0;
+        let expect = k * g.norm_squared() * rb.volume();
         assert!((energy - expect).abs() < 1e-12 * expect);
     }
 
@@ -105,7 +105,7 @@ mod tests {
         let rho_c = 2.0e6;
         let c = hex8_capacity_consistent(&r, rho_c);
         let l = hex8_capacity_lumped(&r, rho_c);
-        let total = rho_c * r.volume0;
+        let total = rho_c * r.volume();
         assert!((c.iter().sum::<f64>() - total).abs() < 1e-12 * total);
         assert!((l.iter().sum::<f64>() - total).abs() < 1e-12 * total);
         // The lumped diagonal is the consistent row sum.

@@ -27,7 +27,7 @@ use nalgebra::Vector3;
 use crate::mechanics::bond::{
     bond_forces, sphere_mass_inertia, update_particles, BondError, BondState, BondStiffness,
 };
-use crate::mechanics::hex8_element::{hex8_forces, Hex8Reference};
+use crate::mechanics::hex8_element::{hex8_forces, Hex8Material, Hex8Reference};
 use crate::mechanics::{ElasticMaterial, MechanicsError, ThermalState};
 use crate::mesh::hex8::{hex_box, HexMesh};
 use crate::mesh::lattice::cubic_lattice;
@@ -259,12 +259,13 @@ pub fn fe_cantilever_on(
     let mut f = vec![Vector3::zeros(); x0.len()];
     let check =
         ((2.0 * std::f64::consts::PI / beam.first_frequency()) / (50.0 * dt)).ceil() as usize;
+    let kernel_material = Hex8Material::new(&material);
     let (tip, steps) = relax(relaxation, check, || {
         f.copy_from_slice(&external);
         for (e, (h, r)) in mesh.hexes.iter().zip(&refs).enumerate() {
             let xe = h.map(|p| x[p as usize]);
             let ve = h.map(|p| v[p as usize]);
-            let res = hex8_forces(r, &material, &xe, &ve, ThermalState::default())
+            let res = hex8_forces(r, &kernel_material, &xe, &ve, ThermalState::default())
                 .map_err(|err| err.at_element(e))?;
             for (p, fe) in h.iter().zip(res.forces) {
                 f[*p as usize] += fe;

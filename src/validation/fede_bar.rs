@@ -16,7 +16,7 @@ use nalgebra::Vector3;
 use super::cantilever::CantileverError;
 use super::fede_coupling::{schur_bound, Coupling, GhostLayer};
 use crate::mechanics::bond::{sphere_mass_inertia, BondStiffness};
-use crate::mechanics::hex8_element::{hex8_forces, Hex8Reference};
+use crate::mechanics::hex8_element::{hex8_forces, Hex8Material, Hex8Reference};
 use crate::mechanics::{ElasticMaterial, ThermalState};
 use crate::mesh::hex8::hex_box;
 use crate::mesh::lattice::cubic_lattice;
@@ -234,10 +234,11 @@ pub(super) fn add_hex_forces(
     f: &mut [Vector3<f64>],
     mut energy: impl FnMut(usize, f64),
 ) -> Result<(), CantileverError> {
+    let material = Hex8Material::new(material);
     for (e, (h, r)) in hexes.iter().zip(refs).enumerate() {
         let res = hex8_forces(
             r,
-            material,
+            &material,
             &h.map(|p| x[p as usize]),
             &h.map(|p| v[p as usize]),
             ThermalState::default(),

@@ -18,7 +18,7 @@ use nalgebra::{DMatrix, DVector, Vector3};
 use super::fede_coupling::{Coupling, GhostLayer};
 use super::fede_patch::PatchBar;
 use crate::mechanics::bond::bond_conductance;
-use crate::mechanics::hex8_element::Hex8Reference;
+use crate::mechanics::hex8_element::Hex8Gauss;
 use crate::mechanics::MechanicsError;
 use crate::mesh::hex8::hex_box;
 use crate::mesh::lattice::cubic_lattice;
@@ -76,8 +76,7 @@ pub fn fede_heat(
     let mut refs = Vec::with_capacity(mesh.hexes.len());
     let mut ke = Vec::with_capacity(mesh.hexes.len());
     for (e, hx) in mesh.hexes.iter().enumerate() {
-        let re =
-            Hex8Reference::new(&hx.map(|a| x0[a as usize])).map_err(|err| err.at_element(e))?;
+        let re = Hex8Gauss::new(&hx.map(|a| x0[a as usize])).map_err(|err| err.at_element(e))?;
         ke.push(hex8_conductivity(&re, k));
         refs.push(re);
     }
@@ -167,7 +166,7 @@ pub fn fede_heat(
         .map(|(hx, re)| {
             let grad: Vector3<f64> = hx
                 .iter()
-                .zip(&re.grad_centre)
+                .zip(&re.mean_gradient())
                 .map(|(a, g)| g * temp[*a as usize])
                 .sum();
             let centre = hx.iter().map(|&a| x0[a as usize][0]).sum::<f64>() / 8.0;

@@ -32,7 +32,7 @@ use nalgebra::Vector3;
 use super::cantilever::{relax, CantileverError, Relaxation};
 use super::fede_coupling::{schur_bound, Coupling, GhostLayer};
 use crate::mechanics::bond::{sphere_mass_inertia, update_particles, BondStiffness};
-use crate::mechanics::hex8_element::{hex8_forces, Hex8Reference};
+use crate::mechanics::hex8_element::{hex8_forces, Hex8Material, Hex8Reference};
 use crate::mechanics::{ElasticMaterial, ThermalState};
 use crate::mesh::hex8::hex_box;
 use crate::mesh::lattice::cubic_lattice;
@@ -382,7 +382,7 @@ pub fn fede_patch(
     for (e, (hx, re)) in model.hexes.iter().zip(&model.refs).enumerate() {
         let res = hex8_forces(
             re,
-            &model.material,
+            &Hex8Material::new(&model.material),
             &hx.map(|p| s.x[p as usize]),
             &hx.map(|p| s.v[p as usize]),
             ThermalState::default(),

@@ -1,7 +1,7 @@
 //! Throughput of the Hex8 internal-force kernel (issue 21 benchmark):
 //! hex updates per second on one core over a 40^3 box of Hex8, slightly
 //! deformed and moving, with a temperature change (thermal split active),
-//! through the kernel `fdem run` calls (`mechanics::hex8_element::hex8_forces`:
+//! through the kernel `fdem run` calls (`mechanics::hex8_element::hex8_forces_at`:
 //! one-point integration with assumed-strain hourglass stiffness).
 //! The checksum of the forces shows that a change of the kernel keeps its
 //! results. Run: cargo run --release --example hex8_kernel_bench [cells_per_side] [repetitions]
@@ -9,7 +9,7 @@
 #[path = "common/timing.rs"]
 mod timing;
 
-use fdem::mechanics::hex8_element::{hex8_forces, Hex8Material, Hex8Reference};
+use fdem::mechanics::hex8_element::{hex8_forces_at, Hex8Material, Hex8Reference};
 use fdem::mechanics::{ElasticMaterial, ThermalState};
 use nalgebra::Vector3;
 
@@ -54,9 +54,7 @@ fn main() {
                     delta_t: 50.0 + (e % 100) as f64,
                     rate: 1.0,
                 };
-                let xs: [Vector3<f64>; 8] = std::array::from_fn(|k| x[h[k] as usize]);
-                let vs: [Vector3<f64>; 8] = std::array::from_fn(|k| v[h[k] as usize]);
-                let out = hex8_forces(r, &kernel, &xs, &vs, th).expect("forces");
+                let out = hex8_forces_at(r, &kernel, &x, &v, h, th).expect("forces");
                 for (k, &i) in h.iter().enumerate() {
                     f[i as usize] += out.forces[k];
                 }

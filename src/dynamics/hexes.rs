@@ -15,7 +15,7 @@ use nalgebra::{Matrix3, Vector3};
 
 use crate::mechanics::explicit::HEX_TET;
 use crate::mechanics::frequency::stable_step;
-use crate::mechanics::hex8_element::{hex8_forces, Hex8Material, Hex8Reference};
+use crate::mechanics::hex8_element::{hex8_forces_at, Hex8Material, Hex8Reference};
 use crate::mechanics::{ElasticMaterial, MechElement, MechanicsError, ThermalState};
 use crate::parallel::PartHex;
 
@@ -136,14 +136,19 @@ impl DomainHexes {
             .filter(|h| range.contains(&(h.slot as usize)))
         {
             let s = h.slot as usize - range.start;
-            let xs = h.nodes.map(|l| x[l as usize]);
-            let vs = h.nodes.map(|l| v[l as usize]);
             let th = ThermalState {
                 delta_t: delta_t[s],
                 rate: rate[s],
             };
-            let r = hex8_forces(&h.reference, &kernel[h.material as usize], &xs, &vs, th)
-                .map_err(|e| e.at_element(s))?;
+            let r = hex8_forces_at(
+                &h.reference,
+                &kernel[h.material as usize],
+                x,
+                v,
+                &h.nodes,
+                th,
+            )
+            .map_err(|e| e.at_element(s))?;
             out[s..s + 6].fill([Vector3::zeros(); 4]);
             for (k, &(t, c)) in h.corner.iter().enumerate() {
                 out[s + t as usize][c as usize] = r.forces[k];

@@ -509,10 +509,41 @@ pub fn hex8_forces(
     v: &[Vector3<f64>; 8],
     thermal: ThermalState,
 ) -> Result<Hex8Response, MechanicsError> {
-    match hex8_forces_fast(r, m, x, v, thermal) {
+    const NODES: [u32; 8] = [0, 1, 2, 3, 4, 5, 6, 7];
+    hex8_forces_at(r, m, x, v, &NODES, thermal)
+}
+
+/// [`hex8_forces`] of the hex with nodes `nodes` of the node arrays `x`
+/// (positions) and `v` (velocities), read in place. Panics if a node index
+/// is out of range.
+#[inline]
+pub fn hex8_forces_at(
+    r: &Hex8Reference,
+    m: &Hex8Material,
+    x: &[Vector3<f64>],
+    v: &[Vector3<f64>],
+    nodes: &[u32; 8],
+    thermal: ThermalState,
+) -> Result<Hex8Response, MechanicsError> {
+    match hex8_forces_fast(r, m, x, v, nodes, thermal) {
         Some(res) => Ok(res),
-        None => hex8_forces_reference(r, &m.material, x, v, thermal),
+        None => fallback(r, m, x, v, nodes, thermal),
     }
+}
+
+#[cold]
+#[inline(never)]
+fn fallback(
+    r: &Hex8Reference,
+    m: &Hex8Material,
+    x: &[Vector3<f64>],
+    v: &[Vector3<f64>],
+    nodes: &[u32; 8],
+    thermal: ThermalState,
+) -> Result<Hex8Response, MechanicsError> {
+    let xs = nodes.map(|i| x[i as usize]);
+    let vs = nodes.map(|i| v[i as usize]);
+    hex8_forces_reference(r, &m.material, &xs, &vs, thermal)
 }
 
 // Index loops over the 8 nodes, 4 modes and 3 axes read as the formulas.
@@ -521,10 +552,12 @@ pub fn hex8_forces(
 fn hex8_forces_fast(
     r: &Hex8Reference,
     m: &Hex8Material,
-    x: &[Vector3<f64>; 8],
-    v: &[Vector3<f64>; 8],
+    x_all: &[Vector3<f64>],
+    v_all: &[Vector3<f64>],
+    nodes: &[u32; 8],
     thermal: ThermalState,
 ) -> Option<Hex8Response> {
+    let x: [Vector3<f64>; 8] = std::array::from_fn(|i| x_all[nodes[i] as usize]);
     let b = &r.grad_mean;
     // seed 004 eq 5 on the element mean: F̄ = Σ x_I ⊗ b_I.
     let mut f = [[0.0; 3]; 3];
@@ -596,7 +629,7 @@ fn hex8_forces_fast(
         b02 * mu * inv_j_e,
         b12 * mu * inv_j_e,
     ];
-    let ns = natural_sums(x);
+    let ns = natural_sums(&x);
     let fh = |h: &Vector3<f64>| {
         Vector3::new(
             f[0][0] * h[0] + f[0][1] * h[1] + f[0][2] * h[2],
@@ -608,6 +641,7 @@ fn hex8_forces_fast(
     let hg: [Vector3<f64>; 4] = std::array::from_fn(|k| (ns[MODE_SUM[k]] - fh(&r.hx[k])) * 0.125);
     let mut hg_dot = [Vector3::zeros(); 4];
     if m.two_eta != 0.0 {
+        let v: [Vector3<f64>; 8] = std::array::from_fn(|i| v_all[nodes[i] as usize]);
         let mut fd = [[0.0; 3]; 3];
         for i in 0..8 {
             for a in 0..3 {
@@ -632,7 +666,7 @@ fn hex8_forces_fast(
         sg[3] += 0.5 * te * (l[0][1] + l[1][0]);
         sg[4] += 0.5 * te * (l[0][2] + l[2][0]);
         sg[5] += 0.5 * te * (l[1][2] + l[2][1]);
-        let nv = natural_sums(v);
+        let nv = natural_sums(&v);
         // Spin W = (L − Lᵀ)/2 turns the hourglass shape without deforming it.
         let w01 = 0.5 * (l[0][1] - l[1][0]);
         let w02 = 0.5 * (l[0][2] - l[2][0]);

@@ -264,8 +264,8 @@ echo "$overlap_line" >&2
   echo "## Hex8 kernel"
   echo
   echo "\`cargo run --release --example hex8_kernel_bench\` (finite-strain Hex8 internal forces"
-  echo "of a 40^3 box, 2x2x2 Gauss points with selective-reduced shear and twist hourglass"
-  echo "control, thermal split, one core; issue 21 asks at least 10 million element updates per"
+  echo "of a 40^3 box, one-point integration with assumed-strain hourglass stiffness,"
+  echo "thermal split, one core; issue 21 asks at least 10 million element updates per"
   echo "second per core):"
   echo
   echo "$hex8_lines" | sed 's/^/- /'

@@ -43,9 +43,9 @@
 //!   symmetric stiffness on q. The viscous law 2 η D adds the same form on
 //!   the rates q̇ (with the element's spin removed) with moduli 2η and η.
 //!
-//! One constitutive evaluation and about 700 flops of hourglass algebra per
-//! element: about 8 times fewer operations than the eight-point scheme,
-//! which was 0.57 M elements/s per core (docs/benchmarks.md).
+//! One constitutive evaluation and a few hundred flops of hourglass
+//! algebra per element: 5.2 M elements/s per core against the eight-point
+//! scheme's 0.57 M (docs/benchmarks.md).
 //!
 //! Sign convention as the Tet4: forces act on the nodes (M a = f_int + f_ext).
 
@@ -698,7 +698,11 @@ fn hex8_forces_fast(
     let e1 = a1 * (1.0 / a1.norm());
     let frame = [e0, e1, e0.cross(&e1)];
     let q: [[f64; 4]; 3] = frame.map(|ec| hg.map(|h| ec.dot(&h)));
-    let qd: [[f64; 4]; 3] = frame.map(|ec| hg_dot.map(|h| ec.dot(&h)));
+    let qd: [[f64; 4]; 3] = if m.two_eta != 0.0 {
+        frame.map(|ec| hg_dot.map(|h| ec.dot(&h)))
+    } else {
+        [[0.0; 4]; 3]
+    };
     let (hs, w) = hourglass_stiffness(r, m, &q, &qd);
     energy += w;
     let g: [Vector3<f64>; 4] = std::array::from_fn(|k| {

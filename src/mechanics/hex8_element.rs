@@ -207,7 +207,7 @@ impl Hex8Reference {
     /// Stable explicit time step estimate (s): shortest element length
     /// 2 ℓ_min over the P-wave speed, times 1/√3 for the lumped trilinear
     /// brick (its highest frequency is √3 times the 1D one on a cube; the
-    /// `critical_dt_is_below_the_stability_limit` test checks it against
+    /// `critical_dt_is_below_the_stability_limit_and_no_mode_is_free` test checks it against
     /// the element's eigenvalues).
     pub fn critical_dt(&self, material: &ElasticMaterial) -> f64 {
         2.0 * self.min_half_length / (3.0_f64.sqrt() * material.p_wave_speed())
@@ -1059,7 +1059,7 @@ mod tests {
     }
 
     #[test]
-    fn critical_dt_is_below_the_stability_limit() {
+    fn critical_dt_is_below_the_stability_limit_and_no_mode_is_free() {
         // The lumped element's highest frequency, from its stiffness by central differences.
         let mut rng = Pcg64::seed_from_u64(12);
         let m = material();
@@ -1088,7 +1088,18 @@ mod tests {
                 }
             }
             let k = (&k + k.transpose()) * 0.5;
-            let w2 = k.symmetric_eigenvalues().max();
+            let mut eig: Vec<f64> = k.symmetric_eigenvalues().iter().copied().collect();
+            eig.sort_by(f64::total_cmp);
+            let w2 = eig[23];
+            // Six rigid modes, and every other mode (the twelve hourglass modes
+            // included) held: no zero-energy mode on any of these shapes.
+            assert!(eig[5].abs() < 1e-6 * w2, "rigid modes {:?}", &eig[..6]);
+            // (The 8:2:1 brick bends softest, at 1.1e-3 of its highest mode.)
+            assert!(
+                eig[6] > 1e-4 * w2,
+                "softest deformation mode {:.3e} of {w2:.3e}",
+                eig[6]
+            );
             let limit = 2.0 / w2.sqrt();
             let dt = r.critical_dt(&m);
             assert!(

@@ -476,7 +476,7 @@ fn fig8_short_beam_png() {
 /// Fig 8 at the seed's size: writes docs/fede-cantilever.png and prints the
 /// profiles. Measured: about 2.5 minutes on one core.
 #[test]
-#[ignore = "about 2.5 minutes on one core; writes docs/fede-cantilever.png (fig8_short_beam_png runs in CI)"]
+#[ignore = "about 2 minutes on one core; writes docs/fede-cantilever.png (fig8_short_beam_png runs in CI)"]
 fn fig8_full_size_png() {
     let beam = Cantilever::seed002();
     let [(fe, fe_err), (de, de_err), (coupled, coupled_err)] =

@@ -445,46 +445,13 @@ pub(crate) fn tet4_forces(
     if !(det_e > 0.0 && det_e.is_finite() && stretch > 0.0 && stretch.is_finite()) {
         return None;
     }
-    // Seed 004 eqs 16, 26: F_e = F/Υ; H = F_e − I.
+    // Seed 004 eqs 16, 26: F_e = F/Υ.
     let inv_stretch = 1.0 / stretch;
-    let hij = |i: usize, j: usize| f[i][j] * inv_stretch - if i == j { 1.0 } else { 0.0 };
-    let hh = [
-        [hij(0, 0), hij(0, 1), hij(0, 2)],
-        [hij(1, 0), hij(1, 1), hij(1, 2)],
-        [hij(2, 0), hij(2, 1), hij(2, 2)],
-    ];
-    // Seed 004 eqs 27–28: J_e − 1 = det(I + H) − 1 = I1 + I2 + I3 of H.
-    let tr = hh[0][0] + hh[1][1] + hh[2][2];
-    // (Summed in the order of element_response: with a rotation, H is O(1) and J_e − 1 is a small
-    // difference of O(1) terms, so a different order would change it by round-off × 1/(J_e − 1).)
-    let hh_ii = |i: usize| hh[i][0] * hh[0][i] + hh[i][1] * hh[1][i] + hh[i][2] * hh[2][i];
-    let tr_hh = hh_ii(0) + hh_ii(1) + hh_ii(2);
-    let det_h = hh[0][0] * (hh[1][1] * hh[2][2] - hh[2][1] * hh[1][2])
-        - hh[0][1] * (hh[1][0] * hh[2][2] - hh[2][0] * hh[1][2])
-        + hh[0][2] * (hh[1][0] * hh[2][1] - hh[2][0] * hh[1][1]);
-    let j_e_minus_1 = tr + 0.5 * (tr * tr - tr_hh) + det_h;
-    let j_e = 1.0 + j_e_minus_1;
-    if !(j_e > 0.0 && j_e.is_finite()) {
+    let Some(el) = neo_hookean_sym(&f, inv_stretch, mat.mu, mat.lambda) else {
         // Round-off has the volume change disagree with det E (or F overflowed): leave it to element_response.
         return None;
-    }
-    let ln_j_e = ln_1p_small(j_e_minus_1);
-    let inv_j_e = 1.0 / j_e;
-    // Seed 004 eqs 31–32: B_e − I = H + Hᵀ + H Hᵀ (symmetric).
-    let bm = |a: usize, b: usize| {
-        hh[a][b] + hh[b][a] + (hh[a][0] * hh[b][0] + hh[a][1] * hh[b][1] + hh[a][2] * hh[b][2])
     };
-    let (b00, b11, b22, b01, b02, b12) =
-        (bm(0, 0), bm(1, 1), bm(2, 2), bm(0, 1), bm(0, 2), bm(1, 2));
-    // Seed 004 eq 34 on the elastic part: σ = μ/J_e (B_e − I) + λ/J_e ln(J_e) I.
-    let pressure = mat.lambda * ln_j_e;
-    let (mu, r) = (mat.mu, inv_j_e);
-    let mut s00 = (b00 * mu + pressure) * r;
-    let mut s11 = (b11 * mu + pressure) * r;
-    let mut s22 = (b22 * mu + pressure) * r;
-    let mut s01 = b01 * mu * r;
-    let mut s02 = b02 * mu * r;
-    let mut s12 = b12 * mu * r;
+    let [mut s00, mut s11, mut s22, mut s01, mut s02, mut s12] = el.sigma;
     if mat.two_eta != 0.0 {
         let v0 = v[n0];
         let (w0, w1, w2) = (v[n1] - v0, v[n2] - v0, v[n3] - v0);
@@ -522,15 +489,79 @@ pub(crate) fn tet4_forces(
     };
     let (f1, f2, f3) = (force(c0), force(c1), force(c2));
     let f0 = -(f1 + f2 + f3);
-    // Not numbered in the seeds: ψ = μ/2 (tr B_e − 3) − μ ln J_e + λ/2 (ln J_e)², the potential of eq 34.
-    let psi = 0.5 * mu * (b00 + b11 + b22) - mu * ln_j_e + 0.5 * mat.lambda * ln_j_e * ln_j_e;
     // Seed 004 eq 37: W = J_T V0 ψ with J_T = Υ³.
-    let strain_energy = stretch * stretch * stretch * reference.volume0 * psi;
+    let strain_energy = stretch * stretch * stretch * reference.volume0 * el.psi;
     Some(Tet4Forces {
         stress,
         forces: [f0, f1, f2, f3],
         strain_energy,
     })
+}
+
+/// The elastic part of the hot-path law, shared by the Tet4 ([`tet4_forces`])
+/// and Hex8 (`hex8_element`) kernels: Cauchy stress and energy density of
+/// the neo-Hookean law on F_e = F/Υ as symmetric components.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct ElasticSym {
+    /// Elastic Cauchy stress (xx, yy, zz, xy, xz, yz) (Pa).
+    pub sigma: [f64; 6],
+    /// Energy density ψ (J/m³ of the stress-free configuration).
+    pub psi: f64,
+}
+
+/// [`ElasticSym`] of the deformation gradient `f` with 1/Υ = `inv_stretch`
+/// and Lamé constants `mu`, `lambda`; `None` unless J_e is positive and
+/// finite (the caller then asks the general path, which gives the error).
+#[inline(always)]
+pub(crate) fn neo_hookean_sym(
+    f: &[[f64; 3]; 3],
+    inv_stretch: f64,
+    mu: f64,
+    lambda: f64,
+) -> Option<ElasticSym> {
+    // Seed 004 eqs 16, 26: H = F_e − I.
+    let hij = |i: usize, j: usize| f[i][j] * inv_stretch - if i == j { 1.0 } else { 0.0 };
+    let hh = [
+        [hij(0, 0), hij(0, 1), hij(0, 2)],
+        [hij(1, 0), hij(1, 1), hij(1, 2)],
+        [hij(2, 0), hij(2, 1), hij(2, 2)],
+    ];
+    // Seed 004 eqs 27–28: J_e − 1 = det(I + H) − 1 = I1 + I2 + I3 of H.
+    let tr = hh[0][0] + hh[1][1] + hh[2][2];
+    // (Summed in the order of element_response: with a rotation, H is O(1) and J_e − 1 is a small
+    // difference of O(1) terms, so a different order would change it by round-off × 1/(J_e − 1).)
+    let hh_ii = |i: usize| hh[i][0] * hh[0][i] + hh[i][1] * hh[1][i] + hh[i][2] * hh[2][i];
+    let tr_hh = hh_ii(0) + hh_ii(1) + hh_ii(2);
+    let det_h = hh[0][0] * (hh[1][1] * hh[2][2] - hh[2][1] * hh[1][2])
+        - hh[0][1] * (hh[1][0] * hh[2][2] - hh[2][0] * hh[1][2])
+        + hh[0][2] * (hh[1][0] * hh[2][1] - hh[2][0] * hh[1][1]);
+    let j_e_minus_1 = tr + 0.5 * (tr * tr - tr_hh) + det_h;
+    let j_e = 1.0 + j_e_minus_1;
+    if !(j_e > 0.0 && j_e.is_finite()) {
+        return None;
+    }
+    let ln_j_e = ln_1p_small(j_e_minus_1);
+    let inv_j_e = 1.0 / j_e;
+    // Seed 004 eqs 31–32: B_e − I = H + Hᵀ + H Hᵀ (symmetric).
+    let bm = |a: usize, b: usize| {
+        hh[a][b] + hh[b][a] + (hh[a][0] * hh[b][0] + hh[a][1] * hh[b][1] + hh[a][2] * hh[b][2])
+    };
+    let (b00, b11, b22, b01, b02, b12) =
+        (bm(0, 0), bm(1, 1), bm(2, 2), bm(0, 1), bm(0, 2), bm(1, 2));
+    // Seed 004 eq 34 on the elastic part: σ = μ/J_e (B_e − I) + λ/J_e ln(J_e) I.
+    let pressure = lambda * ln_j_e;
+    let r = inv_j_e;
+    let sigma = [
+        (b00 * mu + pressure) * r,
+        (b11 * mu + pressure) * r,
+        (b22 * mu + pressure) * r,
+        b01 * mu * r,
+        b02 * mu * r,
+        b12 * mu * r,
+    ];
+    // Not numbered in the seeds: ψ = μ/2 (tr B_e − 3) − μ ln J_e + λ/2 (ln J_e)², the potential of eq 34.
+    let psi = 0.5 * mu * (b00 + b11 + b22) - mu * ln_j_e + 0.5 * lambda * ln_j_e * ln_j_e;
+    Some(ElasticSym { sigma, psi })
 }
 
 /// ln(1 + x), inline for |x| <= 1/32 (volume changes of up to ~3 %, the
@@ -542,7 +573,7 @@ pub(crate) fn tet4_forces(
 /// x + x² P(x), P by Estrin's scheme (short dependency chains), so its
 /// round-off enters scaled by |x|/2 and the result is within 1 ulp.
 #[inline(always)]
-pub(crate) fn ln_1p_small(x: f64) -> f64 {
+fn ln_1p_small(x: f64) -> f64 {
     if x.abs() <= 1.0 / 32.0 {
         // Not numbered in the seeds: ln(1 + x) = Σ_{k>=1} (−1)^(k+1) x^k/k.
         let x2 = x * x;

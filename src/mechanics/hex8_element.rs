@@ -593,42 +593,10 @@ fn hex8_forces_fast(
     if !(j > 0.0 && j.is_finite() && stretch > 0.0 && stretch.is_finite()) {
         return None;
     }
-    // Seed 004 eqs 16, 26: F_e = F/Υ; H = F_e − I.
+    // Seed 004 eqs 16, 26: F_e = F/Υ; the elastic law as the Tet4 hot path's.
     let inv_stretch = 1.0 / stretch;
-    let hh: [[f64; 3]; 3] = std::array::from_fn(|a| {
-        std::array::from_fn(|c| f[a][c] * inv_stretch - if a == c { 1.0 } else { 0.0 })
-    });
-    // Seed 004 eqs 27–28: J_e − 1 = I1 + I2 + I3 of H (in the order of thermal_split).
-    let tr = hh[0][0] + hh[1][1] + hh[2][2];
-    let hh_ii = |a: usize| hh[a][0] * hh[0][a] + hh[a][1] * hh[1][a] + hh[a][2] * hh[2][a];
-    let tr_hh = hh_ii(0) + hh_ii(1) + hh_ii(2);
-    let det_h = hh[0][0] * (hh[1][1] * hh[2][2] - hh[2][1] * hh[1][2])
-        - hh[0][1] * (hh[1][0] * hh[2][2] - hh[2][0] * hh[1][2])
-        + hh[0][2] * (hh[1][0] * hh[2][1] - hh[2][0] * hh[1][1]);
-    let j_e_minus_1 = tr + 0.5 * (tr * tr - tr_hh) + det_h;
-    let j_e = 1.0 + j_e_minus_1;
-    if !(j_e > 0.0 && j_e.is_finite()) {
-        return None;
-    }
-    let ln_j_e = super::element::ln_1p_small(j_e_minus_1);
-    let inv_j_e = 1.0 / j_e;
-    // Seed 004 eqs 31–32: B_e − I = H + Hᵀ + H Hᵀ (symmetric).
-    let bm = |a: usize, c: usize| {
-        hh[a][c] + hh[c][a] + (hh[a][0] * hh[c][0] + hh[a][1] * hh[c][1] + hh[a][2] * hh[c][2])
-    };
-    let (b00, b11, b22, b01, b02, b12) =
-        (bm(0, 0), bm(1, 1), bm(2, 2), bm(0, 1), bm(0, 2), bm(1, 2));
-    // Seed 004 eq 34 on the elastic part: σ = μ/J_e (B_e − I) + λ/J_e ln(J_e) I.
-    let pressure = m.lambda * ln_j_e;
-    let mu = m.mu;
-    let mut sg = [
-        (b00 * mu + pressure) * inv_j_e,
-        (b11 * mu + pressure) * inv_j_e,
-        (b22 * mu + pressure) * inv_j_e,
-        b01 * mu * inv_j_e,
-        b02 * mu * inv_j_e,
-        b12 * mu * inv_j_e,
-    ];
+    let el = super::element::neo_hookean_sym(&f, inv_stretch, m.mu, m.lambda)?;
+    let mut sg = el.sigma;
     let ns = natural_sums(&x);
     let fh = |h: &Vector3<f64>| {
         Vector3::new(
@@ -688,10 +656,8 @@ fn hex8_forces_fast(
         }
     }
     let [s00, s11, s22, s01, s02, s12] = sg;
-    // Not numbered in the seeds: ψ = μ/2 (tr B_e − 3) − μ ln J_e + λ/2 (ln J_e)², the potential of eq 34.
-    let psi = 0.5 * mu * (b00 + b11 + b22) - mu * ln_j_e + 0.5 * m.lambda * ln_j_e * ln_j_e;
     // Seed 004 eq 37: W = J_T V0 ψ with J_T = Υ³.
-    let mut energy = stretch * stretch * stretch * r.volume0 * psi;
+    let mut energy = stretch * stretch * stretch * r.volume0 * el.psi;
     // The orthonormal frame of the current natural axes a_k = Σ x_I ξ_kI.
     let e0 = ns[1] * (1.0 / ns[1].norm());
     let a1 = ns[2] - e0 * e0.dot(&ns[2]);
@@ -777,6 +743,17 @@ mod tests {
                 0.5 * (c[0] + 1.0) + rng.gen_range(-0.1..0.1),
                 0.6 * (c[1] + 1.0) + rng.gen_range(-0.1..0.1),
                 0.4 * (c[2] + 1.0) + rng.gen_range(-0.1..0.1),
+            )
+        })
+    }
+
+    /// `x0` with every coordinate moved by a uniform random amount in ±`amp`.
+    fn perturbed(rng: &mut Pcg64, x0: &[Vector3<f64>; 8], amp: f64) -> [Vector3<f64>; 8] {
+        x0.map(|p| {
+            p + Vector3::new(
+                rng.gen_range(-amp..amp),
+                rng.gen_range(-amp..amp),
+                rng.gen_range(-amp..amp),
             )
         })
     }
@@ -919,13 +896,7 @@ mod tests {
         let x0 = distorted(&mut rng);
         let r = Hex8Reference::new(&x0).unwrap();
         // A general small deformation, with hourglass content.
-        let x: [Vector3<f64>; 8] = x0.map(|p| {
-            p + Vector3::new(
-                rng.gen_range(-1e-3..1e-3),
-                rng.gen_range(-1e-3..1e-3),
-                rng.gen_range(-1e-3..1e-3),
-            )
-        });
+        let x: [Vector3<f64>; 8] = perturbed(&mut rng, &x0, 1e-3);
         let m = material();
         let zero = [Vector3::zeros(); 8];
         let res = forces(&r, &m, &x, &zero, ThermalState::default()).unwrap();
@@ -1028,13 +999,7 @@ mod tests {
         let mut rng = Pcg64::seed_from_u64(11);
         let x0 = distorted(&mut rng);
         let r = Hex8Reference::new(&x0).unwrap();
-        let x: [Vector3<f64>; 8] = x0.map(|p| {
-            p + Vector3::new(
-                rng.gen_range(-1e-3..1e-3),
-                rng.gen_range(-1e-3..1e-3),
-                rng.gen_range(-1e-3..1e-3),
-            )
-        });
+        let x: [Vector3<f64>; 8] = perturbed(&mut rng, &x0, 1e-3);
         let rot = rotation(Vector3::new(-0.4, 0.9, 0.2), 2.1);
         let zero = [Vector3::zeros(); 8];
         let a = forces(&r, &material(), &x, &zero, ThermalState::default()).unwrap();

@@ -52,6 +52,34 @@ fn hex8_cantilever_within_3_percent() {
     assert!(err.abs() < 0.03, "{err}");
 }
 
+/// Bending without locking at the coarsest: the seed's beam with one
+/// element through its thickness (H = 2 mm), at 0.5 mm and at 2 mm along
+/// the beam (10 × 2 × 1 elements). A fully integrated brick locks here
+/// (parasitic shear of the bending mode, no lateral strain); the assumed
+/// strain field of the hourglass modes bends a rectangular element exactly.
+#[test]
+fn hex8_cantilever_one_element_through_the_thickness_within_3_percent() {
+    let beam = Cantilever::seed002();
+    let relax = Relaxation {
+        tolerance: 1e-5,
+        ..Relaxation::default()
+    };
+    for n in [[40, 8, 1], [10, 2, 1]] {
+        let mesh = hex_box([0.0; 3], [beam.length, beam.width, beam.height], n).unwrap();
+        let s = fe_cantilever_on(&beam, &mesh, &relax).unwrap();
+        let reference = analytic(&beam, s.tip_x);
+        let err = (s.tip - reference) / reference;
+        eprintln!(
+            "{n:?} Hex8: tip {:.5} mm vs {:.5} mm ({:+.2} %), {} steps",
+            s.tip * 1e3,
+            reference * 1e3,
+            err * 100.0,
+            s.steps
+        );
+        assert!(err.abs() < 0.03, "{n:?}: {err}");
+    }
+}
+
 /// The one-point Hex8 on a distorted mesh: the seed's beam (40×8×4 cubes
 /// of 0.5 mm) with every node moved by up to 0.25 h along x (except on the
 /// clamped and loaded faces) and the interior nodes also along y and z, so

@@ -40,8 +40,9 @@ pub(super) struct Output {
     /// Particle statistics (rank 0 keeps them; every rank takes part in the reductions).
     report: Option<ParticleReport>,
     radial_steps: Vec<u64>,
-    /// Whether element owners change during the run (repartitions): then
-    /// each output has an `owner_rank` cell field beside the static `rank`.
+    /// Whether element owners may change during the run (mechanics with
+    /// repartitions enabled, on any number of ranks): then each output has
+    /// an `owner_rank` cell field beside the static `rank`.
     owners_move: bool,
     /// Jointed bodies: (time, crack area, fracture energy) at each output,
     /// for the crack plot.
@@ -231,8 +232,9 @@ impl Output {
             stats,
             report,
             radial_steps,
+            // On every rank count alike, so that a run restarted in place
+            // on another number of ranks writes the series' field set.
             owners_move: mechanics
-                && comm.size() > 1
                 && model
                     .mechanics
                     .as_ref()

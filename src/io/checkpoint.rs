@@ -5,6 +5,7 @@
 //! - `/mesh/reference` (N×3 f64), `/mesh/tets` (E×4 u32), `/mesh/body` (E u32)
 //! - `/bodies/names`, `/bodies/templates` (newline-joined UTF-8 as u8),
 //!   `/bodies/nodes`, `/bodies/elems` (B×2 u32 ranges)
+//! - `/mesh/hex_corner`, `/bodies/hex8` when a body is Hex8 (`checkpoint_hexes`)
 //! - `/state/positions`, `/state/velocities` (N×3 f64, when mechanics ran),
 //!   `/state/temperature` (N f64, when the thermal problem ran),
 //!   `/state/pending_heat` (N f64, heat handed over, not yet released)
@@ -318,6 +319,8 @@ pub struct CheckpointHead {
     pub body_nodes: Vec<[u32; 2]>,
     /// Element range of every body.
     pub body_elems: Vec<[u32; 2]>,
+    /// Whether each body is Hex8 (`checkpoint_hexes`).
+    pub body_hex8: Vec<bool>,
     /// Krylov iterations so far.
     pub ksp_iterations: u64,
     /// Heat account: stored, stored change, Dirichlet in, flux in,
@@ -407,6 +410,8 @@ pub struct CheckpointRows<'a> {
     pub spheres: Option<&'a super::checkpoint_spheres::SphereCheckpoint>,
     /// Heat handed over and not yet released, per node (`checkpoint_heat`).
     pub pending_heat: Option<&'a [f64]>,
+    /// Hex corners, 4 per element (`checkpoint_hexes`), when a body is Hex8.
+    pub hex_corner: Option<&'a [u32]>,
 }
 
 /// Collective. Write a checkpoint: every rank its rows (moved to
@@ -590,6 +595,11 @@ fn write_parallel_to(
     let be: Vec<u32> = head.body_elems.iter().flatten().copied().collect();
     small_u32("bodies/nodes", &bn, 2)?;
     small_u32("bodies/elems", &be, 2)?;
+    if let Some(c) = rows.hex_corner {
+        elems_u32(super::checkpoint_hexes::HEX_CORNER, c, 4)?;
+        let flags: Vec<u64> = head.body_hex8.iter().map(|&h| u64::from(h)).collect();
+        small_u(super::checkpoint_hexes::BODY_HEX8, &flags)?;
+    }
     if let Some(x) = rows.positions {
         nodes("state/positions", &flat(x), 3)?;
     }
@@ -756,7 +766,7 @@ impl CheckpointFile {
         } else {
             None
         };
-        let head = CheckpointHead {
+        let mut head = CheckpointHead {
             step: sc[0] as u64,
             time: sc[1],
             substeps: sc[2] as u64,
@@ -766,6 +776,7 @@ impl CheckpointFile {
             body_templates: text("bodies/templates")?,
             body_nodes: rows::<u32, 2>(get(&file, path, "bodies/nodes", 2)?),
             body_elems: rows::<u32, 2>(get(&file, path, "bodies/elems", 2)?),
+            body_hex8: Vec::new(),
             ksp_iterations: first("state/counters")?.unwrap_or(0),
             heat: heat_of(&sc),
             dissipated: sc[8],
@@ -804,6 +815,7 @@ impl CheckpointFile {
         };
         let bad = |m: String| Err(IoError::invalid(path, m));
         let nb = head.body_names.len();
+        head.body_hex8 = super::checkpoint_hexes::read_body_hex8(&file, path, nb)?;
         if head.body_templates.len() != nb
             || head.body_nodes.len() != nb
             || head.body_elems.len() != nb
@@ -1063,6 +1075,7 @@ mod tests {
             springs: None,
             spheres: None,
             pending_heat: None,
+            hex_corner: None,
         };
         crate::testutil::on_one_rank(|comm| write_parallel(comm, p, &head, &rows))
     }

@@ -93,6 +93,7 @@
 
 pub mod checkpoint;
 pub mod checkpoint_heat;
+pub mod checkpoint_hexes;
 pub mod checkpoint_particles;
 pub mod checkpoint_spheres;
 pub mod checkpoint_springs;

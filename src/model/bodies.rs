@@ -207,6 +207,9 @@ pub enum BodySource {
         offset: [f64; 3],
         /// Made discontinuous at load, every tet jointed (issue 19).
         joints: Option<SavedJoints>,
+        /// A Hex8 body (issue 21): its hexes come from the file's hex
+        /// corners (`io::checkpoint_hexes`).
+        hex8: bool,
     },
 }
 
@@ -273,6 +276,8 @@ pub struct BodyMesh<'a> {
     /// Its joints, if jointed: then the mesh above is the continuous one,
     /// and [`BodyMesh::jointed_part`] makes the jointed one around a part.
     pub joints: Option<std::borrow::Cow<'a, SourceJoints>>,
+    /// Its hexes if Hex8 (issue 21): hex `h` is tets `6 h .. 6 h + 6`.
+    pub hexes: Option<std::borrow::Cow<'a, [[u32; 8]]>>,
 }
 
 /// How the jointed mesh around a part ([`BodyMesh::jointed_part`]) names
@@ -322,6 +327,7 @@ impl BodyMesh<'_> {
             ),
             source: Some(Cow::Owned(p.mesh)),
             joints: None,
+            hexes: None,
         };
         let joints = p
             .joints
@@ -358,6 +364,7 @@ impl super::Model {
                     boundary_node: std::borrow::Cow::Borrowed(&src.boundary_node),
                     source: Some(std::borrow::Cow::Borrowed(&src.mesh)),
                     joints: src.joints.as_ref().map(std::borrow::Cow::Borrowed),
+                    hexes: src.hexes.as_deref().map(std::borrow::Cow::Borrowed),
                 })
             }
             BodySource::Saved {
@@ -365,9 +372,15 @@ impl super::Model {
                 body,
                 offset,
                 joints,
+                hex8,
             } => {
                 let f = &files[*file as usize];
                 let m = saved_mesh(f, *body, *offset)?;
+                let hexes = if *hex8 {
+                    Some(saved_hexes(f, *body, &m.tets)?)
+                } else {
+                    None
+                };
                 let material = vec![self.bodies[b].material as u32; m.tets.len()];
                 let src = match joints {
                     None => SourceMesh::new(m, material),
@@ -395,6 +408,7 @@ impl super::Model {
                     boundary_node: std::borrow::Cow::Owned(src.boundary_node),
                     source: None,
                     joints: src.joints.map(std::borrow::Cow::Owned),
+                    hexes: hexes.map(std::borrow::Cow::Owned),
                 })
             }
         }
@@ -454,10 +468,18 @@ impl super::Model {
             .sum()
     }
 
-    /// Whether body `b` is a Hex8 mesh (issue 21).
+    /// Whether body `b` is a Hex8 mesh (issue 21), of its own source or
+    /// from a checkpoint.
     pub fn body_is_hex8(&self, b: usize) -> bool {
-        matches!(self.bodies[b].source, BodySource::Mesh { mesh, .. }
-            if self.meshes[mesh as usize].hexes.is_some())
+        match self.bodies[b].source {
+            BodySource::Mesh { mesh, .. } => self.meshes[mesh as usize].hexes.is_some(),
+            BodySource::Saved { hex8, .. } => hex8,
+        }
+    }
+
+    /// Whether any body is Hex8 (the same on every rank).
+    pub fn has_hexes(&self) -> bool {
+        (0..self.bodies.len()).any(|b| self.body_is_hex8(b))
     }
 
     /// Per body, the global number of its first joint (joints numbered
@@ -583,6 +605,23 @@ fn mean(nodes: &[[f64; 3]]) -> [f64; 3] {
         .iter()
         .fold([0.0; 3], |a, p| [a[0] + p[0], a[1] + p[1], a[2] + p[2]]);
     [s[0] / n, s[1] / n, s[2] / n]
+}
+
+/// The hexes of Hex8 body `body` of checkpoint `f`, whose tets (body-local
+/// node numbers) are `tets`, from the file's hex corners.
+fn saved_hexes(f: &CheckpointFile, body: u32, tets: &[[u32; 4]]) -> Result<Vec<[u32; 8]>, String> {
+    let h = &f.head;
+    let [e0, e1] = h.body_elems[body as usize];
+    let corners = f
+        .elem_hex_corner(&(e0..e1).collect::<Vec<u32>>())
+        .map_err(|e| e.to_string())?;
+    crate::io::checkpoint_hexes::hexes_from_corners(tets, &corners).map_err(|e| {
+        format!(
+            "{}: Hex8 body `{}` (its elements from {e0}): {e}",
+            f.path().display(),
+            h.body_names[body as usize]
+        )
+    })
 }
 
 /// The elements of the set `set` of a body's mesh, or an error naming the

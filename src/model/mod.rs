@@ -390,11 +390,19 @@ impl Model {
                             })
                         }
                     };
+                    let hex8 = h.body_hex8.get(i).copied().unwrap_or(false);
+                    if hex8 && joints.is_some() {
+                        return Err(model_err(format!(
+                            "body `{}`: a Hex8 body from a checkpoint cannot be jointed at load",
+                            b.name
+                        )));
+                    }
                     let source = BodySource::Saved {
                         file: fi as u32,
                         body: i as u32,
                         offset,
                         joints,
+                        hex8,
                     };
                     bodies.push(new_body(
                         b,

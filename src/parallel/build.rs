@@ -300,6 +300,9 @@ struct Made {
     elem_material: Vec<u32>,
     face_mask: Vec<u8>,
     tets: Vec<[u32; 4]>,
+    /// Per element, when any body is Hex8: each node's corner in its hex
+    /// (`io::checkpoint_hexes`).
+    hex_corner: Vec<[u8; 4]>,
     /// Per node (ascending global id, unique): id, position, boundary flag,
     /// and its conditions.
     node_gid: Vec<u32>,
@@ -337,6 +340,7 @@ fn make_bodies(
     held: &std::collections::BTreeMap<u32, Held>,
 ) -> Result<Made> {
     let mech = model.mechanics.is_some();
+    let any_hex = model.has_hexes();
     let mut m = Made::default();
     for (&b, h) in held {
         let body = &model.bodies[b as usize];
@@ -390,6 +394,13 @@ fn make_bodies(
             m.elem_body.push(b);
             m.elem_material.push(mesh.material[i]);
             m.face_mask.push(mesh.face_mask[i]);
+            if any_hex {
+                let hex = mesh.hexes.as_ref().map(|hx| &hx[e as usize / 6]);
+                m.hex_corner.push(t.map(|n| {
+                    hex.and_then(|hex| hex.iter().position(|&x| x == n))
+                        .map_or(crate::io::checkpoint_hexes::NO_CORNER as u8, |k| k as u8)
+                }));
+            }
             m.tets.push(t.map(gid));
             for n in t {
                 used[n as usize] = true;
@@ -711,6 +722,7 @@ fn number(comm: &SimpleCommunicator, m: Made, particle_rows: usize, rows_across:
         elem_gid: m.elem_gid,
         elem_material: m.elem_material,
         face_mask: m.face_mask,
+        hex_corner: m.hex_corner,
         node_owner: order.iter().map(|&i| owner[i]).collect(),
         petsc: node_gid.iter().map(|g| petsc_of[g]).collect(),
         boundary_node: order.iter().map(|&i| m.boundary[i]).collect(),

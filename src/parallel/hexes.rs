@@ -7,6 +7,9 @@
 
 use crate::model::Model;
 
+/// [`crate::io::checkpoint_hexes::NO_CORNER`] as a part stores it.
+const NO_CORNER: u8 = crate::io::checkpoint_hexes::NO_CORNER as u8;
+
 use super::Part;
 
 /// One hex of the part.
@@ -33,18 +36,26 @@ impl PartHexes {
     /// Not a hex's tet.
     pub const NONE: u32 = u32::MAX;
 
-    /// The hexes of `part` (empty when no body is Hex8).
+    /// The hexes of `part` (empty when no body is Hex8): from the part's
+    /// hex corners where it has them (a part built from the model's
+    /// bodies, checkpoint bodies included), else from the model's meshes.
     pub fn new(model: &Model, part: &Part) -> PartHexes {
         let mut out = PartHexes::default();
-        if !model.meshes.iter().any(|m| m.hexes.is_some()) {
+        if !model.has_hexes() {
             return out;
         }
         let ne = part.num_elements();
         out.of_element = vec![Self::NONE; ne];
+        let from_corners = part.hex_corner.len() == ne;
         let mut e = 0;
         while e < ne {
             let gid = part.elem_gid[e];
-            let Some((first, nodes)) = model.element_hex(gid) else {
+            let hex = if from_corners {
+                (part.hex_corner[e][0] != NO_CORNER).then(|| (gid, Self::corner_nodes(part, e)))
+            } else {
+                model.element_hex(gid)
+            };
+            let Some((first, nodes)) = hex else {
                 e += 1;
                 continue;
             };
@@ -71,6 +82,20 @@ impl PartHexes {
             e += 6;
         }
         out
+    }
+
+    /// The eight nodes (global ids) of the hex whose first tet is local
+    /// element `e`, from the part's hex corners.
+    fn corner_nodes(part: &Part, e: usize) -> [u32; 8] {
+        let mut nodes = [u32::MAX; 8];
+        for t in e..(e + 6).min(part.num_elements()) {
+            for (c, &k) in part.hex_corner[t].iter().enumerate() {
+                if let Some(n) = nodes.get_mut(k as usize) {
+                    *n = part.node_gid[part.mesh.tets[t][c] as usize];
+                }
+            }
+        }
+        nodes
     }
 
     /// Whether the part has no hexes.

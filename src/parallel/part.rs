@@ -53,6 +53,10 @@ pub struct Part {
     /// Per element: bit i set when its face opposite node i lies on its
     /// body's boundary (a face on a cut between ranks is not).
     pub face_mask: Vec<u8>,
+    /// Per element, when some body is Hex8 and the part was built from the
+    /// model's bodies: the Table 1 index in its hex of each of its nodes
+    /// (`io::checkpoint_hexes::NO_CORNER` for a Tet4 body's); else empty.
+    pub hex_corner: Vec<[u8; 4]>,
     /// Global id of every local node: owned ones ascending, then ghosts ascending.
     pub node_gid: Vec<u32>,
     /// Number of owned nodes (the first ones).
@@ -498,6 +502,7 @@ impl Part {
             rank,
             size,
             face_mask: elems.iter().map(|&e| bt.mask[e as usize]).collect(),
+            hex_corner: Vec::new(),
             boundary_node: node_gid
                 .iter()
                 .map(|&g| bt.boundary_node[g as usize])

@@ -569,6 +569,16 @@ pub(super) fn save_checkpoint(
     // The parts go with the state: a restart on as many ranks continues on them.
     let rank = vec![comm.rank() as u32; part.num_elements()];
     c.head.partition_ranks = Some(comm.size() as u64);
+    // Hex8 bodies: their hexes, as each tet node's corner (issue 21).
+    let hex_corner: Option<Vec<u32>> = model.has_hexes().then(|| {
+        let ne = part.num_elements();
+        (0..ne)
+            .flat_map(|e| match part.hex_corner.get(e) {
+                Some(c) => c.map(u32::from),
+                None => [crate::io::checkpoint_hexes::NO_CORNER; 4],
+            })
+            .collect()
+    });
     let rows = CheckpointRows {
         node_gid: part.owned_gids(),
         reference: &part.mesh.nodes[..no],
@@ -590,6 +600,7 @@ pub(super) fn save_checkpoint(
         springs: springs.as_ref().map(|(i, v, t)| (&i[..], &v[..], *t)),
         spheres: spheres.as_ref(),
         pending_heat: c.pending_heat.as_deref(),
+        hex_corner: hex_corner.as_deref(),
     };
     crate::io::checkpoint::write_parallel(comm, path, &c.head, &rows).map_err(Error::from)
 }
@@ -612,6 +623,9 @@ pub(super) fn capture(
         elems,
         body_names: model.bodies.iter().map(|b| b.name.clone()).collect(),
         body_templates: model.bodies.iter().map(|b| b.template.clone()).collect(),
+        body_hex8: (0..model.bodies.len())
+            .map(|b| model.body_is_hex8(b))
+            .collect(),
         body_nodes: model
             .bodies
             .iter()

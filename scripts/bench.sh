@@ -173,6 +173,9 @@ radiating_lattice_wall=$last_wall
 
 # Issue 18: memory per rank on 1, 2, 4 and 8 ranks (docs/scaling-measured.md).
 FDEM="$BIN" bash scripts/bench-scaling.sh "$OUT/dep2000/nut-packing-deposit_checkpoint.h5"
+# Issue 22 item 6: strong scaling 1 -> 2 ranks of the N = 2000 deposition and
+# heat-up, median of 3 alternated pairs (docs/strong-scaling-measured.md).
+FDEM="$BIN" bash scripts/bench-strong-scaling.sh "$OUT/dep2000/nut-packing-deposit_checkpoint.h5"
 
 # Mechanics kernel throughput (issue 4, the first part built).
 cargo build --release --example mech_kernel_bench
@@ -268,6 +271,13 @@ echo "$overlap_line" >&2
   echo "The largest N that deposits and heats within an hour is not run here (it takes the hour);"
   echo "measured by hand on 2 ranks (2026-12-05, \"Ten thousand nuts on 2 ranks\" below): N = 10,000"
   echo "in 58.9 min (deposition 3,490.2 s, heat-up 45.9 s, 2,273 MiB per rank)."
+  echo
+  echo "### Strong scaling (issue 22 item 6)"
+  echo
+  echo "From \`scripts/bench-strong-scaling.sh\` (docs/strong-scaling-measured.md), run by this script"
+  echo "on the deposited N = 2000 packing:"
+  echo
+  sed -n '2,$p' docs/strong-scaling-measured.md | sed 's/^### /#### /'
   echo
   echo "## Thermal contact physics (issue 20)"
   echo

@@ -468,8 +468,8 @@ fn hex8_bodies_collide_and_repartition_bitwise() {
 /// A later stage takes Hex8 bodies from a checkpoint as Hex8
 /// (`mesh.kind = "checkpoint"`, the hexes carried by the file's hex
 /// corners): the eight blocks of `scenarios/drop8.toml` and their floor,
-/// saved after one step without gravity (so at their reference to
-/// round-off), then dropped from the checkpoint, land as the same drop made
+/// saved on 2 ranks after one step without gravity (so at their reference
+/// to round-off), then dropped from the checkpoint, land as the same drop made
 /// directly from the box generator's Hex8 (to round-off; measured 1.2e-15
 /// m), on 1 and 2 ranks, not as its Tet4 split (3.0e-3 m apart).
 #[test]
@@ -490,7 +490,8 @@ fn hex8_bodies_from_a_checkpoint_stay_hex8() {
         "--set",
         "output.checkpoint=true",
     ];
-    run_ok(1, &scen, &saved, &[&hex[..], &still[..]].concat());
+    // Written on 2 ranks: each writes the hex corners of its elements.
+    run_ok(2, &scen, &saved, &[&hex[..], &still[..]].concat());
     let ck = saved.join("drop8_checkpoint.h5");
     let text = std::fs::read_to_string(&scen).unwrap();
     let from = |template: &str| {

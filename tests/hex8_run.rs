@@ -428,18 +428,21 @@ fn hex8_bar_with_particles_conducts_the_linear_profile() {
     assert!(d < 1e-8, "1 vs 2 ranks: {d:e}");
 }
 
+/// `scenarios/drop8.toml`'s blocks and floor as Hex8.
+const DROP8_HEX8: [&str; 4] = [
+    "--set",
+    "bodies.block.mesh.element=hex8",
+    "--set",
+    "bodies.floor.mesh.element=hex8",
+];
+
 /// Eight Hex8 blocks dropped onto a Hex8 floor (`scenarios/drop8.toml`):
 /// contact between hexes' tets, and repartitions on 2 ranks that move the
 /// Hex8 bodies (measured: 3, 9 bodies moved), in the same bits as 1 rank.
 #[test]
 fn hex8_bodies_collide_and_repartition_bitwise() {
     let scen = root().join("scenarios/drop8.toml");
-    let hex = [
-        "--set",
-        "bodies.block.mesh.element=hex8",
-        "--set",
-        "bodies.floor.mesh.element=hex8",
-    ];
+    let hex = DROP8_HEX8;
     let one = out_dir("drop8-hex8-1");
     run_ok(1, &scen, &one, &hex);
     let two = out_dir("drop8-hex8-2");
@@ -475,12 +478,7 @@ fn hex8_bodies_collide_and_repartition_bitwise() {
 #[test]
 fn hex8_bodies_from_a_checkpoint_stay_hex8() {
     let scen = root().join("scenarios/drop8.toml");
-    let hex = [
-        "--set",
-        "bodies.block.mesh.element=hex8",
-        "--set",
-        "bodies.floor.mesh.element=hex8",
-    ];
+    let hex = DROP8_HEX8;
     let saved = out_dir("drop8-hex8-saved");
     let still = [
         "--set",

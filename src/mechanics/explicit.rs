@@ -438,15 +438,27 @@ pub fn update_nodes_damped(
     if let Some(e) = ext {
         check_len("external forces", e.len(), n)?;
     }
-    let mut work = NodeWork::default();
+    // Summed in locals (registers), in node order.
+    let (mut external, mut damped) = (0.0, 0.0);
+    // The two divisions of the damped update depend on c alone: made again
+    // only when c changes from one node to the next (a run has one or two
+    // values), the same numbers as made per node.
+    let factors = |c: f64| {
+        let half = 0.5 * c * p.dt;
+        ((1.0 - half) / (1.0 + half), p.dt / (1.0 + half))
+    };
+    let mut last_c = p.mass_damping;
+    let (mut keep, mut scale) = factors(last_c);
     for i in 0..n {
         let v_old = v[i];
         let mut vi = v_old;
         let c = damping(i);
+        if c.to_bits() != last_c.to_bits() {
+            last_c = c;
+            (keep, scale) = factors(c);
+        }
         if mass[i] > 0.0 {
             let a = force[i] / mass[i] + p.gravity;
-            let half = 0.5 * c * p.dt;
-            let (keep, scale) = ((1.0 - half) / (1.0 + half), p.dt / (1.0 + half));
             // Not numbered in the seeds: central difference with mid-point damping, v^{n+½} = ((1 − cΔt/2) v^{n−½} + Δt a^n)/(1 + cΔt/2).
             vi = vi * keep + a * scale;
         }
@@ -457,18 +469,23 @@ pub fn update_nodes_damped(
         }
         if mass[i] > 0.0 {
             let load = ext.map_or(Vector3::zeros(), |e| e[i]) + p.gravity * mass[i];
+            // The node's sums first, then the totals: no long chain of
+            // additions through one accumulator.
+            let (mut work_i, mut free_v2) = (0.0, 0.0);
             for d in 0..3 {
                 let mean = 0.5 * (v_old[d] + vi[d]);
                 if bc[i][d].is_some() {
                     // The reaction's work: m Δv − Δt (f + m g), on v̄.
                     let r = mass[i] * (vi[d] - v_old[d])
                         - p.dt * (force[i][d] + p.gravity[d] * mass[i]);
-                    work.external += (r + p.dt * load[d]) * mean;
+                    work_i += (r + p.dt * load[d]) * mean;
                 } else {
-                    work.external += p.dt * load[d] * mean;
-                    work.damping += p.dt * c * mass[i] * mean * mean;
+                    work_i += p.dt * load[d] * mean;
+                    free_v2 += mean * mean;
                 }
             }
+            external += work_i;
+            damped += p.dt * c * mass[i] * free_v2;
         }
         // Not numbered in the seeds: x^{n+1} = x^n + Δt v^{n+½}.
         let xi = x[i] + vi * p.dt;
@@ -478,7 +495,10 @@ pub fn update_nodes_damped(
         v[i] = vi;
         x[i] = xi;
     }
-    Ok(work)
+    Ok(NodeWork {
+        external,
+        damping: damped,
+    })
 }
 
 /// Kinetic energy ½ Σ m |v|² (J).

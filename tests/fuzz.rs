@@ -16,6 +16,8 @@
 //!
 //! A failing case prints its scenario (or mesh), case number, seed and the
 //! mutated input; `FDEM_FUZZ_ONLY=<name>:<case>` re-runs just that case.
+//! `FDEM_FUZZ_SCALE=<x>` multiplies every case count (CI runs x = 1; a
+//! longer campaign, e.g. x = 10, runs the same cases and more).
 //! The case being run in-process is also written to
 //! `target/test-output/fuzz/current-*.txt`, which names the culprit if the
 //! process dies (an allocation failure aborts, it does not unwind).
@@ -41,7 +43,7 @@ use toml::Value;
 const SEED: u64 = 0x1616_f022_d0e5_0001;
 /// Mutated cases per shipped scenario (in-process), unless listed in
 /// [`SCENARIO_CASES`].
-const CASES_PER_SCENARIO: usize = 360;
+const CASES_PER_SCENARIO: usize = 240;
 /// Scenarios whose valid mutations take long to build get fewer cases.
 /// `fede-expansion-bar`'s case 101 widens the bar 10,000 times: a valid
 /// model of 15 M tets and 640,000 spheres, 26 s to build alone and over
@@ -52,9 +54,19 @@ const SCENARIO_CASES: &[(&str, usize)] = &[
     ("fede-expansion-bar", 100),
 ];
 /// Mutated cases per Gmsh file (in-process).
-const CASES_PER_MESH: usize = 3000;
+const CASES_PER_MESH: usize = 2000;
 /// Mutated scenarios run through the binary.
-const BINARY_CASES: usize = 150;
+const BINARY_CASES: usize = 100;
+/// `n` cases scaled by `FDEM_FUZZ_SCALE` (default 1; at least one case).
+fn scaled(n: usize) -> usize {
+    let x = std::env::var("FDEM_FUZZ_SCALE").map_or(1.0, |v| {
+        v.parse::<f64>()
+            .ok()
+            .filter(|x| x.is_finite() && *x > 0.0)
+            .unwrap_or_else(|| panic!("FDEM_FUZZ_SCALE={v}: expected a positive number"))
+    });
+    ((n as f64 * x).round() as usize).max(1)
+}
 /// A single in-process case running longer than this is a hang.
 const CASE_LIMIT: Duration = Duration::from_secs(30);
 /// A binary run longer than this is a hang.
@@ -716,6 +728,7 @@ fn mutated_scenarios_end_in_an_error_or_a_model() {
             .iter()
             .find(|(n, _)| *n == name)
             .map_or(CASES_PER_SCENARIO, |c| c.1);
+        let cases = scaled(cases);
         let t0 = Instant::now();
         for number in 0..cases {
             if !selected(&name, number) {
@@ -740,7 +753,7 @@ fn mutated_scenarios_end_in_an_error_or_a_model() {
         );
     }
     assert!(
-        runner.cases >= 10_000 || std::env::var("FDEM_FUZZ_ONLY").is_ok(),
+        runner.cases >= scaled(9_000) || std::env::var("FDEM_FUZZ_ONLY").is_ok(),
         "only {} cases",
         runner.cases
     );
@@ -1212,7 +1225,7 @@ fn mutated_meshes_end_in_an_error_or_a_model() {
         // Unmutated, each base builds a model.
         std::fs::write(&msh, bytes).unwrap();
         check_in_process(&text, &scen_path, &[]).unwrap_or_else(|e| panic!("{name}: {e}"));
-        for number in 0..CASES_PER_MESH {
+        for number in 0..scaled(CASES_PER_MESH) {
             if !selected(name, number) {
                 continue;
             }
@@ -1250,7 +1263,7 @@ fn mutated_meshes_end_in_an_error_or_a_model() {
         }
     }
     assert!(
-        runner.cases >= 3 * CASES_PER_MESH || std::env::var("FDEM_FUZZ_ONLY").is_ok(),
+        runner.cases >= 3 * scaled(CASES_PER_MESH) || std::env::var("FDEM_FUZZ_ONLY").is_ok(),
         "only {} cases",
         runner.cases
     );
@@ -1448,7 +1461,7 @@ fn mutated_scenarios_through_the_binary() {
     let scenarios = shipped_scenarios();
     let (mut ok, mut refused, mut later) = (0, 0, 0);
     let mut failures = Vec::new();
-    for number in 0..BINARY_CASES {
+    for number in 0..scaled(BINARY_CASES) {
         let path = &scenarios[number % scenarios.len()];
         let name = stem(path);
         let input = format!("binary-{name}");

@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # ParaView as the real client of fdem's HDF5 + XDMF output.
 #
-# Runs fdem on three scenarios (two bars in contact, shortened; the hot
-# block on a floor; a 50-nut deposit on 2 ranks), then opens each .xdmf
+# Runs fdem on four scenarios (two bars in contact, shortened; the hot
+# block on a floor; a 50-nut deposit on 2 ranks; Hex8 blocks dropped on a
+# Tet4 floor on 2 ranks, with its hexahedral index), then opens each .xdmf
 # with ParaView's Xdmf3 reader (Xdmf3ReaderS) and its legacy reader
 # (XDMFReader) under `xvfb-run -a pvbatch` and checks array names, time
 # steps, temperature ranges and all six stress components against the
@@ -55,6 +56,8 @@ run two-bars 1 scenarios/two-bars.toml --set time.end_time=2.0 --set output.time
   --set output.every=1000
 run hot-block 2 scenarios/hot-block-on-floor.toml
 run nut-deposit 2 scenarios/nut-packing-deposit.toml --set bodies.1.pack.count=50
+# Hex8 blocks on a Tet4 floor (issue 21): the hexahedral index too.
+run drop8-hex8 2 scenarios/drop8.toml --set bodies.block.mesh.element=hex8 --set time.steps=30
 
 echo "== pvbatch scripts/paraview_check.py"
 # The hot block (body 1, rho 2000 kg/m^3, g 9.81 m/s^2, 0.1 m tall) rests
@@ -67,7 +70,8 @@ for attempt in 1 2 3; do
   if xvfb-run -a pvbatch scripts/paraview_check.py \
     "$out/two-bars/two-bars.xdmf" \
     --resting-block=1,2000,9.81,0.1 "$out/hot-block/hot-block-on-floor.xdmf" \
-    "$out/nut-deposit/nut-packing-deposit.xdmf" > "$pvlog" 2>&1; then
+    "$out/nut-deposit/nut-packing-deposit.xdmf" \
+    "$out/drop8-hex8/drop8.xdmf" "$out/drop8-hex8/drop8_hex8.xdmf" > "$pvlog" 2>&1; then
     cat "$pvlog"
     break
   fi

@@ -321,6 +321,30 @@ fn hex8_restart_continues_bitwise() {
     );
     assert_eq!(a.times.last(), b.times.last());
     assert!(a.disp.last() == b.disp.last(), "restart differs");
+    // Continued in place (the series of `first`, on 1 rank): its
+    // hexahedral index lists every step, as the straight run's does.
+    run_ok(1, &scen, &first, &[&h[..], &restart[..]].concat());
+    let index =
+        |d: &std::path::Path| std::fs::read_to_string(d.join("cantilever-hex8_hex8.xdmf")).unwrap();
+    assert_eq!(index(&first), index(&straight));
+    hex_index(&first, "cantilever-hex8", 20e-3 * 4e-3 * 2e-3);
+}
+
+/// Hex8 blocks on a Tet4 floor: the hexahedral index holds the blocks only,
+/// its cell rows start after the floor's tets.
+#[test]
+fn hex8_index_of_hex8_blocks_on_a_tet4_floor() {
+    let out = out_dir("drop8-hex8-on-tet4");
+    let scen = root().join("scenarios/drop8.toml");
+    let set = [
+        "--set",
+        "bodies.block.mesh.element=hex8",
+        "--set",
+        "time.steps=10",
+    ];
+    run_ok(1, &scen, &out, &set);
+    let hexes = hex_index(&out, "drop8", 8.0 * 0.1f64.powi(3));
+    assert_eq!(hexes.len(), 8 * 8);
 }
 
 /// Seed 002 Fig 7 in `fdem run` with Hex8 regions: a bonded lattice
@@ -436,6 +460,69 @@ const DROP8_HEX8: [&str; 4] = [
     "bodies.floor.mesh.element=hex8",
 ];
 
+/// The hexahedral index `<stem>_hex8.xdmf` of a series in `dir` against
+/// its mesh file: `/mesh/hexes` are distinct hexes of eight distinct nodes,
+/// positive in the XDMF/VTK order (six tets around the 0–6 diagonal), of
+/// total volume `volume` (1e-12); when the index has cell fields, the row
+/// it reads for hex h (every sixth from its first) is a tet of that hex.
+/// Returns the hexes.
+fn hex_index(dir: &std::path::Path, stem: &str, volume: f64) -> Vec<[u32; 8]> {
+    let text = std::fs::read_to_string(dir.join(format!("{stem}_hex8.xdmf"))).unwrap();
+    let f = hdf5::File::open(dir.join(format!("{stem}.h5"))).unwrap();
+    let rows = f.dataset("mesh/hexes").unwrap().read_raw::<u32>().unwrap();
+    let hexes: Vec<[u32; 8]> = rows
+        .chunks_exact(8)
+        .map(|r| r.try_into().unwrap())
+        .collect();
+    let nh = hexes.len();
+    assert!(nh > 0 && text.contains(&format!("NumberOfElements=\"{nh}\" NodesPerElement=\"8\"")));
+    let mesh = fdem::io::read_mesh(&dir.join(format!("{stem}.h5"))).unwrap();
+    let x = |n: u32| nalgebra::Vector3::from(mesh.coords[n as usize]);
+    let mut total = 0.0;
+    for h in &hexes {
+        let mut sorted = *h;
+        sorted.sort_unstable();
+        assert!(sorted.windows(2).all(|w| w[0] < w[1]), "{h:?}");
+        for t in [
+            [0, 1, 2, 6],
+            [0, 2, 3, 6],
+            [0, 3, 7, 6],
+            [0, 7, 4, 6],
+            [0, 4, 5, 6],
+            [0, 5, 1, 6],
+        ] {
+            let [a, b, c, d] = t.map(|k| x(h[k]));
+            let v = (b - a).cross(&(c - a)).dot(&(d - a)) / 6.0;
+            assert!(v > 0.0, "hex {h:?}: a tet of volume {v:e}");
+            total += v;
+        }
+    }
+    assert!(
+        (total / volume - 1.0).abs() < 1e-12,
+        "hex volume {total} against {volume}"
+    );
+    let mut distinct: Vec<[u32; 8]> = hexes.clone();
+    distinct.iter_mut().for_each(|h| h.sort_unstable());
+    distinct.sort_unstable();
+    distinct.dedup();
+    assert_eq!(distinct.len(), nh);
+    // The cell rows: `start 0 6 1 nh 6` of the stress.
+    if let Some(i) = text.find("fields/cell/stress") {
+        let slab = &text[..i];
+        let sel = slab.rfind("Format=\"XML\">").unwrap() + "Format=\"XML\">".len();
+        let nums: Vec<u64> = slab[sel..slab[sel..].find('<').unwrap() + sel]
+            .split_whitespace()
+            .map(|v| v.parse().unwrap())
+            .collect();
+        assert_eq!(nums[1..], [0, 6, 1, nh as u64, 6]);
+        for (k, h) in hexes.iter().enumerate() {
+            let tet = mesh.cells[nums[0] as usize + 6 * k];
+            assert!(tet.iter().all(|n| h.contains(n)), "hex {k}: row {tet:?}");
+        }
+    }
+    hexes
+}
+
 /// Eight Hex8 blocks dropped onto a Hex8 floor (`scenarios/drop8.toml`):
 /// contact between hexes' tets, and repartitions on 2 ranks that move the
 /// Hex8 bodies (measured: 3, 9 bodies moved), in the same bits as 1 rank.
@@ -457,6 +544,12 @@ fn hex8_bodies_collide_and_repartition_bitwise() {
     assert!(stdout.contains("repartition(s)"), "{stdout}");
     let (a, b) = (read_mech(&one, "drop8"), read_mech(&two, "drop8"));
     assert!(a.disp == b.disp, "1 and 2 ranks differ");
+    // The hexahedral index: the floor and the eight blocks, the same on 1
+    // and 2 ranks (the blocks moved between ranks on 2).
+    let hexes = hex_index(&one, "drop8", 0.45 * 0.45 * 0.05 + 8.0 * 0.1f64.powi(3));
+    assert_eq!(hexes, hex_index(&two, "drop8", 0.018125));
+    let read = |d: &std::path::Path| std::fs::read_to_string(d.join("drop8_hex8.xdmf")).unwrap();
+    assert_eq!(read(&one), read(&two));
     let k = a.times.len() - 1;
     // The blocks fell and landed: every block node moved down, none below the floor's top.
     let fell = a

@@ -11,7 +11,9 @@ use mpi::traits::{Communicator, CommunicatorCollectives};
 
 use super::ffi::{self, CollectiveXfer};
 use super::xdmf::{self, Center, FieldDesc, XdmfModel};
-use super::{check_name, output_paths, remove_outputs, step_path, steps_dir, IoError};
+use super::{
+    check_name, hex_index_path, output_paths, remove_outputs, step_path, steps_dir, IoError,
+};
 
 /// This rank's part of a Tet4 mesh. Rows are distributed in contiguous blocks: the
 /// non-empty blocks of all ranks must tile `0..global_nodes` (resp. `0..global_cells`)
@@ -33,6 +35,22 @@ pub struct MeshPart<'a> {
     pub cells: &'a [u32],
     /// 4 (Tet4) or 3 (triangles).
     pub nodes_per_cell: usize,
+    /// The Hex8 bodies' hexes (`/mesh/hexes`, the index `<stem>_hex8.xdmf`).
+    pub hexes: Option<HexRows<'a>>,
+}
+
+/// This rank's block of `/mesh/hexes` `[H, 8]` u32 (global node ids, seed
+/// 002 Table 1 order) and where each Hex8 body's hexes and tets are.
+#[derive(Clone, Copy, Debug)]
+pub struct HexRows<'a> {
+    /// Number of hexes over all ranks.
+    pub global: u64,
+    /// This rank's rows are `offset .. offset + rows.len() / 8`.
+    pub offset: u64,
+    /// Eight global node ids per hex.
+    pub rows: &'a [u32],
+    /// The Hex8 bodies, the same on every rank.
+    pub blocks: &'a [super::HexBlock],
 }
 
 impl MeshPart<'_> {
@@ -58,6 +76,7 @@ struct Rows {
 
 mod checks;
 mod files;
+mod hexes;
 mod reopen;
 
 use checks::{agree, agree_signature, check_mesh_local, check_tiling, Fnv};
@@ -127,7 +146,10 @@ impl TimeSeriesWriter {
         let (h5_path, xdmf_path) = output_paths(dir, stem);
 
         // Validate: local checks, then a global view of the distribution.
-        let local = check_name("file stem", stem).and_then(|()| check_mesh_local(mesh));
+        let local = check_name("file stem", stem)
+            .and_then(|()| check_mesh_local(mesh))
+            .and_then(|()| hexes::check_local(mesh));
+        let hex = mesh.hexes.as_ref();
         let mine = [
             u64::from(local.is_ok()),
             mesh.global_nodes,
@@ -136,6 +158,9 @@ impl TimeSeriesWriter {
             mesh.global_cells,
             mesh.cell_offset,
             mesh.num_cells() as u64,
+            hex.map_or(0, |h| h.global),
+            hex.map_or(0, |h| h.offset),
+            hex.map_or(0, |h| h.rows.len() as u64 / 8),
         ];
         let mut all = vec![0_u64; mine.len() * comm.size() as usize];
         comm.all_gather_into(&mine[..], &mut all[..]);
@@ -167,6 +192,13 @@ impl TimeSeriesWriter {
                 mesh.global_cells,
                 rows.iter().map(|r| (r[5], r[6])).collect(),
             )
+        })
+        .and_then(|()| {
+            let global = hex.map_or(0, |h| h.global);
+            if rows.iter().any(|r| r[7] != global) {
+                return Err("ranks disagree on the number of hexes".into());
+            }
+            check_tiling("hex", global, rows.iter().map(|r| (r[8], r[9])).collect())
         })
         .map_err(|what| IoError::invalid(&h5_path, what))?;
 
@@ -227,6 +259,8 @@ impl TimeSeriesWriter {
                             nodes: nodes.global,
                             cells: cells.global,
                             nodes_per_cell: mesh.nodes_per_cell,
+                            hexes: hex.map_or(0, |h| h.global),
+                            hex_blocks: hex.map(|h| h.blocks.to_vec()).unwrap_or_default(),
                             ..XdmfModel::default()
                         },
                         usable: true,
@@ -391,6 +425,9 @@ impl Inner {
             mesh.cells,
         )
         .map_err(call("writing /mesh/topology"))?;
+        if let Some(h) = &mesh.hexes {
+            hexes::write(part, &mesh_g, xfer, h)?;
+        }
         drop((coords, topo, mesh_g, static_g));
         Ok(OpenMesh {
             static_groups,
@@ -726,7 +763,12 @@ impl Inner {
     /// Every file it names is in place.
     fn write_index(&self) -> Result<(), IoError> {
         let indexed = if self.rank == 0 {
-            xdmf::write_atomic(&self.xdmf_path, &self.model.render())
+            xdmf::write_atomic(&self.xdmf_path, &self.model.render()).and_then(|()| {
+                match self.model.render_hexes() {
+                    Some(text) => xdmf::write_atomic(&hex_index_path(&self.xdmf_path), &text),
+                    None => Ok(()),
+                }
+            })
         } else {
             Ok(())
         };
@@ -786,6 +828,7 @@ mod tests {
             cell_offset: 0,
             cells: &CELLS,
             nodes_per_cell: 4,
+            hexes: None,
         }
     }
 

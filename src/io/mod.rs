@@ -104,15 +104,17 @@ pub mod particles;
 pub mod plot;
 mod read;
 mod xdmf;
+mod xdmf_hex;
 
 use std::path::{Path, PathBuf};
 
-pub use hdf5_out::{FieldData, MeshPart, TimeSeriesWriter};
+pub use hdf5_out::{FieldData, HexRows, MeshPart, TimeSeriesWriter};
 pub use history::HistoryWriter;
 pub use read::{
     read_cell_field_step, read_mesh, read_node_field_step, read_static_cell_field_i32,
     read_static_node_field_i32, read_times, read_triangles, MeshData,
 };
+pub use xdmf_hex::{hex_index_path, HexBlock};
 
 /// The `(row, column)` of each of the six components of a symmetric tensor in
 /// XDMF `Tensor6` order: xx, xy, xz, yy, yz, zz (the upper triangle row by
@@ -231,8 +233,8 @@ pub fn step_path(h5: &Path, step: usize) -> PathBuf {
     steps_dir(h5).join(xdmf::step_file_name(step))
 }
 
-/// Removes the time series `<stem>` from `dir`: first the index
-/// `<stem>.xdmf` (and a leftover `<stem>.xdmf.tmp`), then the step directory
+/// Removes the time series `<stem>` from `dir`: first the indexes
+/// `<stem>.xdmf` and `<stem>_hex8.xdmf` (and leftover `.tmp` files), then the step directory
 /// `<stem>_steps` with its files, then the mesh file `<stem>.h5` (and a
 /// leftover `<stem>.h5.part` and its MPI-IO locks `<stem>.h5.part-*.lock`);
 /// missing files are ignored. In that order no
@@ -243,6 +245,8 @@ pub fn step_path(h5: &Path, step: usize) -> PathBuf {
 pub fn remove_outputs(dir: &Path, stem: &str) -> Result<(), IoError> {
     let (h5, xdmf) = output_paths(dir, stem);
     let tmp = xdmf::tmp_path(&xdmf);
+    let hex = hex_index_path(&xdmf);
+    let hex_tmp = xdmf::tmp_path(&hex);
     let part = hdf5_out::part_path(&h5);
     let ignore_missing = |path: &Path, r: std::io::Result<()>| match r {
         Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
@@ -250,7 +254,7 @@ pub fn remove_outputs(dir: &Path, stem: &str) -> Result<(), IoError> {
         }
         _ => Ok(()),
     };
-    for path in [&xdmf, &tmp] {
+    for path in [&xdmf, &tmp, &hex, &hex_tmp] {
         ignore_missing(path, std::fs::remove_file(path))?;
     }
     let steps = steps_dir(&h5);
@@ -318,6 +322,8 @@ mod tests {
         let mine = [
             "s.h5",
             "s.xdmf",
+            "s_hex8.xdmf",
+            "s_hex8.xdmf.tmp",
             "s.h5.part",
             "s.h5.part-349306881-30771.lock",
         ];

@@ -6,6 +6,7 @@ use std::fmt::Write as _;
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
+use super::xdmf_hex::HexBlock;
 use super::IoError;
 
 /// Where a field lives in the mesh.
@@ -16,7 +17,7 @@ pub(crate) enum Center {
 }
 
 impl Center {
-    fn xdmf(self) -> &'static str {
+    pub(super) fn xdmf(self) -> &'static str {
         match self {
             Self::Node => "Node",
             Self::Cell => "Cell",
@@ -69,9 +70,13 @@ pub(crate) struct XdmfModel {
     pub fields: Vec<FieldDesc>,
     /// Times of the completed steps.
     pub times: Vec<f64>,
+    /// Rows of `/mesh/hexes` (0: no Hex8 body).
+    pub hexes: u64,
+    /// The Hex8 bodies, for the second index (`super::xdmf_hex`).
+    pub hex_blocks: Vec<HexBlock>,
 }
 
-fn escape(s: &str) -> String {
+pub(super) fn escape(s: &str) -> String {
     let mut out = String::with_capacity(s.len());
     for c in s.chars() {
         match c {
@@ -247,6 +252,7 @@ mod tests {
                 components: 3,
             }],
             times: vec![0.0, 0.5],
+            ..XdmfModel::default()
         };
         let s = m.render();
         assert_eq!(s.matches("<Grid Name=\"step_").count(), 2);

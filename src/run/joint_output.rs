@@ -82,6 +82,7 @@ impl JointOutput {
             cell_offset: c0,
             cells: &topo,
             nodes_per_cell: 3,
+            hexes: None,
         };
         let name = format!("{stem}_joints");
         // Rows are global: a point's row is its id, on any number of ranks.

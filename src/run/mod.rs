@@ -11,6 +11,7 @@
 //! [`settle`], output, [`checkpoint`]), and `finish` with the [`summary`].
 
 mod checkpoint;
+mod hex_output;
 mod joint_migration;
 mod joint_output;
 mod output;

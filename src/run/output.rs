@@ -21,7 +21,7 @@ use crate::parallel::{agree, Part};
 use crate::scenario::ParticleOutputSpec;
 use crate::thermal::ThermalSystem;
 
-use super::Mechanics;
+use super::{hex_output::HexOutput, Mechanics};
 
 /// The files a run writes into, open.
 pub(super) struct Output {
@@ -796,6 +796,7 @@ fn open_writer(
         .collect();
     let (n0, _) = block(nodes, size, rank);
     let (c0, _) = block(cells, size, rank);
+    let hex = HexOutput::new(comm, model, part);
     let rows = MeshPart {
         global_nodes: nodes,
         node_offset: n0,
@@ -804,6 +805,7 @@ fn open_writer(
         cell_offset: c0,
         cells: &topology,
         nodes_per_cell: 4,
+        hexes: hex.as_ref().map(HexOutput::rows),
     };
     let node_id: Vec<i32> = (n0..n0 + coords.len() as u64).map(|g| g as i32).collect();
     if let Some(keep_until) = continue_after {

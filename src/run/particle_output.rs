@@ -87,6 +87,7 @@ impl ParticleOutput {
             cell_offset: p0,
             cells: &cells,
             nodes_per_cell: 1,
+            hexes: None,
         };
         let name = format!("{stem}_particles");
         let point_row: Vec<i32> = cells.iter().map(|&g| g as i32).collect();

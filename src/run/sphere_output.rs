@@ -58,6 +58,7 @@ impl SphereOutput {
             cell_offset: p0,
             cells: &cells,
             nodes_per_cell: 1,
+            hexes: None,
         };
         let mut writer = TimeSeriesWriter::create(comm, dir, &format!("{stem}_spheres"), &mesh)?;
         let row: Vec<i32> = cells.iter().map(|&g| g as i32).collect();

@@ -162,6 +162,7 @@ impl StatusOutput {
             cell_offset: offset,
             cells: &cells,
             nodes_per_cell: 3,
+            hexes: None,
         };
         let name = format!("{stem}_status");
         let point_row: Vec<i32> = (0..3 * mine).map(|p| (3 * offset + p) as i32).collect();

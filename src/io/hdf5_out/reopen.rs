@@ -16,6 +16,9 @@ use super::checks::{agree, agree_signature, Fnv};
 use super::files::remove_steps_from;
 use super::{CollectiveXfer, Inner, MeshPart, Rows, TimeSeriesWriter};
 
+/// The static fields of a mesh file: name and center.
+type Statics = Vec<(String, Center)>;
+
 /// What a rank finds in the files of the series.
 struct Found {
     /// Static fields of the mesh file.
@@ -64,8 +67,8 @@ impl TimeSeriesWriter {
         let mismatch = i32::from(check.is_err());
         let mut any = 0;
         comm.all_reduce_into(&mismatch, &mut any, SystemOperation::max());
-        let statics = match check {
-            Ok(statics) if any == 0 => statics,
+        let (statics, with_hexes) = match check {
+            Ok(found) if any == 0 => found,
             other => {
                 return Err(IoError::invalid(
                     &h5_path,
@@ -121,7 +124,13 @@ impl TimeSeriesWriter {
             statics: found.statics,
             fields: found.fields.clone().unwrap_or_default(),
             times: found.times,
+            hexes: 0,
+            hex_blocks: Vec::new(),
         };
+        if let Some(h) = mesh.hexes.as_ref().filter(|_| with_hexes) {
+            model.hexes = h.global;
+            model.hex_blocks = h.blocks.to_vec();
+        }
         model.sort();
         let inner = Inner {
             rank,
@@ -155,7 +164,8 @@ impl TimeSeriesWriter {
 }
 
 /// Checks that the mesh file `h5` holds this run's mesh in this rank's rows;
-/// returns its static fields, or what differs as `Err`. An I/O error is the
+/// returns its static fields and whether it has this run's hexes (it has
+/// none if written before the hexahedral index), or what differs as `Err`. An I/O error is the
 /// outer error.
 fn check_mesh_file(
     h5: &Path,
@@ -163,7 +173,7 @@ fn check_mesh_file(
     node_ids: &[i32],
     nodes: Rows,
     cells: Rows,
-) -> Result<Result<Vec<(String, Center)>, String>, IoError> {
+) -> Result<Result<(Statics, bool), String>, IoError> {
     let h5err = |what: &str| {
         let what = what.to_string();
         move |e| IoError::hdf5(h5, what, e)
@@ -222,7 +232,14 @@ fn check_mesh_file(
             statics.push((field, center));
         }
     }
-    Ok(Ok(statics))
+    let with_hexes = match &mesh.hexes {
+        Some(h) => match super::hexes::in_file(&file, h5, h)? {
+            Ok(found) => found,
+            Err(what) => return Ok(Err(what)),
+        },
+        None => false,
+    };
+    Ok(Ok((statics, with_hexes)))
 }
 
 /// The steps of the series of mesh file `h5` with times up to `keep_until`

@@ -4,11 +4,9 @@
 //! `fdem::validation::ambient`), on one and two ranks; the heat account
 //! (stored change = heat in by convection and radiation) and a restart.
 
-mod common;
-
 use std::path::Path;
 
-use common::*;
+use crate::common::*;
 use fdem::validation::ambient::{convective_cooling, radiative_cooling};
 
 /// Cube side (m), heat capacity of one cube (J/K), emissivity, T0 (K):

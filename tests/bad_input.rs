@@ -1,12 +1,10 @@
 //! Bad input gives a clear error naming the file, key or element, a
 //! non-zero exit, and no corrupt output, on one and two ranks.
 
-mod common;
-
 use std::path::{Path, PathBuf};
 use std::process::Output;
 
-use common::*;
+use crate::common::*;
 
 fn scenario_dir(name: &str) -> PathBuf {
     out_dir(&format!("bad-{name}"))

@@ -5,9 +5,7 @@
 //! the peak platen force gives back the joints' tensile strength and the
 //! crack runs along the loaded diameter.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 
 /// scenarios/brazilian-disc.toml.
 const F_T: f64 = 10e6;

@@ -1,9 +1,7 @@
 //! The command line: every shipped scenario passes `fdem check`; `fdem info`
 //! reports the libraries in use; `fdem mesh` writes a Gmsh file that runs.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 
 #[test]
 fn every_shipped_scenario_checks() {

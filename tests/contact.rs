@@ -3,9 +3,7 @@
 //! surface and the pipe-network model; conservation, symmetry, and one rank
 //! against two on a stack of cubes.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use fdem::validation::{circle_overlap_surface, PipeNetwork, SlabProblem};
 
 fn sets(list: &[String]) -> Vec<&str> {

@@ -6,11 +6,9 @@
 //! without any mesh: each box's face rectangles clipped by the other box's
 //! six half-spaces, halved.
 
-mod common;
-
 use std::path::Path;
 
-use common::*;
+use crate::common::*;
 use fdem::geometry::transform::rotation_xyz_degrees;
 
 type P = [f64; 3];

@@ -4,9 +4,7 @@
 //! across it with the contact resistance, so the temperature jumps by
 //! q Rc; pulled apart it conducts none. 1 and 2 ranks alike.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 
 /// Conductivity (W/m/K), contact resistance (m² K/W), length (m),
 /// end temperatures (°C) and end traction (Pa, + pulls) of the bar.

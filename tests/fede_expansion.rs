@@ -6,11 +6,9 @@
 //! the free thermal strain α ΔT everywhere, so the bar α ΔT L longer, no
 //! stress in the elements, no force in the bonds, no momentum.
 
-mod common;
-
 use std::path::Path;
 
-use common::*;
+use crate::common::*;
 
 const SCEN: &str = "scenarios/fede-expansion-bar.toml";
 const STEM: &str = "fede-expansion-bar";

@@ -5,11 +5,9 @@
 //! the linear profile T = ΔT x / L in both regions, the flux k ΔT / L
 //! through every section, the heat stored ρ c ∫ T dV.
 
-mod common;
-
 use std::path::Path;
 
-use common::*;
+use crate::common::*;
 use nalgebra::{Matrix3, Vector3};
 
 const L: f64 = 3e-3;

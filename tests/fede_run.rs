@@ -4,11 +4,9 @@
 //! dynamics through `fdem run`. References are computed here: uniaxial
 //! stress σ = t, strain t/E in both regions, end displacement t L / E.
 
-mod common;
-
 use std::path::Path;
 
-use common::*;
+use crate::common::*;
 
 const T: f64 = 1e6;
 const E: f64 = 1e9;

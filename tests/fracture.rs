@@ -3,9 +3,7 @@
 //! area at two mesh sizes), intact joints giving the continuum's answer,
 //! one and two ranks bitwise, and the scenario errors of the fracture keys.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 
 /// The bar's constants (scenarios/fracture-bar.toml).
 const F_T: f64 = 1e6;

@@ -14,12 +14,10 @@
 //!   explicit steps too long for a sphere's or a node's capacity stop the
 //!   run with a clear error.
 
-mod common;
-
 use std::f64::consts::PI;
 use std::path::Path;
 
-use common::*;
+use crate::common::*;
 
 /// A sphere series' output times, centres and temperatures by global
 /// sphere number.

@@ -10,11 +10,9 @@
 //! - a bad `[[spheres]]` key is one clear error naming it, and so are
 //!   more spheres than fit in their box.
 
-mod common;
-
 use std::path::Path;
 
-use common::*;
+use crate::common::*;
 
 /// A run's sphere series: placed centres, and per output every sphere's
 /// centre and velocity, by global sphere number.

@@ -6,9 +6,7 @@
 //! springs follows the same trajectories on 1 and 2 ranks and after a
 //! restart.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use fdem::io::checkpoint::Checkpoint;
 
 fn incline(out: &std::path::Path, friction: f64, spring: f64, steps: u32) {

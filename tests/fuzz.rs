@@ -22,8 +22,6 @@
 //! `target/test-output/fuzz/current-*.txt`, which names the culprit if the
 //! process dies (an allocation failure aborts, it does not unwind).
 
-mod common;
-
 use std::cell::{Cell, RefCell};
 use std::collections::BTreeMap;
 use std::io::Write as _;
@@ -32,7 +30,7 @@ use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex, Once};
 use std::time::{Duration, Instant};
 
-use common::*;
+use crate::common::*;
 use rand::seq::SliceRandom;
 use rand::Rng;
 use rand::SeedableRng;

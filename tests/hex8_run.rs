@@ -4,9 +4,7 @@
 //! Timoshenko tip deflection, the seed 000 slab series, the free cube's
 //! (1 + α ΔT)³.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use fdem::validation::cantilever::Cantilever;
 
 /// The tip (x = L) nodes' mean displacement along −z at output `k` (m).

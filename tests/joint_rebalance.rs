@@ -6,9 +6,7 @@
 //! grid and the broken joints are bitwise those of one rank; on a hot
 //! floor with thermal contact, temperatures agree with one rank's to 1e-8.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 
 /// drop8 with its blocks jointed: f_t = 20 kPa, p_f = 10 E.
 fn scenario() -> String {

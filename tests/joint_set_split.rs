@@ -13,9 +13,7 @@
 //! continuum nodes are owned by a rank holding neither tet of some of
 //! their joints (a joint only on its tets' ranks would miss them).
 
-mod common;
-
-use common::*;
+use crate::common::*;
 
 /// Where the bar of scenarios/fracture-bar.toml (0.1 × 0.02 × 0.02 m, 240
 /// Tet4, h = 10 mm) is jointed: every count above the 400 node copies a

@@ -12,9 +12,7 @@
 //! their last bits follow the partition whatever the body: they are held
 //! to 1e-9 of their scale here, which catches a joint counted twice.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 
 const STEM: &str = "fracture-bar";
 /// The bar's tensile strength (Pa) and cross-section (m²).

@@ -7,9 +7,7 @@
 //! numbered again and a closed crack across the cut meets its other face
 //! on the joint's owner.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 
 /// The ranks holding the elements of the run in `dir` (its `rank` field).
 fn ranks_held(dir: &std::path::Path, stem: &str) -> Vec<i32> {

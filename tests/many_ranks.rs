@@ -5,8 +5,7 @@
 //! Krylov or direct solve is the only difference). Output series are in
 //! global id order, so the files compare row by row.
 
-mod common;
-use common::*;
+use crate::common::*;
 use std::path::Path;
 
 const RANKS: [usize; 4] = [1, 2, 3, 4];

@@ -5,9 +5,7 @@
 //! a block sliding on an incline with friction, and an eight-body drop on
 //! one and two ranks.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 
 fn tet_volume(p: [[f64; 3]; 4]) -> f64 {
     let a = [0, 1, 2].map(|d| p[1][d] - p[0][d]);

@@ -5,12 +5,10 @@
 //! with k × 1000 the mean particle temperature follows the lumped
 //! (average-temperature) network built from the same contact areas.
 
-mod common;
-
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
-use common::*;
+use crate::common::*;
 use fdem::io::checkpoint::Checkpoint;
 use fdem::validation::LumpedNetwork;
 

@@ -7,9 +7,7 @@
 //! history; the energy per unit of crack area is at least G_I; and 1 and 2
 //! ranks break the same joints at the same moments (energies to 1e-8).
 
-mod common;
-
-use common::*;
+use crate::common::*;
 
 /// scenarios/packing-thermal-shock.toml.
 const G_I: f64 = 20.0;

@@ -7,11 +7,9 @@
 //! with heat their temperatures, heat account and the heat handed to the
 //! bodies not yet released.
 
-mod common;
-
 use std::path::Path;
 
-use common::*;
+use crate::common::*;
 
 /// Particle displacements and velocities (and temperatures, when
 /// written) of every output, with the output times.

@@ -10,11 +10,9 @@
 //! same bar conducting heat gives the temperatures of one rank to the
 //! solver's round-off.
 
-mod common;
-
 use std::path::{Path, PathBuf};
 
-use common::*;
+use crate::common::*;
 
 /// Spheres of the long bar: its 5 mm × 2 mm × 2 mm set in cells of 2r = 0.25 mm.
 const SPHERES: usize = 20 * 8 * 8;

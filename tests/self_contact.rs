@@ -15,9 +15,7 @@
 //! variant: the two tips at different temperatures conduct only once they
 //! touch, and only with a `[contact]` table.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use fdem::mesh::TetMesh;
 
 /// Young's modulus (Pa), Poisson's ratio, density, contact penalty (Pa).

@@ -3,9 +3,7 @@
 //! the heat balance; time-convergence orders of theta = 0, 0.5, 1 against
 //! the exact semi-discrete solution.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 
 fn slab_errors(h: f64, name: &str) -> [f64; 3] {
     let out = out_dir(name);

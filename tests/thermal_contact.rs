@@ -5,11 +5,9 @@
 //! prescribed pressure (plates) and at the penalty contact's pressure (a
 //! block on a floor under growing loads); on one and two ranks.
 
-mod common;
-
 use std::path::Path;
 
-use common::*;
+use crate::common::*;
 use fdem::contact::conductance::{cmy_conductance, Cmy};
 use fdem::thermal::radiation::{grey_exchange, STEFAN_BOLTZMANN};
 

@@ -4,9 +4,7 @@
 //! stays at 0 °C; the joints crack where the plane-stress hoop stress
 //! reaches f_t. References from `validation::thermoelastic`.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use fdem::validation::thermoelastic::HollowCylinder;
 
 /// scenarios/hollow-cylinder-cracking.toml's constants.

@@ -2,9 +2,7 @@
 //! the slab (direct, explicit and CG/GAMG paths) and an irregular Gmsh mesh,
 //! with the METIS partition cutting through the body.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 
 fn compare(tag: &str, stem: &str, extra1: &[&str], extra2: &[&str], tol: f64) {
     let scen = root().join(format!("scenarios/{stem}.toml"));

@@ -140,8 +140,16 @@ impl XdmfModel {
         s
     }
 
-    /// Renders the whole XDMF document.
-    pub(crate) fn render(&self) -> String {
+    /// The XDMF document of the series: the grid `mesh_name` with its
+    /// `head` (topology, geometry, static fields; given the indent) while no
+    /// step is written, else a temporal collection of one grid per step:
+    /// the head and what `step(k, steps_dir, out)` adds (its attributes).
+    pub(super) fn document(
+        &self,
+        mesh_name: &str,
+        head: impl Fn(&str) -> String,
+        step: impl Fn(usize, &str, &mut String),
+    ) -> String {
         let mut s = String::from(
             "<?xml version=\"1.0\" encoding=\"utf-8\"?>\n\
              <!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n\
@@ -149,12 +157,11 @@ impl XdmfModel {
              \x20 <Domain>\n",
         );
         if self.times.is_empty() {
-            // No step yet: the mesh and its static fields only.
-            s.push_str("    <Grid Name=\"mesh\" GridType=\"Uniform\">\n");
-            s.push_str(&self.mesh_block("      "));
+            let _ = writeln!(s, "    <Grid Name=\"{mesh_name}\" GridType=\"Uniform\">");
+            s.push_str(&head("      "));
             s.push_str("    </Grid>\n");
         } else {
-            let mesh = self.mesh_block("        ");
+            let mesh = head("        ");
             let steps = escape(&self.steps_name);
             s.push_str(
                 "    <Grid Name=\"TimeSeries\" GridType=\"Collection\" CollectionType=\"Temporal\">\n",
@@ -165,35 +172,43 @@ impl XdmfModel {
                     "      <Grid Name=\"step_{k:06}\" GridType=\"Uniform\">\n        <Time Value=\"{t:e}\"/>"
                 );
                 s.push_str(&mesh);
-                for f in &self.fields {
-                    let rows = match f.center {
-                        Center::Node => self.nodes,
-                        Center::Cell => self.cells,
-                    };
-                    let c = f.components;
-                    let dims = if c == 1 {
-                        rows.to_string()
-                    } else {
-                        format!("{rows} {c}")
-                    };
-                    let ty = attribute_type(c).unwrap_or("Matrix");
-                    let name = escape(&f.name);
-                    let _ = writeln!(
-                        s,
-                        "        <Attribute Name=\"{name}\" AttributeType=\"{ty}\" Center=\"{center}\">\n\
-                         \x20         <DataItem Dimensions=\"{dims}\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">{steps}/{file}:/fields/{g}/{name}</DataItem>\n\
-                         \x20       </Attribute>",
-                        center = f.center.xdmf(),
-                        g = f.center.group(),
-                        file = step_file_name(k),
-                    );
-                }
+                step(k, &steps, &mut s);
                 s.push_str("      </Grid>\n");
             }
             s.push_str("    </Grid>\n");
         }
         s.push_str("  </Domain>\n</Xdmf>\n");
         s
+    }
+
+    /// Renders the whole XDMF document (no step yet: the mesh and its
+    /// static fields only).
+    pub(crate) fn render(&self) -> String {
+        self.document("mesh", |indent| self.mesh_block(indent), |k, steps, s| {
+            for f in &self.fields {
+                let rows = match f.center {
+                    Center::Node => self.nodes,
+                    Center::Cell => self.cells,
+                };
+                let c = f.components;
+                let dims = if c == 1 {
+                    rows.to_string()
+                } else {
+                    format!("{rows} {c}")
+                };
+                let ty = attribute_type(c).unwrap_or("Matrix");
+                let name = escape(&f.name);
+                let _ = writeln!(
+                    s,
+                    "        <Attribute Name=\"{name}\" AttributeType=\"{ty}\" Center=\"{center}\">\n\
+                     \x20         <DataItem Dimensions=\"{dims}\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">{steps}/{file}:/fields/{g}/{name}</DataItem>\n\
+                     \x20       </Attribute>",
+                    center = f.center.xdmf(),
+                    g = f.center.group(),
+                    file = step_file_name(k),
+                );
+            }
+        })
     }
 }
 

@@ -152,54 +152,29 @@ impl XdmfModel {
             return None;
         }
         let cell_start = self.hex_cell_start();
-        let mut s = String::from(
-            "<?xml version=\"1.0\" encoding=\"utf-8\"?>\n\
-             <!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n\
-             <Xdmf Version=\"3.0\" xmlns:xi=\"http://www.w3.org/2001/XInclude\">\n\
-             \x20 <Domain>\n",
-        );
-        if self.times.is_empty() {
-            s.push_str("    <Grid Name=\"hex8\" GridType=\"Uniform\">\n");
-            s.push_str(&self.hex_grid_head(cell_start, "      "));
-            s.push_str("    </Grid>\n");
-        } else {
-            let head = self.hex_grid_head(cell_start, "        ");
-            let steps = escape(&self.steps_name);
-            s.push_str(
-                "    <Grid Name=\"TimeSeries\" GridType=\"Collection\" CollectionType=\"Temporal\">\n",
-            );
-            for (k, t) in self.times.iter().enumerate() {
-                let _ = writeln!(
-                    s,
-                    "      <Grid Name=\"step_{k:06}\" GridType=\"Uniform\">\n        <Time Value=\"{t:e}\"/>"
+        let head = |indent: &str| self.hex_grid_head(cell_start, indent);
+        Some(self.document("hex8", head, |k, steps, s| {
+            for f in &self.fields {
+                let start = match (f.center, cell_start) {
+                    (Center::Cell, None) => continue,
+                    (_, start) => start.unwrap_or(0),
+                };
+                let name = escape(&f.name);
+                let path = format!(
+                    "{steps}/{}:/fields/{}/{name}",
+                    step_file_name(k),
+                    f.center.group()
                 );
-                s.push_str(&head);
-                for f in &self.fields {
-                    let start = match (f.center, cell_start) {
-                        (Center::Cell, None) => continue,
-                        (_, start) => start.unwrap_or(0),
-                    };
-                    let name = escape(&f.name);
-                    let path = format!(
-                        "{steps}/{}:/fields/{}/{name}",
-                        step_file_name(k),
-                        f.center.group()
-                    );
-                    let ty = attribute_type(f.components).unwrap_or("Matrix");
-                    let float = "NumberType=\"Float\" Precision=\"8\"";
-                    let _ = write!(
-                        s,
-                        "        <Attribute Name=\"{name}\" AttributeType=\"{ty}\" Center=\"{c}\">\n{}        </Attribute>\n",
-                        self.hex_rows(f.center, start, "          ", &path, f.components, float),
-                        c = f.center.xdmf(),
-                    );
-                }
-                s.push_str("      </Grid>\n");
+                let ty = attribute_type(f.components).unwrap_or("Matrix");
+                let float = "NumberType=\"Float\" Precision=\"8\"";
+                let _ = write!(
+                    s,
+                    "        <Attribute Name=\"{name}\" AttributeType=\"{ty}\" Center=\"{c}\">\n{}        </Attribute>\n",
+                    self.hex_rows(f.center, start, "          ", &path, f.components, float),
+                    c = f.center.xdmf(),
+                );
             }
-            s.push_str("    </Grid>\n");
-        }
-        s.push_str("  </Domain>\n</Xdmf>\n");
-        Some(s)
+        }))
     }
 }
 

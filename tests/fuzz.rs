@@ -39,18 +39,13 @@ use toml::Value;
 
 /// Seed of every run; a case's own seed mixes in its input and number.
 const SEED: u64 = 0x1616_f022_d0e5_0001;
-/// Mutated cases per shipped scenario (in-process), unless listed in
-/// [`SCENARIO_CASES`].
+/// Mutated cases per shipped scenario (in-process).
 const CASES_PER_SCENARIO: usize = 240;
-/// Scenarios whose valid mutations take long to build get fewer cases.
-/// `fede-expansion-bar`'s case 101 widens the bar 10,000 times: a valid
-/// model of 15 M tets and 640,000 spheres, 26 s to build alone and over
-/// the 30 s limit beside the other tests.
-const SCENARIO_CASES: &[(&str, usize)] = &[
-    ("bench-cube-1m", 60),
-    ("bench-mech-block", 200),
-    ("fede-expansion-bar", 100),
-];
+/// The element limit while a case builds its model in-process
+/// ([`fdem::mesh::with_element_limit`]): a mutation that makes a valid but
+/// huge model (a bar widened 10,000 times: 15 M tets, 26 s to build) ends
+/// in the limit's error at once. The largest reduced base has under 0.2 M.
+const FUZZ_ELEMENT_LIMIT: usize = 500_000;
 /// Mutated cases per Gmsh file (in-process).
 const CASES_PER_MESH: usize = 2000;
 /// Mutated scenarios run through the binary.
@@ -692,12 +687,15 @@ fn mutate_scenario(base: &str, rng: &mut Pcg64, cap: Option<&dyn Fn(&mut Value)>
     }
 }
 
-/// Parse, validate and build the model, as `fdem check` does.
+/// Parse, validate and build the model, as `fdem check` does (under the
+/// [`FUZZ_ELEMENT_LIMIT`]).
 fn check_in_process(text: &str, path: &Path, sets: &[String]) -> Result<(), String> {
-    let sc = fdem::scenario::parse_str(text, path, sets).map_err(|e| e.to_string())?;
-    let model = fdem::model::Model::from_scenario(&sc).map_err(|e| e.to_string())?;
-    model.whole_mesh().map_err(|e| e.to_string())?;
-    Ok(())
+    fdem::mesh::with_element_limit(FUZZ_ELEMENT_LIMIT, || {
+        let sc = fdem::scenario::parse_str(text, path, sets).map_err(|e| e.to_string())?;
+        let model = fdem::model::Model::from_scenario(&sc).map_err(|e| e.to_string())?;
+        model.whole_mesh().map_err(|e| e.to_string())?;
+        Ok(())
+    })
 }
 
 fn shipped_scenarios() -> Vec<PathBuf> {
@@ -722,11 +720,7 @@ fn mutated_scenarios_end_in_an_error_or_a_model() {
     for path in shipped_scenarios() {
         let name = stem(&path);
         let base = reduced_base(&path, false);
-        let cases = SCENARIO_CASES
-            .iter()
-            .find(|(n, _)| *n == name)
-            .map_or(CASES_PER_SCENARIO, |c| c.1);
-        let cases = scaled(cases);
+        let cases = scaled(CASES_PER_SCENARIO);
         let t0 = Instant::now();
         for number in 0..cases {
             if !selected(&name, number) {
@@ -1286,17 +1280,15 @@ fn base_reductions(name: &str, binary: bool) -> Vec<(&'static str, Value)> {
         )],
         _ => Vec::new(),
     };
-    if binary {
-        match name {
-            "bench-cube-1m" | "bench-mech-block" => {
-                v.push(("bodies.0.mesh.element_size", Value::Float(0.1)));
-            }
-            "bench-contact-pack" => v.push((
-                "bodies.0.lattice.count",
-                Value::Array(vec![Value::Integer(2); 3]),
-            )),
-            _ => {}
-        }
+    // 1 M and 0.2 M tets: over or near the fuzz's element limit.
+    if let "bench-cube-1m" | "bench-mech-block" = name {
+        v.push(("bodies.0.mesh.element_size", Value::Float(0.1)));
+    }
+    if binary && name == "bench-contact-pack" {
+        v.push((
+            "bodies.0.lattice.count",
+            Value::Array(vec![Value::Integer(2); 3]),
+        ));
     }
     v
 }

@@ -353,18 +353,12 @@ fn set_cylinder(ranks: usize, out: &std::path::Path, extra: &[&str]) -> (Results
     cracking_run(ranks, &scen, out, "cylinder", extra)
 }
 
+/// The cylinder jointed on a set, split over 2 ranks (each holding jointed
+/// and continuum tets), cracks as on one rank and continues from its
+/// checkpoint on 3 and 1 ranks ([`cracks_and_restarts_as_on_one_rank`]).
 #[test]
-fn a_cylinder_jointed_on_a_set_cracks_split_as_on_one_rank() {
-    let (one, one_mode) = set_cylinder(1, &out_dir("joint-set-split-cyl-1"), &[]);
-    let want = broken(&one_mode);
-    assert!(!want.is_empty(), "the cylinder must crack");
-    let dir = out_dir("joint-set-split-cyl-2");
-    let (two, two_mode) = set_cylinder(2, &dir, &[]);
-    assert_eq!(
-        ranks_of(&dir.join("cylinder.h5")),
-        vec![0, 1],
-        "the cylinder is not split over 2 ranks"
-    );
+fn a_cylinder_jointed_on_a_set_cracks_split_and_restarts_as_on_one_rank() {
+    let dir = cracks_and_restarts_as_on_one_rank("joint-set-split-cyl", "cylinder", set_cylinder);
     let by_rank = tets_by_rank(&dir, "cylinder", |c| {
         c[0].abs() <= 0.08 && c[1].abs() <= 0.08
     });
@@ -372,59 +366,6 @@ fn a_cylinder_jointed_on_a_set_cracks_split_as_on_one_rank() {
         by_rank.iter().all(|&[j, c]| j > 0 && c > 0),
         "2 ranks: each must hold jointed and continuum tets: {by_rank:?}"
     );
-    assert_eq!(broken(&two_mode), want, "2 ranks: broken joints differ");
-    assert_same_temperatures(&one, &two, 1e-8, "cylinder on a set, 1 against 2 ranks");
-    eprintln!(
-        "{} joints broken on 1 and 2 ranks; temperatures within {:e}",
-        want.len(),
-        worst(&one, &two)
-    );
-}
-
-/// The cylinder jointed on a set, checkpointed on 2 ranks after joints
-/// broke (7.4 ms), continues to 8 ms on 3 ranks and on 1 to the
-/// uninterrupted one-rank run's broken joints and temperatures.
-#[test]
-fn a_cylinder_jointed_on_a_set_restarts_on_other_rank_counts() {
-    let ck_args = [
-        "--set",
-        "output.checkpoint=true",
-        "--set",
-        "time.end_time=8e-3",
-    ];
-    let (want, want_mode) = set_cylinder(1, &out_dir("joint-set-split-restart-full"), &ck_args);
-    let first = out_dir("joint-set-split-restart-first");
-    let stop = [&ck_args[..], &["--set", "time.end_time=7.4e-3"]].concat();
-    let (_, first_mode) = set_cylinder(2, &first, &stop);
-    assert_eq!(ranks_of(&first.join("cylinder.h5")), vec![0, 1]);
-    assert!(
-        !broken(&first_mode).is_empty(),
-        "no joint broke before the checkpoint"
-    );
-    let ck = first.join("cylinder_checkpoint.h5");
-    for ranks in [3, 1] {
-        let rest = out_dir(&format!("joint-set-split-restart-{ranks}"));
-        let more = [&ck_args[..], &["--restart", ck.to_str().unwrap()]].concat();
-        let (got, mode) = set_cylinder(ranks, &rest, &more);
-        assert_eq!(
-            ranks_of(&rest.join("cylinder.h5")),
-            (0..ranks as i32).collect::<Vec<_>>(),
-            "{ranks} ranks: the restarted cylinder is not split over all ranks"
-        );
-        assert_eq!(
-            broken(&mode),
-            broken(&want_mode),
-            "{ranks} ranks: broken joints differ"
-        );
-        let (k, kw) = (got.times.len() - 1, want.times.len() - 1);
-        assert_eq!(got.times[k], want.times[kw], "{ranks} ranks: end time");
-        let d = rel_diff(&got.temperature[k], &want.temperature[kw]);
-        assert!(d < 1e-8, "{ranks} ranks: end temperatures differ by {d:e}");
-        eprintln!(
-            "restart on {ranks} ranks: {} joints broken, end temperatures within {d:e}",
-            broken(&mode).len()
-        );
-    }
 }
 
 /// The fully jointed bar of scenarios/fracture-bar.toml on 3 ranks: each

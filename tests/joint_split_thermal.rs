@@ -9,15 +9,6 @@
 
 use crate::common::*;
 
-/// The ranks holding the elements of the run in `dir` (its `rank` field).
-fn ranks_held(dir: &std::path::Path, stem: &str) -> Vec<i32> {
-    let h5 = dir.join(format!("{stem}.h5"));
-    let mut r = fdem::io::read_static_cell_field_i32(&h5, "rank").unwrap();
-    r.sort_unstable();
-    r.dedup();
-    r
-}
-
 /// The jointed bar of scenarios/fracture-bar.toml (960 node copies), free
 /// and unloaded, heated at x = min to 100 °C from 0 °C (no expansion, so
 /// nothing moves and no joint breaks): the diffusion length over the run
@@ -107,62 +98,14 @@ fn cylinder(ranks: usize, out: &std::path::Path, extra: &[&str]) -> (Results, Ve
     cracking_run(ranks, &scen, out, "hollow-cylinder-cracking", extra)
 }
 
+/// The fully jointed cracking cylinder split over ranks cracks as on one
+/// rank and continues from its checkpoint on 3 and 1 ranks
+/// ([`cracks_and_restarts_as_on_one_rank`]).
 #[test]
-fn a_split_jointed_cylinder_cracks_as_on_one_rank() {
-    let one_dir = out_dir("joint-split-thermal-cyl-1");
-    let (one, one_mode) = cylinder(1, &one_dir, &[]);
-    let want = broken(&one_mode);
-    assert!(!want.is_empty(), "the cylinder must crack");
-    let two_dir = out_dir("joint-split-thermal-cyl-2");
-    let (two, two_mode) = cylinder(2, &two_dir, &[]);
-    assert_eq!(
-        ranks_held(&two_dir, "hollow-cylinder-cracking"),
-        vec![0, 1],
-        "the cylinder is not split over 2 ranks"
+fn a_split_jointed_cylinder_cracks_and_restarts_as_on_one_rank() {
+    cracks_and_restarts_as_on_one_rank(
+        "joint-split-thermal-cyl",
+        "hollow-cylinder-cracking",
+        cylinder,
     );
-    assert_eq!(broken(&two_mode), want, "2 ranks: broken joints differ");
-    assert_same_temperatures(&one, &two, 1e-8, "cracking cylinder, 1 against 2 ranks");
-}
-
-/// A split cracking cylinder checkpointed on 2 ranks after its first
-/// joints broke (at 7.4 ms) continues to 8 ms on 3 ranks (a new cut)
-/// and on 1 to the uninterrupted one-rank run's broken joints and
-/// temperatures.
-#[test]
-fn a_split_jointed_cylinder_restarts_on_other_rank_counts() {
-    let ck_args = [
-        "--set",
-        "output.checkpoint=true",
-        "--set",
-        "time.end_time=8e-3",
-    ];
-    let (want, want_mode) = cylinder(1, &out_dir("joint-split-thermal-restart-full"), &ck_args);
-    let first = out_dir("joint-split-thermal-restart-first");
-    let stop = [&ck_args[..], &["--set", "time.end_time=7.4e-3"]].concat();
-    let (_, first_mode) = cylinder(2, &first, &stop);
-    assert_eq!(ranks_held(&first, "hollow-cylinder-cracking"), vec![0, 1]);
-    assert!(
-        !broken(&first_mode).is_empty(),
-        "no joint broke before the checkpoint"
-    );
-    let ck = first.join("hollow-cylinder-cracking_checkpoint.h5");
-    for ranks in [3, 1] {
-        let rest = out_dir(&format!("joint-split-thermal-restart-{ranks}"));
-        let more = [&ck_args[..], &["--restart", ck.to_str().unwrap()]].concat();
-        let (got, mode) = cylinder(ranks, &rest, &more);
-        assert_eq!(
-            ranks_held(&rest, "hollow-cylinder-cracking"),
-            (0..ranks as i32).collect::<Vec<_>>(),
-            "{ranks} ranks: the restarted cylinder is not split over all ranks"
-        );
-        assert_eq!(
-            broken(&mode),
-            broken(&want_mode),
-            "{ranks} ranks: broken joints differ"
-        );
-        let (k, kw) = (got.times.len() - 1, want.times.len() - 1);
-        assert_eq!(got.times[k], want.times[kw], "{ranks} ranks: end time");
-        let d = rel_diff(&got.temperature[k], &want.temperature[kw]);
-        assert!(d < 1e-8, "{ranks} ranks: end temperatures differ by {d:e}");
-    }
 }

@@ -1008,6 +1008,33 @@ mod tests {
         (a - b).abs() / b.abs()
     }
 
+    /// A lowered element limit refuses a larger box (naming the limit), only
+    /// on its thread and only inside the call; the default takes it.
+    #[test]
+    fn a_lowered_element_limit_refuses_a_larger_box_and_is_restored() {
+        let build = || box_mesh([0.0; 3], [1.0; 3], 0.25);
+        let err = crate::mesh::with_element_limit(383, build).unwrap_err();
+        assert!(matches!(err, MeshError::TooLarge(_)), "{err}");
+        assert!(err.to_string().contains("384 elements") && err.to_string().contains("383"));
+        assert_eq!(
+            crate::mesh::with_element_limit(384, build)
+                .unwrap()
+                .tets
+                .len(),
+            384
+        );
+        assert_eq!(crate::mesh::element_limit(), crate::mesh::MAX_ELEMENTS);
+        let other = std::thread::spawn(move || {
+            crate::mesh::with_element_limit(10, || {
+                std::thread::spawn(crate::mesh::element_limit)
+                    .join()
+                    .unwrap()
+            })
+        });
+        assert_eq!(other.join().unwrap(), crate::mesh::MAX_ELEMENTS);
+        assert!(build().is_ok());
+    }
+
     #[test]
     fn kuhn_template_is_positive_and_fills_cube() {
         let c = |k: usize| [(k & 1) as f64, ((k >> 1) & 1) as f64, ((k >> 2) & 1) as f64];

@@ -66,12 +66,38 @@ pub use nut::{nut_mesh, nut_mesh_default};
 /// [`MeshError::TooLarge`] before they allocate them.
 pub const MAX_ELEMENTS: usize = 20_000_000;
 
+thread_local! {
+    static ELEMENT_LIMIT: std::cell::Cell<usize> = const { std::cell::Cell::new(MAX_ELEMENTS) };
+}
+
+/// The element limit in force on this thread: [`MAX_ELEMENTS`] unless
+/// [`with_element_limit`] lowered it.
+pub fn element_limit() -> usize {
+    ELEMENT_LIMIT.with(std::cell::Cell::get)
+}
+
+/// Runs `f` with the element limit lowered to `limit` (at most
+/// [`MAX_ELEMENTS`]) on this thread, where a model is built, then restores
+/// it: a program that builds many models (the input fuzz tests) turns a
+/// valid but huge one into the [`MeshError::TooLarge`] error at once.
+pub fn with_element_limit<R>(limit: usize, f: impl FnOnce() -> R) -> R {
+    struct Restore(usize);
+    impl Drop for Restore {
+        fn drop(&mut self) {
+            ELEMENT_LIMIT.with(|l| l.set(self.0));
+        }
+    }
+    let _restore = Restore(ELEMENT_LIMIT.with(|l| l.replace(limit.min(MAX_ELEMENTS))));
+    f()
+}
+
 /// [`MeshError::TooLarge`] if `what`, a mesh of `count` elements, exceeds
-/// [`MAX_ELEMENTS`].
+/// the [`element_limit`] ([`MAX_ELEMENTS`]).
 pub(crate) fn check_element_count(what: &str, count: u128) -> Result<(), MeshError> {
-    if count > MAX_ELEMENTS as u128 {
+    let limit = element_limit();
+    if count > limit as u128 {
         return Err(MeshError::TooLarge(format!(
-            "{what} would have {count} elements, more than fdem's limit of {MAX_ELEMENTS} \
+            "{what} would have {count} elements, more than fdem's limit of {limit} \
              (the mesh is kept on every rank); increase the element size"
         )));
     }

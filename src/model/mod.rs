@@ -253,12 +253,12 @@ impl Model {
         let (mut n_nodes, mut n_elems) = (0u64, 0u64);
         let limit = |b: &str, copies: u128, per: usize, so_far: u64| -> Result<()> {
             let total = u128::from(so_far) + copies * per as u128;
-            if total > mesh::MAX_ELEMENTS as u128 {
+            if total > mesh::element_limit() as u128 {
                 return Err(model_err(format!(
                     "body `{b}`: {copies} cop{} of its {per} Tet4 would make the model {total} Tet4, \
                      more than fdem's limit of {}",
                     if copies == 1 { "y" } else { "ies" },
-                    mesh::MAX_ELEMENTS
+                    mesh::element_limit()
                 )));
             }
             Ok(())
@@ -344,12 +344,12 @@ impl Model {
                     .iter()
                     .map(|&i| u64::from(h.body_elems[i][1] - h.body_elems[i][0]))
                     .sum();
-                if n_elems + elems > mesh::MAX_ELEMENTS as u64 {
+                if n_elems + elems > mesh::element_limit() as u64 {
                     return Err(model_err(format!(
                         "body `{}`: the model would have {} Tet4, more than fdem's limit of {}",
                         b.name,
                         n_elems + elems,
-                        mesh::MAX_ELEMENTS
+                        mesh::element_limit()
                     )));
                 }
                 let fracture = b

@@ -633,6 +633,104 @@ pub fn cracking_run(
     (read_results(out, stem), mode)
 }
 
+/// The distinct ranks, ascending, holding the elements of the output
+/// `<stem>.h5` in `dir` (its `rank` field).
+pub fn ranks_held(dir: &Path, stem: &str) -> Vec<i32> {
+    let h5 = dir.join(format!("{stem}.h5"));
+    let mut r = fdem::io::read_static_cell_field_i32(&h5, "rank").unwrap();
+    r.sort_unstable();
+    r.dedup();
+    r
+}
+
+/// A cracking run (`run(ranks, out, extra)`, see [`cracking_run`]; output
+/// stem `stem`, directories `<tag>-*`) split on two ranks cracks as on one,
+/// and continues from its checkpoint on other rank counts. The one-rank
+/// run to 8 ms is the reference; the two-rank run to 7.4 ms (after its
+/// first joints broke) has at every output the one-rank temperatures (1e-8)
+/// and at its last the same broken joints; its checkpoint continues to
+/// 8 ms on 3 ranks (a new cut) and on 1 to the reference's broken joints
+/// and end temperatures. One test for both: the uninterrupted runs are
+/// the costly part, run once. Returns the two-rank run's directory.
+pub fn cracks_and_restarts_as_on_one_rank(
+    tag: &str,
+    stem: &str,
+    run: impl Fn(usize, &Path, &[&str]) -> (Results, Vec<f64>),
+) -> PathBuf {
+    let ck_args = [
+        "--set",
+        "output.checkpoint=true",
+        "--set",
+        "time.end_time=8e-3",
+    ];
+    let full = out_dir(&format!("{tag}-full"));
+    let (want, want_mode) = run(1, &full, &ck_args);
+    let first = out_dir(&format!("{tag}-first"));
+    let stop = [&ck_args[..], &["--set", "time.end_time=7.4e-3"]].concat();
+    let (two, first_mode) = run(2, &first, &stop);
+    assert_eq!(
+        ranks_held(&first, stem),
+        vec![0, 1],
+        "{tag}: not split over 2 ranks"
+    );
+    let k = two.times.len() - 1;
+    assert_eq!(
+        two.times[..],
+        want.times[..=k],
+        "{tag}: 2 ranks' output times"
+    );
+    for (i, t) in two.temperature.iter().enumerate() {
+        let d = rel_diff(t, &want.temperature[i]);
+        let at = two.times[i];
+        assert!(
+            d < 1e-8,
+            "{tag}, 2 ranks, t = {at}: temperatures differ by {d:e}"
+        );
+    }
+    let jh5 = full.join(format!("{stem}_joints.h5"));
+    assert_eq!(fdem::io::read_times(&jh5).unwrap()[k], two.times[k]);
+    let at_stop = broken(&fdem::io::read_cell_field_step(&jh5, "mode", k).unwrap());
+    assert!(!at_stop.is_empty(), "{tag}: no joint broke before 7.4 ms");
+    assert_eq!(
+        broken(&first_mode),
+        at_stop,
+        "{tag}: 2 ranks' broken joints differ"
+    );
+    let ck = first.join(format!("{stem}_checkpoint.h5"));
+    for ranks in [3, 1] {
+        let rest = out_dir(&format!("{tag}-restart-{ranks}"));
+        let more = [&ck_args[..], &["--restart", ck.to_str().unwrap()]].concat();
+        let (got, mode) = run(ranks, &rest, &more);
+        assert_eq!(
+            ranks_held(&rest, stem),
+            (0..ranks as i32).collect::<Vec<_>>(),
+            "{tag}, restart on {ranks} ranks: not split over all ranks"
+        );
+        assert_eq!(
+            broken(&mode),
+            broken(&want_mode),
+            "{tag}, restart on {ranks} ranks: broken joints differ"
+        );
+        let (k, kw) = (got.times.len() - 1, want.times.len() - 1);
+        assert_eq!(
+            got.times[k], want.times[kw],
+            "{tag}, {ranks} ranks: end time"
+        );
+        let d = rel_diff(&got.temperature[k], &want.temperature[kw]);
+        assert!(
+            d < 1e-8,
+            "{tag}, {ranks} ranks: end temperatures differ by {d:e}"
+        );
+        eprintln!(
+            "{tag}: restart on {ranks} ranks: {} joints broken ({} at 7.4 ms), \
+             end temperatures within {d:e}",
+            broken(&mode).len(),
+            at_stop.len()
+        );
+    }
+    first
+}
+
 /// Every output of the particle series `<stem>_particles.h5` in `dir`: its
 /// times and, per field (displacement, velocity, temperature where
 /// written), per output the values by global particle number (the rows

@@ -1373,9 +1373,7 @@ fn run_with_limit(
     cmd.process_group(0)
         .stdout(std::fs::File::create(stdout).unwrap())
         .stderr(std::fs::File::create(stderr).unwrap())
-        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
-        .env("OMPI_MCA_rmaps_base_oversubscribe", "1");
+        .envs(MPI_ENV);
     let mut child = cmd.spawn().expect("cannot start fdem");
     let start = Instant::now();
     loop {

@@ -385,8 +385,7 @@ fn no_rank_holds_all_the_joints_of_a_split_bar() {
         .arg(&out)
         .args(["--set", "time.end_time=1e-3"])
         .env("FDEM_LOG", "memory=debug")
-        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+        .envs(MPI_ENV)
         .output()
         .expect("cannot start fdem");
     let (stdout, stderr) = (

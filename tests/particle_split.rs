@@ -58,9 +58,7 @@ fn run_counting(ranks: usize, scen: &Path, out: &Path, extra: &[&str]) -> Vec<us
         .arg(out)
         .args(extra)
         .env("FDEM_LOG", "particles=debug")
-        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
-        .env("OMPI_MCA_rmaps_base_oversubscribe", "1");
+        .envs(MPI_ENV);
     let o = cmd.output().expect("cannot start fdem");
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(

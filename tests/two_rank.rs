@@ -113,8 +113,7 @@ fn a_panic_on_one_rank_stops_every_rank() {
         .args(["--quiet", "--output"])
         .arg(&out)
         .env("FDEM_FAULT_PANIC_RANK", "1")
-        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+        .envs(MPI_ENV)
         .output()
         .expect("cannot start mpirun");
     let stderr = String::from_utf8_lossy(&o.stderr);

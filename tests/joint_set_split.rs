@@ -358,7 +358,8 @@ fn set_cylinder(ranks: usize, out: &std::path::Path, extra: &[&str]) -> (Results
 /// checkpoint on 3 and 1 ranks ([`cracks_and_restarts_as_on_one_rank`]).
 #[test]
 fn a_cylinder_jointed_on_a_set_cracks_split_and_restarts_as_on_one_rank() {
-    let dir = cracks_and_restarts_as_on_one_rank("joint-set-split-cyl", "cylinder", set_cylinder);
+    let dir =
+        cracks_and_restarts_as_on_one_rank("joint-set-split-cyl", "cylinder", set_cylinder, None);
     let by_rank = tets_by_rank(&dir, "cylinder", |c| {
         c[0].abs() <= 0.08 && c[1].abs() <= 0.08
     });

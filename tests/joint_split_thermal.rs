@@ -100,12 +100,14 @@ fn cylinder(ranks: usize, out: &std::path::Path, extra: &[&str]) -> (Results, Ve
 
 /// The fully jointed cracking cylinder split over ranks cracks as on one
 /// rank and continues from its checkpoint on 3 and 1 ranks
-/// ([`cracks_and_restarts_as_on_one_rank`]).
+/// ([`cracks_and_restarts_as_on_one_rank`]; the one-rank run is
+/// [`cracking_cylinder_reference`], shared with tests/thermal_cracking.rs).
 #[test]
 fn a_split_jointed_cylinder_cracks_and_restarts_as_on_one_rank() {
     cracks_and_restarts_as_on_one_rank(
         "joint-split-thermal-cyl",
         "hollow-cylinder-cracking",
         cylinder,
+        Some(cracking_cylinder_reference()),
     );
 }

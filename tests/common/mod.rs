@@ -646,10 +646,37 @@ pub fn cracking_run(
         "time.end_time=7.6e-3",
     ];
     run_ok(ranks, scen, out, &[&base[..], extra].concat());
+    (read_results(out, stem), last_modes(out, stem))
+}
+
+/// The modes of the joints of the run in `out` at its last output.
+pub fn last_modes(out: &Path, stem: &str) -> Vec<f64> {
     let jh5 = out.join(format!("{stem}_joints.h5"));
     let k = fdem::io::read_times(&jh5).unwrap().len() - 1;
-    let mode = fdem::io::read_cell_field_step(&jh5, "mode", k).unwrap();
-    (read_results(out, stem), mode)
+    fdem::io::read_cell_field_step(&jh5, "mode", k).unwrap()
+}
+
+/// What the reference runs of [`cracks_and_restarts_as_on_one_rank`] add
+/// to [`cracking_run`]: a checkpoint, to 8 ms.
+const CK_ARGS: [&str; 4] = [
+    "--set",
+    "output.checkpoint=true",
+    "--set",
+    "time.end_time=8e-3",
+];
+
+/// The one-rank run of scenarios/hollow-cylinder-cracking.toml to 8 ms,
+/// checkpointing, at rtol 1e-12 (its outputs every 0.2 ms): the reference
+/// of tests/joint_split_thermal.rs and tests/thermal_cracking.rs, run once
+/// per test process by whichever test asks first (the others wait).
+pub fn cracking_cylinder_reference() -> &'static Path {
+    static DIR: std::sync::OnceLock<PathBuf> = std::sync::OnceLock::new();
+    DIR.get_or_init(|| {
+        let out = out_dir("cracking-cylinder-reference");
+        let scen = root().join("scenarios/hollow-cylinder-cracking.toml");
+        cracking_run(1, &scen, &out, "hollow-cylinder-cracking", &CK_ARGS);
+        out
+    })
 }
 
 /// The distinct ranks, ascending, holding the elements of the output
@@ -665,7 +692,8 @@ pub fn ranks_held(dir: &Path, stem: &str) -> Vec<i32> {
 /// A cracking run (`run(ranks, out, extra)`, see [`cracking_run`]; output
 /// stem `stem`, directories `<tag>-*`) split on two ranks cracks as on one,
 /// and continues from its checkpoint on other rank counts. The one-rank
-/// run to 8 ms is the reference; the two-rank run to 7.4 ms (after its
+/// run to 8 ms is the reference (in `reference` if given, made by `run`
+/// with [`CK_ARGS`]); the two-rank run to 7.4 ms (after its
 /// first joints broke) has at every output the one-rank temperatures (1e-8)
 /// and at its last the same broken joints; its checkpoint continues to
 /// 8 ms on 3 ranks (a new cut) and on 1 to the reference's broken joints
@@ -675,15 +703,20 @@ pub fn cracks_and_restarts_as_on_one_rank(
     tag: &str,
     stem: &str,
     run: impl Fn(usize, &Path, &[&str]) -> (Results, Vec<f64>),
+    reference: Option<&Path>,
 ) -> PathBuf {
-    let ck_args = [
-        "--set",
-        "output.checkpoint=true",
-        "--set",
-        "time.end_time=8e-3",
-    ];
-    let full = out_dir(&format!("{tag}-full"));
-    let (want, want_mode) = run(1, &full, &ck_args);
+    let ck_args = CK_ARGS;
+    let (full, (want, want_mode)) = match reference {
+        Some(dir) => (
+            dir.to_path_buf(),
+            (read_results(dir, stem), last_modes(dir, stem)),
+        ),
+        None => {
+            let full = out_dir(&format!("{tag}-full"));
+            let r = run(1, &full, &ck_args);
+            (full, r)
+        }
+    };
     let first = out_dir(&format!("{tag}-first"));
     let stop = [&ck_args[..], &["--set", "time.end_time=7.4e-3"]].concat();
     let (two, first_mode) = run(2, &first, &stop);

@@ -50,7 +50,13 @@ NODE_PREFIXES = ("/mesh/coordinates", "/static/node/", "/fields/node/")
 CELL_PREFIXES = ("/mesh/topology", "/static/cell/", "/fields/cell/")
 # The owner rank of each cell depends on the partition, not a result (the
 # per-step owner_rank exists only in runs that repartition).
-PARTITION = ("/static/cell/rank", "/fields/cell/owner_rank")
+# The hexes' rows (/static/hex/, /fields/hex/) are in global hex order already.
+PARTITION = (
+    "/static/cell/rank",
+    "/fields/cell/owner_rank",
+    "/static/hex/rank",
+    "/fields/hex/owner_rank",
+)
 
 
 def itemsize(h5, ds):

@@ -21,10 +21,9 @@
 # A hexahedral index STEM_hex8.xdmf (Hex8 bodies, issue 21) is checked on
 # its own: one block of VTK hexahedra per Hex8 body, the corners of
 # /mesh/hexes, positive volumes summing to the body's tets' volume, every
-# point field as in the step files and every cell field the body's tets'
-# rows read with a stride of 6 (the first tet of each hex): all of them
-# with the legacy reader; ParaView 5.11's Xdmf3 readers skip attributes
-# read through a HyperSlab, so they show the hexes and point fields only.
+# point field as in the step files, and every cell field and static cell
+# field (from /fields/hex, /static/hex) that of the hex's first tet, in
+# both readers.
 # Saves a PNG of the temperature at the last step next to each XDMF file
 # (displacement magnitude for a purely mechanical run) and prints its path.
 import os
@@ -103,8 +102,9 @@ class H5:
         self.topology = h5_read(path, "/mesh/topology", "<u4").reshape(-1, 4)
         self.nodes, self.cells = len(self.coords), len(self.topology)
         # {center: {name: [file per step]}}
-        self.fields = {"node": {}, "cell": {}}
-        self.statics = {"node": [], "cell": []}
+        # "hex": the hexes' rows of the cell fields (series with Hex8 bodies).
+        self.fields = {"node": {}, "cell": {}, "hex": {}}
+        self.statics = {"node": [], "cell": [], "hex": []}
         for o in h5_objects(path):
             parts = o.strip("/").split("/")
             if parts[0] == "static" and len(parts) == 3:
@@ -358,8 +358,8 @@ def hex8_check(xdmf):
     in_hex = np.zeros(h5.nodes, dtype=bool)
     in_hex[hexes.ravel()] = True
     hex_tets = np.flatnonzero(in_hex[h5.topology].all(axis=1))
-    first_tet = hex_tets[0]
-    contiguous = np.array_equal(hex_tets, np.arange(first_tet, first_tet + 6 * len(hexes)))
+    # Hexes and their tets body after body: hex i is hex_tets[6 i .. 6 i + 6].
+    first = hex_tets[::6]
     print("  HDF5: %d hexes over %d tets, %d steps" % (len(hexes), h5.cells, len(h5.times)))
     for name in READERS:
         reader = READERS[name](xdmf)
@@ -387,15 +387,16 @@ def hex8_check(xdmf):
         cell = arrays(g.GetCellData())
         point = arrays(g.GetPointData())
         check(
-            contiguous or not cell,
-            "%s: cell fields %s although the Hex8 bodies' tets are apart" % (name, sorted(cell)),
+            sorted(cell) == sorted(list(h5.fields["cell"]) + h5.statics["cell"]),
+            "%s: cell fields %s of the hexes, the tets have %s"
+            % (name, sorted(cell), sorted(list(h5.fields["cell"]) + h5.statics["cell"])),
         )
-        for f in h5.fields["cell"] if contiguous else []:
-            if name == "Xdmf3ReaderS" and f not in cell:
-                # ParaView 5.11's Xdmf3 readers skip attributes read
-                # through a HyperSlab ("unrecognized array type").
-                continue
-            want = h5.field("cell", f, k)[first_tet : first_tet + 6 * n : 6]
+        for f in h5.statics["cell"]:
+            want = h5.static("cell", f)[first]
+            got = np.asarray(cell.get(f, []), dtype=float)
+            check(np.array_equal(got, want), "%s: static cell field %s of the hexes" % (name, f))
+        for f in h5.fields["cell"]:
+            want = h5.field("cell", f, k)[first]
             got = np.asarray(cell.get(f, []), dtype=float)
             if want.ndim == 2 and want.shape[1] == 6 and got.ndim == 2 and got.shape[1] == 9:
                 want = tensor9(want)
@@ -407,7 +408,7 @@ def hex8_check(xdmf):
         shown = sorted(set(h5.fields["cell"]) & set(cell))
         print(
             "  %s: %d hexahedra (volume %.6g), point fields as written, cell fields %s "
-            "as the tets' stride-6 rows" % (name, n, vol.sum(), shown)
+            "as their first tets'" % (name, n, vol.sum(), shown)
         )
         Delete(reader)
     ResetSession()

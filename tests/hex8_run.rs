@@ -461,9 +461,9 @@ const DROP8_HEX8: [&str; 4] = [
 /// The hexahedral index `<stem>_hex8.xdmf` of a series in `dir` against
 /// its mesh file: `/mesh/hexes` are distinct hexes of eight distinct nodes,
 /// positive in the XDMF/VTK order (six tets around the 0–6 diagonal), of
-/// total volume `volume` (1e-12); when the index has cell fields, the row
-/// it reads for hex h (every sixth from its first) is a tet of that hex.
-/// Returns the hexes.
+/// total volume `volume` (1e-12); the hexes' cell rows the index reads
+/// (`/static/hex/*`, `/fields/hex/*` of every step) are those of each of
+/// their six tets. Returns the hexes.
 fn hex_index(dir: &std::path::Path, stem: &str, volume: f64) -> Vec<[u32; 8]> {
     let text = std::fs::read_to_string(dir.join(format!("{stem}_hex8.xdmf"))).unwrap();
     let f = hdf5::File::open(dir.join(format!("{stem}.h5"))).unwrap();
@@ -504,19 +504,67 @@ fn hex_index(dir: &std::path::Path, stem: &str, volume: f64) -> Vec<[u32; 8]> {
     distinct.sort_unstable();
     distinct.dedup();
     assert_eq!(distinct.len(), nh);
-    // The cell rows: `start 0 6 1 nh 6` of the stress.
-    if let Some(i) = text.find("fields/cell/stress") {
-        let slab = &text[..i];
-        let sel = slab.rfind("Format=\"XML\">").unwrap() + "Format=\"XML\">".len();
-        let nums: Vec<u64> = slab[sel..slab[sel..].find('<').unwrap() + sel]
-            .split_whitespace()
-            .map(|v| v.parse().unwrap())
-            .collect();
-        assert_eq!(nums[1..], [0, 6, 1, nh as u64, 6]);
-        for (k, h) in hexes.iter().enumerate() {
-            let tet = mesh.cells[nums[0] as usize + 6 * k];
-            assert!(tet.iter().all(|n| h.contains(n)), "hex {k}: row {tet:?}");
+    // The tets of the hexes, body after body: hex k is tets[6 k .. 6 k + 6].
+    let tets: Vec<usize> = (0..mesh.cells.len())
+        .filter(|&e| {
+            hexes
+                .iter()
+                .any(|h| mesh.cells[e].iter().all(|n| h.contains(n)))
+        })
+        .collect();
+    assert_eq!(tets.len(), 6 * nh);
+    for (k, h) in hexes.iter().enumerate() {
+        let six = &tets[6 * k..6 * k + 6];
+        assert!(
+            six.iter()
+                .all(|&e| mesh.cells[e].iter().all(|n| h.contains(n))),
+            "hex {k}"
+        );
+    }
+    assert!(!text.contains("HyperSlab") && !text.contains("/fields/cell/"));
+    let cell_rows = |file: &hdf5::File, kind: &str| {
+        for name in file
+            .group(&format!("{kind}/cell"))
+            .unwrap()
+            .member_names()
+            .unwrap()
+        {
+            assert!(
+                text.contains(&format!("/{kind}/hex/{name}<")),
+                "{kind} {name}"
+            );
+            let cell = file.dataset(&format!("{kind}/cell/{name}")).unwrap();
+            let hex = file.dataset(&format!("{kind}/hex/{name}")).unwrap();
+            let width = cell.shape().get(1).copied().unwrap_or(1);
+            assert_eq!(hex.shape()[0], nh, "{kind} {name}");
+            let read = |d: &hdf5::Dataset| match d.read_raw::<f64>() {
+                Ok(v) => v,
+                Err(_) => d
+                    .read_raw::<i32>()
+                    .unwrap()
+                    .into_iter()
+                    .map(f64::from)
+                    .collect(),
+            };
+            let (c, x) = (read(&cell), read(&hex));
+            for (k, &e) in tets.iter().enumerate() {
+                let h = k / 6;
+                assert_eq!(
+                    c[e * width..(e + 1) * width],
+                    x[h * width..(h + 1) * width],
+                    "{kind} {name} hex {h}"
+                );
+            }
         }
+    };
+    cell_rows(&f, "static");
+    for step in 0.. {
+        let path = dir.join(format!("{stem}_steps/{step:06}.h5"));
+        if !path.exists() {
+            assert!(step > 0);
+            break;
+        }
+        cell_rows(&hdf5::File::open(path).unwrap(), "fields");
     }
     hexes
 }

@@ -87,7 +87,8 @@ use files::{create_file, fixed_dataset, publish, remove_if_present};
 /// first step (or the close) seals it.
 struct OpenMesh {
     // Declared before `file` so that they are closed first.
-    static_groups: [Group; 2],
+    /// `/static/node`, `/static/cell` and, with hexes, `/static/hex`.
+    static_groups: Vec<Group>,
     file: File,
     part: PathBuf,
 }
@@ -107,6 +108,8 @@ struct Inner {
     /// index's order ([`XdmfModel::sort`]).
     fields: Option<Vec<FieldDesc>>,
     model: XdmfModel,
+    /// The hexes' rows of the cell fields this rank writes.
+    hexes: Option<hexes::Sample>,
     usable: bool,
 }
 
@@ -253,6 +256,9 @@ impl TimeSeriesWriter {
                         xfer,
                         mesh: Some(open),
                         fields: None,
+                        hexes: hex.map(|h| {
+                            hexes::Sample::new(h.global, h.blocks, cells.offset, cells.count)
+                        }),
                         model: XdmfModel {
                             h5_name: format!("{stem}.h5"),
                             steps_name,
@@ -403,7 +409,10 @@ impl Inner {
         };
         let mesh_g = group(&file, "mesh")?;
         let static_g = group(&file, "static")?;
-        let static_groups = [group(&static_g, "node")?, group(&static_g, "cell")?];
+        let mut static_groups = vec![group(&static_g, "node")?, group(&static_g, "cell")?];
+        if mesh.hexes.is_some() {
+            static_groups.push(group(&static_g, "hex")?);
+        }
         let coords = fixed_dataset::<f64>(&mesh_g, "coordinates", &[nodes.global, 3])
             .map_err(h5err("creating /mesh/coordinates"))?;
         ffi::write_block(
@@ -497,7 +506,16 @@ impl Inner {
                     call,
                     what: what.clone(),
                 },
-            )
+            )?;
+            match (&self.hexes, center) {
+                (Some(h), Center::Cell) => h.write(
+                    &open.part,
+                    &open.static_groups[2],
+                    &self.xfer,
+                    (name, 1, values),
+                ),
+                _ => Ok(()),
+            }
         })();
         let result = agree(&self.comm, &self.h5_path, &what, result);
         if result.is_err() {
@@ -506,70 +524,6 @@ impl Inner {
         }
         self.model.statics.push((name.to_string(), center));
         self.model.sort();
-        Ok(())
-    }
-
-    /// Local validation of a step's arguments.
-    fn check_step(&self, time: f64, lists: FieldLists<'_, '_>) -> Result<(), String> {
-        if !time.is_finite() {
-            return Err(format!("time {time} is not finite"));
-        }
-        if let Some(&last) = self.model.times.last() {
-            if time <= last {
-                return Err(format!(
-                    "time {time:e} is not larger than the previous step's time {last:e}"
-                ));
-            }
-        }
-        for (center, list) in lists {
-            let rows = self.rows(center).count;
-            let kind = center.group();
-            for (i, &(name, comps, values)) in list.iter().enumerate() {
-                check_name(&format!("{kind} field"), name)?;
-                if xdmf::attribute_type(comps).is_none() {
-                    return Err(format!(
-                        "{kind} field {name:?}: {comps} components (supported: 1, 3, 6, 9)"
-                    ));
-                }
-                if list[..i].iter().any(|f| f.0 == name) {
-                    return Err(format!("{kind} field {name:?} is given twice"));
-                }
-                if values.len() as u64 != rows * comps as u64 {
-                    return Err(format!(
-                        "{kind} field {name:?} has {} values on rank {}, expected {rows} rows x {comps} = {}",
-                        values.len(),
-                        self.rank,
-                        rows * comps as u64
-                    ));
-                }
-            }
-            if let Some(fields) = &self.fields {
-                let known: Vec<&FieldDesc> = fields.iter().filter(|d| d.center == center).collect();
-                for d in &known {
-                    match list.iter().find(|f| f.0 == d.name) {
-                        None => {
-                            return Err(format!(
-                                "{kind} field {:?} is missing (the first step fixes the field set)",
-                                d.name
-                            ))
-                        }
-                        Some(f) if f.1 != d.components => {
-                            return Err(format!(
-                                "{kind} field {:?} has {} components, the first step had {}",
-                                d.name, f.1, d.components
-                            ))
-                        }
-                        Some(_) => {}
-                    }
-                }
-                if let Some(extra) = list.iter().find(|f| !known.iter().any(|d| d.name == f.0)) {
-                    return Err(format!(
-                        "{kind} field {:?} was not in the first step (the first step fixes the field set)",
-                        extra.0
-                    ));
-                }
-            }
-        }
         Ok(())
     }
 
@@ -678,8 +632,11 @@ impl Inner {
                 .create_group("fields")
                 .map_err(h5err("creating group /fields".into()))?;
             let mut groups = Vec::new();
-            for center in [Center::Node, Center::Cell] {
-                let name = center.group();
+            let hex = self.hexes.as_ref().map(|_| "hex");
+            for name in [Center::Node.group(), Center::Cell.group()]
+                .into_iter()
+                .chain(hex)
+            {
                 groups.push(
                     fields_g
                         .create_group(name)
@@ -710,6 +667,14 @@ impl Inner {
                 let ds =
                     fixed_dataset::<f64>(group, &d.name, &shape).map_err(h5err(what.clone()))?;
                 ffi::write_block(&ds, &self.xfer, &start, &count, values).map_err(call(what))?;
+                if let (Some(h), Center::Cell) = (&self.hexes, d.center) {
+                    h.write(
+                        part,
+                        &groups[2],
+                        &self.xfer,
+                        (&d.name, d.components, values),
+                    )?;
+                }
             }
             let time_ds = fixed_dataset::<f64>(&file, "time", &[1])
                 .map_err(h5err("creating /time".into()))?;

@@ -18,9 +18,12 @@
 //! | `<stem>.h5`               | `/mesh/topology`      | `[E, 4]` | u32  | Tet4 connectivity, global node rows   |
 //! | `<stem>.h5`               | `/static/node/<name>` | `[N]`    | i32  | static per-node fields (body id, ...) |
 //! | `<stem>.h5`               | `/static/cell/<name>` | `[E]`    | i32  | static per-cell fields                |
+//! | `<stem>.h5`               | `/mesh/hexes`         | `[H, 8]` | u32  | Hex8 bodies' hexes (if any)           |
+//! | `<stem>.h5`               | `/static/hex/<name>`  | `[H]`    | i32  | a hex's first tet's static cell value |
 //! | `<stem>_steps/<k:06>.h5`  | `/time`               | `[1]`    | f64  | the time of step `k`                  |
 //! | `<stem>_steps/<k:06>.h5`  | `/fields/node/<name>` | `[N, c]` | f64  | node field (`[N]` if c = 1)           |
 //! | `<stem>_steps/<k:06>.h5`  | `/fields/cell/<name>` | `[E, c]` | f64  | cell field (`[E]` if c = 1)           |
+//! | `<stem>_steps/<k:06>.h5`  | `/fields/hex/<name>`  | `[H, c]` | f64  | a hex's first tet's cell field row    |
 //!
 //! A field of 6 components is a symmetric tensor, its rows in XDMF `Tensor6`
 //! order xx, xy, xz, yy, yz, zz ([`TENSOR6_ORDER`], [`tensor6`]), which the
@@ -42,7 +45,9 @@
 //! directory can be moved together. It uses plain HDF `DataItem`s only (no
 //! `HyperSlab`), because ParaView's default reader for `.xdmf` (Xdmf3ReaderS)
 //! drops hyperslab attributes; it was checked with ParaView 5.11's "XDMF Reader",
-//! Xdmf3ReaderS and Xdmf3ReaderT.
+//! Xdmf3ReaderS and Xdmf3ReaderT. So does the hexahedral index of the Hex8
+//! bodies, `<stem>_hex8.xdmf`, which reads the hexes' own rows
+//! (`/static/hex`, `/fields/hex`).
 //!
 //! ## Crash safety
 //!

@@ -4,12 +4,13 @@
 //! file's `/mesh/hexes` (global node ids, seed 002 Table 1 order, which is
 //! the XDMF/VTK hexahedron order: the bottom face counter-clockwise seen
 //! from +z, then the top face above it), body after body. A body's hex `h`
-//! is its tets `6 h .. 6 h + 6`, each carrying its hex's cell values, so
-//! when the Hex8 bodies' tets follow one another a cell field of the hexes
-//! is the tets' dataset read with a stride of 6 (an XDMF `HyperSlab`, which
-//! ParaView's legacy XDMF reader reads; its Xdmf3 readers skip it): nothing
-//! is written twice. With a Tet4 body between Hex8 bodies the index has the
-//! node fields only.
+//! is its tets `6 h .. 6 h + 6`, each carrying its hex's cell values; the
+//! hexes' cell fields are stored once more per hex (`/static/hex/<name>`,
+//! `/fields/hex/<name>`: the first tet's row), because ParaView's two XDMF
+//! readers take different selections of every sixth row (the legacy one a
+//! `HyperSlab` item, the Xdmf3 ones a `|start:stride:count:dims` suffix, each
+//! ignoring the other's) and plain datasets read in both. It costs a sixth
+//! of the Hex8 bodies' cell data.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -35,88 +36,41 @@ pub fn hex_index_path(xdmf: &Path) -> PathBuf {
     xdmf.with_file_name(format!("{stem}_hex8.xdmf"))
 }
 
-/// How the hyperslab's start, stride and count are given.
-const SEL: &str = "NumberType=\"UInt\" Precision=\"8\" Format=\"XML\"";
-
-/// An HDF5 dataset read with a hyperslab: rows `start, start + stride, …`
-/// (`count` of them) of a `[rows, width]` dataset (`width` 1: a vector).
-fn slab(
-    indent: &str,
-    path: &str,
-    (rows, width): (u64, usize),
-    (start, stride, count): (u64, u64, u64),
-    number: &str,
-) -> String {
-    let (dims, sel, full) = if width == 1 {
-        (
-            count.to_string(),
-            format!("3 1\" {SEL}>{start} {stride} {count}"),
-            rows.to_string(),
-        )
-    } else {
-        (
-            format!("{count} {width}"),
-            format!("3 2\" {SEL}>{start} 0 {stride} 1 {count} {width}"),
-            format!("{rows} {width}"),
-        )
-    };
-    format!(
-        "{indent}<DataItem ItemType=\"HyperSlab\" Dimensions=\"{dims}\" {number} Type=\"HyperSlab\">\n\
-         {indent}  <DataItem Dimensions=\"{sel}</DataItem>\n\
-         {indent}  <DataItem Dimensions=\"{full}\" {number} Format=\"HDF\">{path}</DataItem>\n\
-         {indent}</DataItem>\n"
-    )
-}
-
 impl XdmfModel {
-    /// The row of the tets' cell datasets that holds the first hex's
-    /// values, when every hex's first tet is six rows after the previous
-    /// hex's: the Hex8 bodies' tets follow one another with no Tet4 body
-    /// between them. Otherwise the hex index has no cell fields.
-    fn hex_cell_start(&self) -> Option<u64> {
-        let first = self.hex_blocks.first()?.first_tet;
-        let mut next = first;
-        for b in &self.hex_blocks {
-            if b.first_tet != next {
-                return None;
-            }
-            next += 6 * b.count;
-        }
-        Some(first)
-    }
-
-    /// A field's data item in the hex grid: node fields whole, cell fields
-    /// every sixth row from `start`.
+    /// A field's data item in the hex grid: node fields as in the main
+    /// index, cell fields from the hexes' own rows (`<file>:/<kind>/hex/<name>`).
     fn hex_rows(
         &self,
         center: Center,
-        start: u64,
         indent: &str,
         path: &str,
         width: usize,
         number: &str,
     ) -> String {
+        let rows = match center {
+            Center::Node => self.nodes,
+            Center::Cell => self.hexes,
+        };
+        let dims = if width == 1 {
+            rows.to_string()
+        } else {
+            format!("{rows} {width}")
+        };
+        format!(
+            "{indent}<DataItem Dimensions=\"{dims}\" {number} Format=\"HDF\">{path}</DataItem>\n"
+        )
+    }
+
+    /// The group of a field of `center` in the hex grid.
+    fn hex_group(center: Center) -> &'static str {
         match center {
-            Center::Node => {
-                let dims = if width == 1 {
-                    self.nodes.to_string()
-                } else {
-                    format!("{} {width}", self.nodes)
-                };
-                format!("{indent}<DataItem Dimensions=\"{dims}\" {number} Format=\"HDF\">{path}</DataItem>\n")
-            }
-            Center::Cell => slab(
-                indent,
-                path,
-                (self.cells, width),
-                (start, 6, self.hexes),
-                number,
-            ),
+            Center::Node => Center::Node.group(),
+            Center::Cell => "hex",
         }
     }
 
     /// Topology, geometry and static attributes of the hex grid.
-    fn hex_grid_head(&self, cell_start: Option<u64>, indent: &str) -> String {
+    fn hex_grid_head(&self, indent: &str) -> String {
         let h5 = escape(&self.h5_name);
         let (n, nh) = (self.nodes, self.hexes);
         let mut s = format!(
@@ -128,17 +82,13 @@ impl XdmfModel {
              {indent}</Geometry>\n",
         );
         for (name, center) in &self.statics {
-            let start = match (center, cell_start) {
-                (Center::Cell, None) => continue,
-                (_, start) => start.unwrap_or(0),
-            };
             let name = escape(name);
-            let path = format!("{h5}:/static/{}/{name}", center.group());
+            let path = format!("{h5}:/static/{}/{name}", Self::hex_group(*center));
             let int = "NumberType=\"Int\" Precision=\"4\"";
             let _ = write!(
                 s,
                 "{indent}<Attribute Name=\"{name}\" AttributeType=\"Scalar\" Center=\"{c}\">\n{}{indent}</Attribute>\n",
-                self.hex_rows(*center, start, &format!("{indent}  "), &path, 1, int),
+                self.hex_rows(*center, &format!("{indent}  "), &path, 1, int),
                 c = center.xdmf(),
             );
         }
@@ -151,26 +101,21 @@ impl XdmfModel {
         if self.hex_blocks.is_empty() {
             return None;
         }
-        let cell_start = self.hex_cell_start();
-        let head = |indent: &str| self.hex_grid_head(cell_start, indent);
+        let head = |indent: &str| self.hex_grid_head(indent);
         Some(self.document("hex8", head, |k, steps, s| {
             for f in &self.fields {
-                let start = match (f.center, cell_start) {
-                    (Center::Cell, None) => continue,
-                    (_, start) => start.unwrap_or(0),
-                };
                 let name = escape(&f.name);
                 let path = format!(
                     "{steps}/{}:/fields/{}/{name}",
                     step_file_name(k),
-                    f.center.group()
+                    Self::hex_group(f.center)
                 );
                 let ty = attribute_type(f.components).unwrap_or("Matrix");
                 let float = "NumberType=\"Float\" Precision=\"8\"";
                 let _ = write!(
                     s,
                     "        <Attribute Name=\"{name}\" AttributeType=\"{ty}\" Center=\"{c}\">\n{}        </Attribute>\n",
-                    self.hex_rows(f.center, start, "          ", &path, f.components, float),
+                    self.hex_rows(f.center, "          ", &path, f.components, float),
                     c = f.center.xdmf(),
                 );
             }
@@ -223,29 +168,36 @@ mod tests {
     }
 
     #[test]
-    fn hex_index_reads_the_tets_cell_rows_with_a_stride_of_six() {
+    fn hex_index_reads_the_hexes_own_rows_of_the_cell_fields() {
         let s = model().render_hexes().unwrap();
         assert_eq!(s.matches("TopologyType=\"Hexahedron\"").count(), 2);
         assert!(s.contains("NumberOfElements=\"4\""));
         assert!(s.contains(
             "Dimensions=\"4 8\" NumberType=\"UInt\" Precision=\"4\" Format=\"HDF\">out.h5:/mesh/hexes<"
         ));
-        // Blocks a and b follow one another: rows 6, 12, 18 and 24 of 30.
-        assert!(s.contains(&format!("Dimensions=\"3 2\" {SEL}>6 0 6 1 4 6</DataItem>")));
-        assert!(s.contains(&format!("Dimensions=\"3 1\" {SEL}>6 6 4</DataItem>")));
-        assert!(s.contains("Dimensions=\"30 6\" NumberType=\"Float\""));
-        assert!(s.contains(">out_steps/000001.h5:/fields/cell/stress</DataItem>"));
-        assert!(s.contains(">out_steps/000001.h5:/fields/node/displacement</DataItem>"));
+        assert!(
+            !s.contains("HyperSlab")
+                && !s.contains("/fields/cell/")
+                && !s.contains("/static/cell/")
+        );
+        assert!(s.contains(
+            "Dimensions=\"4 6\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">out_steps/000001.h5:/fields/hex/stress</DataItem>"
+        ));
+        assert!(s.contains(
+            "Dimensions=\"4\" NumberType=\"Int\" Precision=\"4\" Format=\"HDF\">out.h5:/static/hex/body</DataItem>"
+        ));
+        assert!(s.contains(
+            "Dimensions=\"40 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">out_steps/000001.h5:/fields/node/displacement</DataItem>"
+        ));
         // The XML is balanced.
         for tag in ["Grid", "DataItem", "Attribute", "Topology", "Geometry"] {
             let open = s.matches(&format!("<{tag} ")).count();
             assert_eq!(open, s.matches(&format!("</{tag}>")).count(), "{tag}");
         }
-        // A Tet4 body between them: no stride reaches both, no cell fields.
+        // A Tet4 body between them changes nothing: the hexes' rows are their own.
         let mut gap = model();
         gap.hex_blocks[1].first_tet = 30;
-        let g = gap.render_hexes().unwrap();
-        assert!(!g.contains("Center=\"Cell\"") && g.contains("/fields/node/displacement"));
+        assert_eq!(gap.render_hexes().unwrap(), s);
         let none = XdmfModel {
             hex_blocks: Vec::new(),
             ..model()
@@ -256,7 +208,7 @@ mod tests {
             ..model()
         };
         let m = mesh_only.render_hexes().unwrap();
-        assert!(!m.contains("<Time ") && m.contains("/static/cell/body"));
+        assert!(!m.contains("<Time ") && m.contains("/static/hex/body"));
         assert_eq!(
             hex_index_path(Path::new("d/run.xdmf")),
             Path::new("d/run_hex8.xdmf")

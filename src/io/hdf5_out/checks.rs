@@ -9,8 +9,10 @@ use mpi::collective::SystemOperation;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::{Communicator, CommunicatorCollectives};
 
+use super::super::check_name;
+use super::super::xdmf::{self, FieldDesc};
 use super::super::IoError;
-use super::MeshPart;
+use super::{FieldLists, Inner, MeshPart};
 
 /// FNV-1a, used to check that all ranks pass the same names, shapes and times.
 #[derive(Clone, Copy)]
@@ -149,4 +151,70 @@ pub(super) fn check_mesh_local(mesh: &MeshPart) -> Result<(), String> {
         }
     }
     Ok(())
+}
+
+impl Inner {
+    /// Local validation of a step's arguments.
+    pub(super) fn check_step(&self, time: f64, lists: FieldLists<'_, '_>) -> Result<(), String> {
+        if !time.is_finite() {
+            return Err(format!("time {time} is not finite"));
+        }
+        if let Some(&last) = self.model.times.last() {
+            if time <= last {
+                return Err(format!(
+                    "time {time:e} is not larger than the previous step's time {last:e}"
+                ));
+            }
+        }
+        for (center, list) in lists {
+            let rows = self.rows(center).count;
+            let kind = center.group();
+            for (i, &(name, comps, values)) in list.iter().enumerate() {
+                check_name(&format!("{kind} field"), name)?;
+                if xdmf::attribute_type(comps).is_none() {
+                    return Err(format!(
+                        "{kind} field {name:?}: {comps} components (supported: 1, 3, 6, 9)"
+                    ));
+                }
+                if list[..i].iter().any(|f| f.0 == name) {
+                    return Err(format!("{kind} field {name:?} is given twice"));
+                }
+                if values.len() as u64 != rows * comps as u64 {
+                    return Err(format!(
+                        "{kind} field {name:?} has {} values on rank {}, expected {rows} rows x {comps} = {}",
+                        values.len(),
+                        self.rank,
+                        rows * comps as u64
+                    ));
+                }
+            }
+            if let Some(fields) = &self.fields {
+                let known: Vec<&FieldDesc> = fields.iter().filter(|d| d.center == center).collect();
+                for d in &known {
+                    match list.iter().find(|f| f.0 == d.name) {
+                        None => {
+                            return Err(format!(
+                                "{kind} field {:?} is missing (the first step fixes the field set)",
+                                d.name
+                            ))
+                        }
+                        Some(f) if f.1 != d.components => {
+                            return Err(format!(
+                                "{kind} field {:?} has {} components, the first step had {}",
+                                d.name, f.1, d.components
+                            ))
+                        }
+                        Some(_) => {}
+                    }
+                }
+                if let Some(extra) = list.iter().find(|f| !known.iter().any(|d| d.name == f.0)) {
+                    return Err(format!(
+                        "{kind} field {:?} was not in the first step (the first step fixes the field set)",
+                        extra.0
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
 }

@@ -132,19 +132,23 @@ impl TimeSeriesWriter {
             model.hex_blocks = h.blocks.to_vec();
         }
         model.sort();
-        let inner = Inner {
-            rank,
-            xdmf_path,
-            nodes,
-            cells,
-            xfer,
-            mesh: None,
-            fields: found.fields.map(|_| model.fields.clone()),
-            model,
-            usable: true,
-            h5_path,
-            comm,
-        };
+        let inner =
+            Inner {
+                rank,
+                xdmf_path,
+                nodes,
+                cells,
+                xfer,
+                mesh: None,
+                fields: found.fields.map(|_| model.fields.clone()),
+                hexes: mesh.hexes.as_ref().filter(|_| with_hexes).map(|h| {
+                    super::hexes::Sample::new(h.global, h.blocks, cells.offset, cells.count)
+                }),
+                model,
+                usable: true,
+                h5_path,
+                comm,
+            };
         // The index first, so that it never names a removed step.
         inner.write_index()?;
         let kept = inner.model.times.len();

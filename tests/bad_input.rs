@@ -646,6 +646,15 @@ fn gigantic_meshes_are_refused_before_they_are_built() {
         assert!(start.elapsed().as_secs() < 20, "{edit}: refused only after {:?}", start.elapsed());
         assert_no_output(&out);
     }
+    // A model's limit is per rank (each keeps its part): 60 M Tet4 of copies
+    // on 2 ranks is refused at 40 M.
+    let s = d.join("bad.toml");
+    let (_, err) = run_bad(2, &s, &d.join("out"), &[]);
+    assert!(
+        err.contains("60000000 Tet4")
+            && err.contains("limit of 40000000 (20000000 per rank on 2 ranks)"),
+        "{err}"
+    );
 }
 
 /// Found by tests/fuzz.rs: `time.dt = 5e-324` with `end_time = 4` makes

@@ -58,13 +58,26 @@ pub use error::MeshError;
 pub use geometry::{tet_quality, tet_signed_volume, DEGENERATE_REL_TOL};
 pub use nut::{nut_mesh, nut_mesh_default};
 
-/// The most Tet4 elements a generated or imported mesh, and a whole model,
-/// may have: 20 million. fdem keeps the whole mesh on every rank (about
-/// 100 bytes per tet to set a model up, several times that in a run), so a
-/// mistyped element size would otherwise try to allocate tens of gigabytes;
-/// generators and the Gmsh reader refuse larger meshes with
+/// The most Tet4 elements one generated or imported mesh may have, and a
+/// model per rank ([`model_element_limit`]): 20 million. Every rank builds
+/// each body's mesh whole at set-up (a generated box, a Gmsh file, the nut
+/// template a packing copies; about 100 bytes per tet) before it keeps its
+/// part, so a mistyped element size would otherwise try to allocate tens of
+/// gigabytes; generators and the Gmsh reader refuse larger meshes with
 /// [`MeshError::TooLarge`] before they allocate them.
 pub const MAX_ELEMENTS: usize = 20_000_000;
+
+/// The most Tet4 a whole model may have on `ranks` ranks: the
+/// [`element_limit`] per rank, since after set-up each rank holds only its
+/// part (a packing of copies is never built whole), and at most
+/// [`MAX_MODEL_ELEMENTS`].
+pub fn model_element_limit(ranks: usize) -> u128 {
+    (element_limit() as u128 * ranks.max(1) as u128).min(MAX_MODEL_ELEMENTS as u128)
+}
+
+/// The most Tet4 of a model on any number of ranks: global element and
+/// node ids are u32, and a model has at most four nodes per element.
+pub const MAX_MODEL_ELEMENTS: u64 = u32::MAX as u64 / 4;
 
 thread_local! {
     static ELEMENT_LIMIT: std::cell::Cell<usize> = const { std::cell::Cell::new(MAX_ELEMENTS) };
@@ -98,7 +111,7 @@ pub(crate) fn check_element_count(what: &str, count: u128) -> Result<(), MeshErr
     if count > limit as u128 {
         return Err(MeshError::TooLarge(format!(
             "{what} would have {count} elements, more than fdem's limit of {limit} \
-             (the mesh is kept on every rank); increase the element size"
+             (each body's mesh is built whole on every rank at set-up); increase the element size"
         )));
     }
     Ok(())

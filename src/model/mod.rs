@@ -210,8 +210,27 @@ pub struct WholeMesh {
 impl Model {
     /// Build the model: load or generate every body's mesh, check it, and
     /// resolve boundary conditions on named sets. Errors name the scenario
-    /// file, the body and the set or element.
+    /// file, the body and the set or element. The model may have
+    /// [`mesh::element_limit`] Tet4 (one process holds them all: `fdem check`,
+    /// tests); a run on several ranks builds with [`Model::from_scenario_on`].
     pub fn from_scenario(sc: &LoadedScenario) -> Result<Model> {
+        Self::from_scenario_on(sc, 1)
+    }
+
+    /// [`Model::from_scenario`] for a run on `ranks` ranks, each of which
+    /// keeps only its part after set-up: the model may have `ranks` times
+    /// [`mesh::element_limit`] Tet4 ([`mesh::model_element_limit`]), while
+    /// each body's own mesh (built whole on every rank) keeps the limit.
+    pub fn from_scenario_on(sc: &LoadedScenario, ranks: usize) -> Result<Model> {
+        let model_limit = mesh::model_element_limit(ranks);
+        let over = format!(
+            "more than fdem's limit of {model_limit}{}",
+            if ranks > 1 {
+                format!(" ({} per rank on {ranks} ranks)", mesh::element_limit())
+            } else {
+                String::new()
+            }
+        );
         let s = &sc.scenario;
         let path = sc.path.display().to_string();
         let model_err = |message: String| Error::Model {
@@ -253,12 +272,12 @@ impl Model {
         let (mut n_nodes, mut n_elems) = (0u64, 0u64);
         let limit = |b: &str, copies: u128, per: usize, so_far: u64| -> Result<()> {
             let total = u128::from(so_far) + copies * per as u128;
-            if total > mesh::element_limit() as u128 {
+            if total > model_limit {
                 return Err(model_err(format!(
                     "body `{b}`: {copies} cop{} of its {per} Tet4 would make the model {total} Tet4, \
-                     more than fdem's limit of {}",
+                     {}; run on more ranks or increase the element size",
                     if copies == 1 { "y" } else { "ies" },
-                    mesh::element_limit()
+                    over
                 )));
             }
             Ok(())
@@ -344,12 +363,12 @@ impl Model {
                     .iter()
                     .map(|&i| u64::from(h.body_elems[i][1] - h.body_elems[i][0]))
                     .sum();
-                if n_elems + elems > mesh::element_limit() as u64 {
+                if u128::from(n_elems + elems) > model_limit {
                     return Err(model_err(format!(
-                        "body `{}`: the model would have {} Tet4, more than fdem's limit of {}",
+                        "body `{}`: the model would have {} Tet4, {}",
                         b.name,
                         n_elems + elems,
-                        mesh::element_limit()
+                        over
                     )));
                 }
                 let fracture = b
@@ -965,6 +984,33 @@ conductance = 50.0
     fn model() -> Model {
         let sc = crate::scenario::parse_str(TWO, Path::new("t.toml"), &[]).unwrap();
         Model::from_scenario(&sc).unwrap()
+    }
+
+    #[test]
+    fn the_model_limit_grows_with_the_ranks_a_body_mesh_limit_does_not() {
+        // 18 Tet4: body a (6) and two copies of g (6 each).
+        let sc = crate::scenario::parse_str(TWO, Path::new("t.toml"), &[]).unwrap();
+        let on = |limit, ranks| {
+            crate::mesh::with_element_limit(limit, || {
+                Model::from_scenario_on(&sc, ranks).map(|m| m.totals().1)
+            })
+        };
+        let one = on(17, 1).unwrap_err().to_string();
+        assert!(one.contains("limit of 17;"), "{one}");
+        assert_eq!(on(18, 1).unwrap(), 18);
+        assert_eq!(on(9, 2).unwrap(), 18);
+        let two = on(8, 2).unwrap_err().to_string();
+        assert!(two.contains("limit of 16 (8 per rank on 2 ranks)"), "{two}");
+        // A body's own mesh is built whole on every rank: its limit stays.
+        assert!(on(5, 4).is_err());
+        assert_eq!(
+            crate::mesh::model_element_limit(0),
+            crate::mesh::MAX_ELEMENTS as u128
+        );
+        assert_eq!(
+            crate::mesh::model_element_limit(1 << 20),
+            u128::from(crate::mesh::MAX_MODEL_ELEMENTS)
+        );
     }
 
     #[test]

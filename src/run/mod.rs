@@ -86,7 +86,7 @@ pub fn run(
     opts: &RunOptions,
 ) -> Result<RunSummary> {
     let clock = Instant::now();
-    let model = Model::from_scenario(sc)?;
+    let model = Model::from_scenario_on(sc, comm.size() as usize)?;
     let times = PhaseTimes {
         model: clock.elapsed().as_secs_f64(),
         ..PhaseTimes::default()

@@ -191,6 +191,12 @@ impl ExplicitDomain {
         // go back to the rank that evaluated them (`pair_balance`).
         self.last_detect_fresh = !(self.sticky_detect && self.linear_tolerance > 0.0);
         let clock = std::time::Instant::now();
+        let mut lap = clock;
+        let mut phase = |k: usize, c: &mut super::MechanicsCounters| {
+            let now = std::time::Instant::now();
+            c.detect_phases[k] += (now - lap).as_secs_f64();
+            lap = now;
+        };
         let carried = self.contacts_before_detection(comm.size() as usize);
         let springs = self.has_springs().then(|| self.springs_before_detection());
         let planes_before = self.pair_planes.len();
@@ -213,6 +219,7 @@ impl ExplicitDomain {
             let r = comm.rank();
             crate::run::trace_memory(r, "detect start");
             let itself = self.self_contact.split_bodies();
+            phase(0, &mut self.counters);
             let ghosts = exchange_ghosts(
                 comm,
                 &own,
@@ -222,6 +229,7 @@ impl ExplicitDomain {
                 &itself,
             );
             crate::run::trace_memory(r, "detect ghosts");
+            phase(1, &mut self.counters);
             let og = OwnAndGhosts {
                 own: &own,
                 ghosts: &ghosts,
@@ -229,16 +237,20 @@ impl ExplicitDomain {
             let (kept, weights, thermal) = self.find_pairs(&og);
             crate::run::trace_memory(r, "detect found");
             self.count_pair_work(&og, &kept, &weights);
+            phase(2, &mut self.counters);
             let (here, received) = self.balance_pairs(comm, &og, &kept, &weights, &carried);
             crate::run::trace_memory(r, "detect balanced");
+            phase(3, &mut self.counters);
             crate::run::release_fragmented_memory();
             self.install(&og, &here, &received, &thermal);
             crate::run::trace_memory(r, "detect installed");
             self.part_tets = own;
         } else {
+            phase(0, &mut self.counters);
             self.install_none();
         }
         self.refresh_local_arrays();
+        phase(4, &mut self.counters);
         // Fresh candidates: planes rebuilt on demand; the touching pairs
         // keep their linearised overlaps (`carry`).
         let nt = self.pair_tets.len();
@@ -266,6 +278,7 @@ impl ExplicitDomain {
         self.x_detect = self.x[..self.n_owned].to_vec();
         self.detected_at = Some(self.counters.substeps);
         self.counters.detections += 1;
+        phase(5, &mut self.counters);
         self.counters.detect_time += clock.elapsed().as_secs_f64();
         Ok(())
     }

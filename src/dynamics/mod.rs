@@ -91,7 +91,10 @@ pub use domain::ExplicitDomain;
 pub use joints::{merge_body_cracks, JointRows};
 pub use particles::ParticleRows;
 pub use spheres::SphereRows;
-pub use state::{MechanicsCounters, MechanicsState, SavedMotion, SphereHeat, TakenSpheres};
+pub use state::{
+    MechanicsCounters, MechanicsState, SavedMotion, SphereHeat, TakenSpheres, DETECT_PHASES,
+    SUBSTEP_PHASES,
+};
 
 /// Marks an absent local index or slot.
 const NONE: u32 = u32::MAX;

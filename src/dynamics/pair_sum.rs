@@ -70,6 +70,13 @@ pub(super) struct PairForces {
     /// Per owned node, whether it received entries this substep (all
     /// false between calls of [`Self::add_all`]).
     mixed: Vec<bool>,
+    /// Per owned node, its entries among the mixed nodes' and then where
+    /// its bucket ends (all zero between calls of [`Self::add_all`]); the
+    /// mixed nodes; their entries, and those bucketed by node.
+    count: Vec<u32>,
+    mixed_nodes: Vec<u32>,
+    late: Vec<Entry>,
+    bucketed: Vec<Entry>,
     /// Per neighbour: contributions to its nodes, and from it to ours.
     pub(super) send: Vec<Vec<f64>>,
     pub(super) recv: Vec<Vec<f64>>,
@@ -239,28 +246,77 @@ impl PairForces {
         }
         if self.mixed.len() < f.len() {
             self.mixed.resize(f.len(), false);
+            self.count.resize(f.len(), 0);
         }
+        let (mixed, count) = (&mut self.mixed, &mut self.count);
+        let mixed_nodes = &mut self.mixed_nodes;
+        mixed_nodes.clear();
         for e in received {
-            self.mixed[e.node as usize] = true;
+            if !mixed[e.node as usize] {
+                mixed[e.node as usize] = true;
+                mixed_nodes.push(e.node);
+            }
         }
-        let mut late: Vec<Entry> = Vec::new();
+        // A node's sum depends only on its own entries' order: bucket the
+        // mixed nodes' entries by node (a counting sort, keeping the arrival
+        // order: own entries, then received), each bucket stably by key, as
+        // one stable sort by (node, key) would order them.
+        let late = &mut self.late;
+        late.clear();
         for e in own {
-            if self.mixed[e.node as usize] {
+            if mixed[e.node as usize] {
+                make_room(late, 1);
                 late.push(*e);
+                count[e.node as usize] += 1;
             } else {
                 f[e.node as usize] += self.forces[e.at as usize];
             }
         }
-        late.extend_from_slice(received);
-        // Stable: arrival order among equal keys, as in `order`.
-        late.sort_by_key(|e| (e.node, e.key));
-        for e in &late {
-            f[e.node as usize] += self.forces[e.at as usize];
-            self.mixed[e.node as usize] = false;
+        make_room(late, received.len());
+        for e in received {
+            late.push(*e);
+            count[e.node as usize] += 1;
+        }
+        let mut start = 0u32;
+        for &n in mixed_nodes.iter() {
+            let c = count[n as usize];
+            count[n as usize] = start;
+            start += c;
+        }
+        let bucketed = &mut self.bucketed;
+        bucketed.clear();
+        make_room(bucketed, late.len());
+        bucketed.resize(
+            late.len(),
+            Entry {
+                key: 0,
+                node: 0,
+                at: 0,
+            },
+        );
+        for e in late.iter() {
+            let at = &mut count[e.node as usize];
+            bucketed[*at as usize] = *e;
+            *at += 1;
+        }
+        let mut begin = 0usize;
+        for &n in mixed_nodes.iter() {
+            let n = n as usize;
+            let end = count[n] as usize;
+            let bucket = &mut bucketed[begin..end];
+            // Stable: arrival order among equal keys, as in `order`.
+            bucket.sort_by_key(|e| e.key);
+            for e in bucket.iter() {
+                f[n] += self.forces[e.at as usize];
+            }
+            count[n] = 0;
+            mixed[n] = false;
+            begin = end;
         }
     }
 
-    /// Give back the per-neighbour message buffers. They are held at the
+    /// Give back the per-neighbour message buffers (and the mixed nodes'
+    /// entries). They are held at the
     /// size of the busiest substep for reuse, but only on ranks with
     /// neighbours, on top of their share of the pairs; the next substep
     /// sizes them again (a few page faults), so an output or a detection
@@ -268,6 +324,8 @@ impl PairForces {
     pub(super) fn release_messages(&mut self) {
         self.send = Vec::new();
         self.recv = Vec::new();
+        self.late = Vec::new();
+        self.bucketed = Vec::new();
     }
 
     /// Bytes held (capacities).
@@ -278,6 +336,8 @@ impl PairForces {
             + self.entries.capacity() * size_of::<Entry>()
             + (self.order.capacity() + self.end.capacity()) * 4
             + self.mixed.capacity()
+            + (self.count.capacity() + self.mixed_nodes.capacity()) * 4
+            + (self.late.capacity() + self.bucketed.capacity()) * size_of::<Entry>()
             + self
                 .send
                 .iter()
@@ -391,6 +451,7 @@ mod tests {
             p.add_all(&mut got);
             assert_eq!(got, want, "round {round}");
             assert!(p.mixed.iter().all(|m| !m));
+            assert!(p.count.iter().all(|&c| c == 0));
         }
     }
 }

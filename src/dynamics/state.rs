@@ -68,6 +68,30 @@ pub struct MechanicsState {
     pub friction_work: f64,
 }
 
+/// The phases of a contact detection, in order: the carried contacts and
+/// margin, the ghost exchange (collective), the pair search (local), the
+/// pair balancing (collective), the installation of the pairs (local), and
+/// the halo, ghost state and assembly rebuild (collective).
+pub const DETECT_PHASES: [&str; 6] = ["prepare", "ghosts", "pairs", "balance", "install", "halo"];
+
+/// The phases of an explicit substep, in order: the contact pairs' forces,
+/// the elements next to the halo and the packing of what goes to the
+/// neighbours, the interior elements (while messages fly), the wait for
+/// the neighbours' contributions, the sum of the owned nodes' forces (and
+/// joints), the touching flags' all-reduce (collective: it waits for the
+/// slowest rank), particles and spheres, and the node update with the
+/// forwarding of the ghosts' state (collective).
+pub const SUBSTEP_PHASES: [&str; 8] = [
+    "pairs",
+    "boundary",
+    "interior",
+    "wait",
+    "sum",
+    "flags",
+    "particles",
+    "update",
+];
+
 /// Counters for the run summary.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct MechanicsCounters {
@@ -85,6 +109,12 @@ pub struct MechanicsCounters {
     pub candidates: u64,
     /// Seconds in contact detection and halo rebuilds.
     pub detect_time: f64,
+    /// `detect_time` by phase ([`DETECT_PHASES`]), this rank's: where the
+    /// search waits for other ranks shows as a collective phase longer
+    /// here than on the slowest rank's computing phases.
+    pub detect_phases: [f64; 6],
+    /// Seconds of the substeps by phase ([`SUBSTEP_PHASES`]), this rank's.
+    pub substep_phases: [f64; 8],
     /// Substeps advanced by this process (not restored on restart) and the
     /// bytes it sent to other ranks meanwhile (halo, ghost refresh, pair
     /// balancing).

@@ -95,6 +95,12 @@ impl ExplicitDomain {
         let mut error: Option<Error> = None;
         let ne = self.elements.len();
         let pair_base = 4 * ne;
+        let mut lap = std::time::Instant::now();
+        let mut phase = |k: usize, c: &mut super::MechanicsCounters| {
+            let now = std::time::Instant::now();
+            c.substep_phases[k] += (now - lap).as_secs_f64();
+            lap = now;
+        };
         // Contact forces of the touching candidate pairs.
         self.pair_forces.clear();
         self.contact_energy = 0.0;
@@ -232,6 +238,7 @@ impl ExplicitDomain {
                 self.release_apart_springs(now);
             }
         }
+        phase(0, &mut self.counters);
         // Elements next to the halo, then the interior while messages fly.
         let nb = self.n_boundary;
         let (dt_b, dt_i) = self.elem_dt.split_at(nb);
@@ -313,10 +320,13 @@ impl ExplicitDomain {
         let (materials, x, v) = (&self.materials, &self.x, &self.v);
         let hexes = &self.hexes;
         let mut inner: std::result::Result<f64, crate::mechanics::MechanicsError> = Ok(0.0);
+        phase(1, &mut self.counters);
+        let mut interior_time = 0.0;
         // Without penalty contact no pair forces travel (all ranks agree).
         let pairs = &mut self.pair_forces;
         let sized = (self.penalty.is_some()).then(|| (&pairs.send[..], &mut pairs.recv[..]));
         self.halo.exchange_into_sized(comm, &send, recv, sized, || {
+            let clock = std::time::Instant::now();
             let tets = element_forces(
                 interior,
                 materials,
@@ -335,9 +345,13 @@ impl ExplicitDomain {
                 }
                 other => other,
             };
+            interior_time = clock.elapsed().as_secs_f64();
         });
         self.send_buf = send;
         self.pair_forces.take_received(&routes);
+        self.counters.substep_phases[2] += interior_time;
+        phase(3, &mut self.counters);
+        self.counters.substep_phases[3] -= interior_time;
         match inner {
             Ok(w) => strain += w,
             Err(e) => {
@@ -357,6 +371,7 @@ impl ExplicitDomain {
             self.joints.add_forces(&self.x, t, &mut self.f);
             self.mark_cracks();
         }
+        phase(4, &mut self.counters);
         let free = self.free_damping.unwrap_or(self.damping);
         if self.free_damping.is_some() {
             // Which bodies touch something, over all ranks (a body's pairs
@@ -364,6 +379,7 @@ impl ExplicitDomain {
             let mine = self.touching.clone();
             comm.all_reduce_into(&mine[..], &mut self.touching[..], SystemOperation::max());
         }
+        phase(5, &mut self.counters);
         if !self.particles.is_empty() {
             // Bonds and links after the element sum, in each body's fixed order (on any rank).
             let (x, v) = (&self.x, &self.v);
@@ -408,6 +424,7 @@ impl ExplicitDomain {
                 error.get_or_insert(e);
             }
         }
+        phase(6, &mut self.counters);
         let no = self.n_owned;
         let p = NodeUpdate {
             dt: self.dt,
@@ -450,6 +467,7 @@ impl ExplicitDomain {
             }
         }
         self.forward_state(comm);
+        phase(7, &mut self.counters);
         match error {
             Some(e) => Err(e),
             None => Ok(()),

@@ -480,6 +480,24 @@ impl Stages<'_, '_> {
         mech.domain.counters = counters;
         mech.domain.counters.detections += fresh.detections;
         mech.domain.counters.detect_time += fresh.detect_time;
+        for (a, b) in mech
+            .domain
+            .counters
+            .detect_phases
+            .iter_mut()
+            .zip(fresh.detect_phases)
+        {
+            *a += b;
+        }
+        for (a, b) in mech
+            .domain
+            .counters
+            .substep_phases
+            .iter_mut()
+            .zip(fresh.substep_phases)
+        {
+            *a += b;
+        }
         mech.domain.set_friction_work(friction_work);
         self.times.mechanics += clock.elapsed().as_secs_f64();
 

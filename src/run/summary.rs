@@ -79,6 +79,12 @@ pub struct MechanicsSummary {
     /// Free spheres (issue 21): how many, and the touching pairs and
     /// sphere–face contacts of the last substep; zeros without spheres.
     pub spheres: [u64; 3],
+    /// Seconds of the detections by phase (`dynamics::DETECT_PHASES`):
+    /// the least and the most over the ranks.
+    pub detect_phases: [(f64, f64); 6],
+    /// Seconds of the substeps by phase (`dynamics::SUBSTEP_PHASES`): the
+    /// least and the most over the ranks.
+    pub substep_phases: [(f64, f64); 8],
 }
 
 /// The repartitions of a run on several ranks with moving bodies.
@@ -248,6 +254,26 @@ impl std::fmt::Display for RunSummary {
                 f,
                 "  traffic     {:.0} B sent per substep per rank (max over ranks), {:.0} B mean (halo, ghost refresh, pair balancing)",
                 m.bytes_per_substep.0, m.bytes_per_substep.1
+            )?;
+            let phases = |names: &[&str], times: &[(f64, f64)]| {
+                let each: Vec<String> = names
+                    .iter()
+                    .zip(times)
+                    .map(|(name, (lo, hi))| format!("{name} {lo:.3}/{hi:.3}"))
+                    .collect();
+                each.join(" | ")
+            };
+            if m.detections > 0 {
+                writeln!(
+                    f,
+                    "  detection   by phase, s (least/most over ranks): {}",
+                    phases(&crate::dynamics::DETECT_PHASES, &m.detect_phases)
+                )?;
+            }
+            writeln!(
+                f,
+                "  substeps    by phase, s (least/most over ranks): {}",
+                phases(&crate::dynamics::SUBSTEP_PHASES, &m.substep_phases)
             )?;
             let [n, pairs, faces] = m.spheres;
             if n > 0 {
@@ -531,6 +557,16 @@ impl MechanicsSummary {
         let mut counts = [0.0; 4];
         comm.all_reduce_into(&mine[..], &mut counts[..], SystemOperation::sum());
         let sent = m.counters.bytes_sent as f64 / m.counters.substeps_run.max(1) as f64;
+        let c = &m.counters;
+        let phases: Vec<f64> = c
+            .detect_phases
+            .iter()
+            .chain(&c.substep_phases)
+            .copied()
+            .collect();
+        let (mut least, mut most_phase) = (vec![0.0; phases.len()], vec![0.0; phases.len()]);
+        comm.all_reduce_into(&phases[..], &mut least[..], SystemOperation::min());
+        comm.all_reduce_into(&phases[..], &mut most_phase[..], SystemOperation::max());
         let (mut most, mut total) = (0.0, 0.0);
         comm.all_reduce_into(&sent, &mut most, SystemOperation::max());
         comm.all_reduce_into(&sent, &mut total, SystemOperation::sum());
@@ -556,6 +592,8 @@ impl MechanicsSummary {
                 (0, 0, 0.0, 0.0)
             },
             spheres: m.sphere_counts(comm),
+            detect_phases: std::array::from_fn(|k| (least[k], most_phase[k])),
+            substep_phases: std::array::from_fn(|k| (least[6 + k], most_phase[6 + k])),
         }
     }
 }

@@ -236,7 +236,9 @@ pub fn exchange_ghosts<C: Communicator>(
     drop(local_of);
     let received = all_to_all(comm, data);
 
-    // Assemble, each node once.
+    // Assemble, each node once, by ascending global id; a node that came
+    // in several pieces keeps its first arrival. Tets refer to arrivals
+    // until the nodes are ordered.
     let mut nodes: Vec<[f64; NODE]> = Vec::new();
     let mut g = ContactTets::default();
     let mut tet_nodes: Vec<[u32; 4]> = Vec::new();
@@ -245,39 +247,47 @@ pub fn exchange_ghosts<C: Communicator>(
         while at < list.len() {
             let (nn, nt) = (list[at] as usize, list[at + 1] as usize);
             at += 2;
-            let piece = &list[at..at + NODE * nn];
-            at += NODE * nn;
+            let base = nodes.len() as u32;
             nodes.extend(
-                piece
+                list[at..at + NODE * nn]
                     .chunks_exact(NODE)
                     .map(|n| <[f64; NODE]>::try_from(n).expect("seven values")),
             );
+            at += NODE * nn;
             for rec in list[at..at + TET * nt].chunks_exact(TET) {
                 g.gid.push(rec[0] as u32);
                 g.body.push(rec[1] as u32);
                 g.material.push(rec[2] as u32);
                 g.mask.push(rec[3] as u8);
                 g.volume0.push(rec[4]);
-                tet_nodes.push(std::array::from_fn(|k| {
-                    piece[NODE * rec[5 + k] as usize] as u32
-                }));
+                tet_nodes.push(std::array::from_fn(|k| base + rec[5 + k] as u32));
             }
             at += TET * nt;
         }
     }
     drop(received);
-    nodes.sort_by_key(|n| n[0] as u32);
-    nodes.dedup_by_key(|n| n[0] as u32);
-    for n in &nodes {
-        g.node_gid.push(n[0] as u32);
-        g.node_owner.push(n[1] as u32);
-        g.node_petsc.push(n[2] as u32);
-        g.node_boundary.push(n[3] != 0.0);
-        g.x.push([n[4], n[5], n[6]]);
+    // (gid, arrival) keys are distinct: sorted, they give the first arrival of each gid first.
+    let mut keys: Vec<(u32, u32)> = nodes
+        .iter()
+        .enumerate()
+        .map(|(i, n)| (n[0] as u32, i as u32))
+        .collect();
+    keys.sort_unstable();
+    let mut index_of = vec![0u32; nodes.len()];
+    for &(gid, i) in &keys {
+        if g.node_gid.last() != Some(&gid) {
+            let n = &nodes[i as usize];
+            g.node_gid.push(gid);
+            g.node_owner.push(n[1] as u32);
+            g.node_petsc.push(n[2] as u32);
+            g.node_boundary.push(n[3] != 0.0);
+            g.x.push([n[4], n[5], n[6]]);
+        }
+        index_of[i as usize] = (g.node_gid.len() - 1) as u32;
     }
     g.tets = tet_nodes
         .iter()
-        .map(|t| t.map(|gid| g.node_gid.binary_search(&gid).expect("listed") as u32))
+        .map(|t| t.map(|a| index_of[a as usize]))
         .collect();
     g
 }

@@ -182,6 +182,9 @@ pub struct ExplicitDomain {
     pub(super) owned_body: Vec<u32>,
     /// Per body, this substep: 1 if some pair of it overlaps (any rank).
     pub(super) touching: Vec<u8>,
+    /// This rank's flags of the last substep (the buffer the next
+    /// substep's all-reduce sends from).
+    pub(super) touching_here: Vec<u8>,
     pub(super) strain_energy: f64,
     /// Cohesive joints of the jointed bodies held here.
     pub(super) joints: super::joints::DomainJoints,
@@ -499,6 +502,7 @@ impl ExplicitDomain {
             free_damping: mm.free_damping,
             owned_body,
             touching: vec![0; model.bodies.len()],
+            touching_here: vec![0; model.bodies.len()],
             strain_energy: 0.0,
             joints,
             self_contact,

@@ -28,6 +28,18 @@ pub(super) const OVERLAPPED: u8 = u8::MAX;
 /// Corners of a tet and its bounding box (low, high corner).
 pub(super) type TetGeometry = ([[f64; 3]; 4], [f64; 3], [f64; 3]);
 
+/// The clock of a substep's phases ([`super::SUBSTEP_PHASES`]).
+struct PhaseClock(std::time::Instant);
+
+impl PhaseClock {
+    /// Adds the time since the last mark to phase `k`.
+    fn mark(&mut self, k: usize, c: &mut super::MechanicsCounters) {
+        let now = std::time::Instant::now();
+        c.substep_phases[k] += (now - self.0).as_secs_f64();
+        self.0 = now;
+    }
+}
+
 impl ExplicitDomain {
     /// Collective. Advance by `n` substeps.
     pub fn advance(&mut self, comm: &SimpleCommunicator, n: u64) -> Result<()> {
@@ -89,18 +101,132 @@ impl ExplicitDomain {
         Ok(())
     }
 
-    /// One substep (collective over neighbours only). Errors are returned
-    /// after the messages are exchanged, so no neighbour waits.
+    /// One substep (collective: the touching flags' all-reduce, when
+    /// free flight has its own damping, and the neighbours' messages).
+    /// Errors are returned after the messages are exchanged, so no
+    /// neighbour waits.
     pub(super) fn substep(&mut self, comm: &SimpleCommunicator) -> Result<()> {
-        let mut error: Option<Error> = None;
-        let ne = self.elements.len();
-        let pair_base = 4 * ne;
-        let mut lap = std::time::Instant::now();
-        let mut phase = |k: usize, c: &mut super::MechanicsCounters| {
-            let now = std::time::Instant::now();
-            c.substep_phases[k] += (now - lap).as_secs_f64();
-            lap = now;
+        let mut clock = PhaseClock(std::time::Instant::now());
+        self.pair_phase();
+        clock.mark(0, &mut self.counters);
+        let mut error = if self.free_damping.is_some() {
+            // Which bodies touch something, over all ranks (a body's pairs
+            // may be on another rank than its nodes): reduced while the
+            // elements are computed and the forces summed.
+            let here = std::mem::take(&mut self.touching);
+            let mut all = std::mem::take(&mut self.touching_here);
+            let error = mpi::request::scope(|scope| {
+                let op = SystemOperation::max();
+                let flags = comm.immediate_all_reduce_into(scope, &here[..], &mut all[..], op);
+                let error = self.element_phase(comm, &mut clock);
+                flags.wait();
+                error
+            });
+            self.touching = all;
+            self.touching_here = here;
+            error
+        } else {
+            self.element_phase(comm, &mut clock)
         };
+        clock.mark(5, &mut self.counters);
+        let free = self.free_damping.unwrap_or(self.damping);
+        if !self.particles.is_empty() {
+            // Bonds and links after the element sum, in each body's fixed order (on any rank).
+            let (x, v) = (&self.x, &self.v);
+            self.strain_energy += self.particles.add_forces(x, v, self.dt, &mut self.f);
+            let (touching, damping) = (&self.touching, self.damping);
+            // The packing-stage damping of the nodes below, per body.
+            let body_damping = |b: u32| {
+                if touching[b as usize] != 0 {
+                    damping
+                } else {
+                    free
+                }
+            };
+            match self.particles.advance(self.dt, body_damping, &self.gravity) {
+                Ok(step) => {
+                    self.particle_kinetic = step.kinetic;
+                    self.particle_momentum = step.momentum;
+                    self.dissipated += step.damped;
+                }
+                Err(e) => {
+                    error.get_or_insert(e);
+                }
+            }
+            self.particles.forward_motion(comm);
+        }
+        if let Some(spheres) = self.spheres.as_mut() {
+            // Free spheres (issue 21) after the element sum: their faces'
+            // shares land on the owned nodes in (sphere, contact) order.
+            let touched = self.damping;
+            let step = spheres.substep(
+                comm,
+                &self.part_tets,
+                &self.x,
+                &self.v,
+                self.dt,
+                &self.gravity,
+                |touching| if touching { touched } else { free },
+                &self.node_t,
+                &mut self.f,
+            );
+            if let Err(e) = step {
+                error.get_or_insert(e);
+            }
+        }
+        clock.mark(6, &mut self.counters);
+        let no = self.n_owned;
+        let p = NodeUpdate {
+            dt: self.dt,
+            gravity: self.gravity,
+            mass_damping: self.damping,
+        };
+        let (touching, owned_body, damping) = (&self.touching, &self.owned_body, self.damping);
+        // Not in the seeds: packing-stage mass damping only on bodies in contact (free flight undamped).
+        let node_damping = |i: usize| {
+            if touching[owned_body[i] as usize] != 0 {
+                damping
+            } else {
+                free
+            }
+        };
+        match update_nodes_damped(
+            &p,
+            node_damping,
+            &self.mass[..no],
+            &self.f[..no],
+            Some(&self.ext[..no]),
+            &self.bc[..no],
+            &mut self.x[..no],
+            &mut self.v[..no],
+        ) {
+            Ok(w) => {
+                self.external_work += w.external;
+                self.dissipated += w.damping;
+            }
+            Err(e) => {
+                let msg = match e {
+                    crate::mechanics::MechanicsError::NonFinite { node } => format!(
+                        "node {} became non-finite (NaN or infinite): the explicit step \
+                     is unstable or a contact exploded; reduce mechanics.dt or mechanics.safety",
+                        self.node_gid[node]
+                    ),
+                    other => other.to_string(),
+                };
+                error.get_or_insert(Error::Mechanics(msg));
+            }
+        }
+        self.forward_state(comm);
+        clock.mark(7, &mut self.counters);
+        match error {
+            Some(e) => Err(e),
+            None => Ok(()),
+        }
+    }
+
+    /// Phase 0 of a substep: the contact forces of the candidate pairs
+    /// and the touching flags of this rank.
+    fn pair_phase(&mut self) {
         // Contact forces of the touching candidate pairs.
         self.pair_forces.clear();
         self.contact_energy = 0.0;
@@ -238,7 +364,19 @@ impl ExplicitDomain {
                 self.release_apart_springs(now);
             }
         }
-        phase(0, &mut self.counters);
+    }
+
+    /// Phases 1–4 of a substep: the elements' forces, the exchange of the
+    /// ghost contributions with the neighbours (collective over them), the
+    /// sum of the owned nodes' forces and the joints'. Returns an
+    /// element's error, after the exchange.
+    fn element_phase(
+        &mut self,
+        comm: &SimpleCommunicator,
+        clock: &mut PhaseClock,
+    ) -> Option<Error> {
+        let ne = self.elements.len();
+        let pair_base = 4 * ne;
         // Elements next to the halo, then the interior while messages fly.
         let nb = self.n_boundary;
         let (dt_b, dt_i) = self.elem_dt.split_at(nb);
@@ -320,7 +458,7 @@ impl ExplicitDomain {
         let (materials, x, v) = (&self.materials, &self.x, &self.v);
         let hexes = &self.hexes;
         let mut inner: std::result::Result<f64, crate::mechanics::MechanicsError> = Ok(0.0);
-        phase(1, &mut self.counters);
+        clock.mark(1, &mut self.counters);
         let mut interior_time = 0.0;
         // Without penalty contact no pair forces travel (all ranks agree).
         let pairs = &mut self.pair_forces;
@@ -350,7 +488,7 @@ impl ExplicitDomain {
         self.send_buf = send;
         self.pair_forces.take_received(&routes);
         self.counters.substep_phases[2] += interior_time;
-        phase(3, &mut self.counters);
+        clock.mark(3, &mut self.counters);
         self.counters.substep_phases[3] -= interior_time;
         match inner {
             Ok(w) => strain += w,
@@ -358,9 +496,7 @@ impl ExplicitDomain {
                 elem_error.get_or_insert((e, nb));
             }
         }
-        if let Some((e, offset)) = elem_error {
-            error.get_or_insert(self.element_error(e, offset));
-        }
+        let error = elem_error.map(|(e, offset)| self.element_error(e, offset));
         self.strain_energy = strain;
         self.counters.element_updates += ne as u64;
         // Owned node forces, summed in key order; then the owners advance.
@@ -371,107 +507,8 @@ impl ExplicitDomain {
             self.joints.add_forces(&self.x, t, &mut self.f);
             self.mark_cracks();
         }
-        phase(4, &mut self.counters);
-        let free = self.free_damping.unwrap_or(self.damping);
-        if self.free_damping.is_some() {
-            // Which bodies touch something, over all ranks (a body's pairs
-            // may be on another rank than its nodes).
-            let mine = self.touching.clone();
-            comm.all_reduce_into(&mine[..], &mut self.touching[..], SystemOperation::max());
-        }
-        phase(5, &mut self.counters);
-        if !self.particles.is_empty() {
-            // Bonds and links after the element sum, in each body's fixed order (on any rank).
-            let (x, v) = (&self.x, &self.v);
-            self.strain_energy += self.particles.add_forces(x, v, self.dt, &mut self.f);
-            let (touching, damping) = (&self.touching, self.damping);
-            // The packing-stage damping of the nodes below, per body.
-            let body_damping = |b: u32| {
-                if touching[b as usize] != 0 {
-                    damping
-                } else {
-                    free
-                }
-            };
-            match self.particles.advance(self.dt, body_damping, &self.gravity) {
-                Ok(step) => {
-                    self.particle_kinetic = step.kinetic;
-                    self.particle_momentum = step.momentum;
-                    self.dissipated += step.damped;
-                }
-                Err(e) => {
-                    error.get_or_insert(e);
-                }
-            }
-            self.particles.forward_motion(comm);
-        }
-        if let Some(spheres) = self.spheres.as_mut() {
-            // Free spheres (issue 21) after the element sum: their faces'
-            // shares land on the owned nodes in (sphere, contact) order.
-            let touched = self.damping;
-            let step = spheres.substep(
-                comm,
-                &self.part_tets,
-                &self.x,
-                &self.v,
-                self.dt,
-                &self.gravity,
-                |touching| if touching { touched } else { free },
-                &self.node_t,
-                &mut self.f,
-            );
-            if let Err(e) = step {
-                error.get_or_insert(e);
-            }
-        }
-        phase(6, &mut self.counters);
-        let no = self.n_owned;
-        let p = NodeUpdate {
-            dt: self.dt,
-            gravity: self.gravity,
-            mass_damping: self.damping,
-        };
-        let (touching, owned_body, damping) = (&self.touching, &self.owned_body, self.damping);
-        // Not in the seeds: packing-stage mass damping only on bodies in contact (free flight undamped).
-        let node_damping = |i: usize| {
-            if touching[owned_body[i] as usize] != 0 {
-                damping
-            } else {
-                free
-            }
-        };
-        match update_nodes_damped(
-            &p,
-            node_damping,
-            &self.mass[..no],
-            &self.f[..no],
-            Some(&self.ext[..no]),
-            &self.bc[..no],
-            &mut self.x[..no],
-            &mut self.v[..no],
-        ) {
-            Ok(w) => {
-                self.external_work += w.external;
-                self.dissipated += w.damping;
-            }
-            Err(e) => {
-                let msg = match e {
-                    crate::mechanics::MechanicsError::NonFinite { node } => format!(
-                        "node {} became non-finite (NaN or infinite): the explicit step \
-                     is unstable or a contact exploded; reduce mechanics.dt or mechanics.safety",
-                        self.node_gid[node]
-                    ),
-                    other => other.to_string(),
-                };
-                error.get_or_insert(Error::Mechanics(msg));
-            }
-        }
-        self.forward_state(comm);
-        phase(7, &mut self.counters);
-        match error {
-            Some(e) => Err(e),
-            None => Ok(()),
-        }
+        clock.mark(4, &mut self.counters);
+        error
     }
 
     fn element_error(&self, e: crate::mechanics::MechanicsError, offset: usize) -> Error {

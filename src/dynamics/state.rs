@@ -78,8 +78,9 @@ pub const DETECT_PHASES: [&str; 6] = ["prepare", "ghosts", "pairs", "balance", "
 /// the elements next to the halo and the packing of what goes to the
 /// neighbours, the interior elements (while messages fly), the wait for
 /// the neighbours' contributions, the sum of the owned nodes' forces (and
-/// joints), the touching flags' all-reduce (collective: it waits for the
-/// slowest rank), particles and spheres, and the node update with the
+/// joints), the end of the touching flags' all-reduce (started after the
+/// pairs, it waits only for a rank that has not finished its pairs yet),
+/// particles and spheres, and the node update with the
 /// forwarding of the ghosts' state (collective).
 pub const SUBSTEP_PHASES: [&str; 8] = [
     "pairs",
